@@ -1,0 +1,8 @@
+"""magtact: design magnetic soft tactile sensors by simulation, metamodels and optimisation."""
+
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("magtact")
+except PackageNotFoundError:  # running from a source tree without installation
+    __version__ = "0.0.0"

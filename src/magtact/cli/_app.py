@@ -1,0 +1,39 @@
+"""The typer application and helpers shared by every command."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from ..study import Study, load_study
+
+app = typer.Typer(
+    name="magtact",
+    help="Design magnetic soft tactile sensors: field, mechanics, DOE, metamodels, optimisation.",
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    add_completion=False,
+)
+console = Console(stderr=True)
+
+#: The optional STUDY argument of every command: a TOML file or a preset name.
+StudyArg = Annotated[
+    str | None,
+    typer.Argument(help="Study TOML file or preset ('magone', 'magone-printed'); "
+                        "default: the built-in MagOne study."),
+]
+OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).")]
+
+
+def get_study(source: str | None) -> Study:
+    """Load the study for a command (errors are reported by :func:`magtact.cli.main`)."""
+    return load_study(source)
+
+
+def out_dir(path: Path) -> Path:
+    """Create and return an output folder."""
+    path.mkdir(parents=True, exist_ok=True)
+    return path

@@ -1,0 +1,5 @@
+"""Parametric geometry of the sensor: distances, loading path and meshes."""
+
+from ._path import dz0, hall_from_magnet_centre, loading_path, magnet_span
+
+__all__ = ["dz0", "hall_from_magnet_centre", "loading_path", "magnet_span"]

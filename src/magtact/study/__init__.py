@@ -1,0 +1,22 @@
+"""Study settings: typed, immutable, loaded from TOML in user units, SI inside."""
+
+from ._load import PRESETS, StudyError, load_study, magone, magone_printed, study_from_dict
+from ._model import (
+    DOE,
+    Body,
+    Constraints,
+    Design,
+    Loading,
+    Magnet,
+    Magnetics,
+    Material,
+    Mechanics,
+    Study,
+)
+from ._units import MU0, from_si, kpa, mm, to_si
+
+__all__ = [
+    "DOE", "MU0", "PRESETS", "Body", "Constraints", "Design", "Loading", "Magnet", "Magnetics",
+    "Material", "Mechanics", "Study", "StudyError", "from_si", "kpa", "load_study", "magone",
+    "magone_printed", "mm", "study_from_dict", "to_si",
+]

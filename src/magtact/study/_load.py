@@ -1,0 +1,235 @@
+"""Loading, validating and writing study files (TOML, user units)."""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from dataclasses import fields, replace
+from importlib import resources
+from pathlib import Path
+
+import tomli_w
+
+from ._model import SECTIONS, Study, key_of
+from ._units import LABEL, from_si, to_si
+
+PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
+
+
+class StudyError(ValueError):
+    """A study file is invalid. ``key`` names the offending TOML key (``section.key``)."""
+
+    def __init__(self, key: str, message: str, source: str | None = None):
+        self.key = key
+        where = f"{source}: " if source else ""
+        super().__init__(f"{where}[{key}] {message}")
+
+
+def magone() -> Study:
+    """The built-in MagOne study (G read as 10–50 kPa, original 29.4 kPa; SPEC section 1)."""
+    return load_study("magone")
+
+
+def magone_printed() -> Study:
+    """The MagOne study with G as printed in the publication (1–5 kPa, original 2.94 kPa)."""
+    return load_study("magone-printed")
+
+
+def load_study(source: str | Path | None = None) -> Study:
+    """Load and validate a study.
+
+    ``source`` is a TOML file path, a preset name (``"magone"``, ``"magone-printed"``) or
+    ``None`` for the built-in MagOne study. A file may say ``base = "magone"`` (the default),
+    ``"magone-printed"`` or ``"none"``: keys it does not give are taken from that base, and with
+    ``"none"`` every key must be given. Raises :class:`StudyError` naming the offending key.
+    """
+    if source is None:
+        source = "magone"
+    if isinstance(source, str) and source in PRESETS:
+        text = resources.files("magtact.study").joinpath(PRESETS[source]).read_text("utf-8")
+        label = f"preset '{source}'"
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise StudyError("file", f"study file not found: {path}")
+        text = path.read_text("utf-8")
+        label = str(path)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError("file", f"is not valid TOML: {exc}", label) from None
+    return study_from_dict(data, label)
+
+
+def study_from_dict(data: dict, source: str | None = None) -> Study:
+    """Build a validated :class:`Study` from a TOML-shaped dict in user units."""
+    data = dict(data)
+    base_name = data.pop("base", "magone")
+    if base_name == "none":
+        base, complete = Study(), True
+    elif base_name in PRESETS:
+        base, complete = load_study(base_name), False
+    else:
+        raise StudyError("base", f"expected one of {sorted(PRESETS) + ['none']}, got {base_name!r}",
+                         source)
+    top = {}
+    for key in ("name", "description"):
+        if key in data:
+            value = data.pop(key)
+            if not isinstance(value, str):
+                raise StudyError(key, f"expected a string, got {value!r}", source)
+            top[key] = value
+    if complete and "name" not in top:
+        raise StudyError("name", "is missing (required when base = 'none')", source)
+    for key in data:
+        if key not in SECTIONS:
+            raise StudyError(key, _unknown(key, SECTIONS, "section"), source)
+        if not isinstance(data[key], dict):
+            raise StudyError(key, f"expected a table [{key}], got {data[key]!r}", source)
+    sections = {}
+    for name in SECTIONS:
+        sections[name] = _section(name, getattr(base, name), data.get(name, {}), complete, source)
+    study = replace(base, **top, **sections)
+    _check_consistency(study, source)
+    return study
+
+
+def _unknown(key: str, allowed, what: str) -> str:
+    close = difflib.get_close_matches(key, list(allowed), n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    return f"unknown {what}{hint} Expected one of: {', '.join(allowed)}"
+
+
+def _section(name: str, default, given: dict, complete: bool, source):
+    spec = {key_of(f): f for f in fields(default)}
+    for key in given:
+        if key not in spec:
+            raise StudyError(f"{name}.{key}", _unknown(key, spec, "key"), source)
+    values = {}
+    for key, f in spec.items():
+        full = f"{name}.{key}"
+        if key not in given:
+            if complete:
+                raise StudyError(full, f"is missing; expected {_expected(f)}", source)
+            continue
+        values[f.name] = _convert(full, f, given[key], source)
+    return replace(default, **values)
+
+
+def _expected(f) -> str:
+    m = f.metadata
+    unit = LABEL.get(m["unit"], m["unit"])
+    if m["choices"]:
+        return "one of " + ", ".join(repr(c) for c in m["choices"])
+    if isinstance(f.default, bool):
+        return "true or false"
+    if isinstance(f.default, tuple):
+        return f"a range [low, high] in {unit}"
+    if m["integer"]:
+        return "an integer"
+    return f"a number in {unit}" if m["unit"] else "a number"
+
+
+def _convert(full: str, f, value, source):
+    m = f.metadata
+    if m["choices"]:
+        if value not in m["choices"]:
+            raise StudyError(full, f"expected {_expected(f)}, got {value!r}", source)
+        return value
+    if isinstance(f.default, bool):
+        if not isinstance(value, bool):
+            raise StudyError(full, f"expected true or false, got {value!r}", source)
+        return value
+    if isinstance(f.default, tuple):
+        if not (isinstance(value, list) and len(value) == 2):
+            raise StudyError(full, f"expected {_expected(f)}, got {value!r}", source)
+        lo, hi = (_number(full, f, v, source) for v in value)
+        if not lo < hi:
+            raise StudyError(full, f"range out of order: low {value[0]} must be below high "
+                                   f"{value[1]}", source)
+        return (to_si(lo, m["unit"]), to_si(hi, m["unit"]))
+    value = _number(full, f, value, source)
+    return value if m["integer"] else to_si(value, m["unit"])
+
+
+def _number(full: str, f, value, source):
+    m = f.metadata
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise StudyError(full, f"expected {_expected(f)}, got {value!r}", source)
+    if m["integer"] and not isinstance(value, int):
+        raise StudyError(full, f"expected an integer, got {value!r}", source)
+    if not math.isfinite(value):
+        raise StudyError(full, f"expected a finite number, got {value!r}", source)
+    if m["positive"] and value <= 0:
+        raise StudyError(full, f"must be positive, got {value!r}", source)
+    if m["minimum"] is not None and value < m["minimum"]:
+        raise StudyError(full, f"must be at least {m['minimum']}, got {value!r}", source)
+    return value
+
+
+def _check_consistency(s: Study, source) -> None:
+    """Checks that involve several keys; each names the key a user would change."""
+    b, mg, ld = s.body, s.magnet, s.loading
+    if mg.R_m >= b.R:
+        raise StudyError("magnet.R_m_mm", f"the magnet ({_mm(mg.R_m)} mm radius) must be narrower "
+                                          f"than the body (body.R_mm = {_mm(b.R)})", source)
+    if b.R_g > b.R:
+        raise StudyError("body.R_g_mm", f"must not exceed body.R_mm = {_mm(b.R)}", source)
+    needed = 1.5 * mg.H_m if mg.placement == "covered" else mg.H_m
+    if needed > b.H_g:
+        raise StudyError("magnet.H_m_mm", f"the {mg.placement} magnet needs {_mm(needed)} mm of "
+                                          f"the upper part but body.H_g_mm is {_mm(b.H_g)}", source)
+    if b.R_h >= min(b.R - mg.R_m, b.H_g):
+        raise StudyError("body.R_h_mm", f"edge radius {_mm(b.R_h)} mm must be smaller than the "
+                                        "gap beside the magnet and the upper part's height", source)
+    dz0_min = s.design.H[0] + b.H_g - mg.H_m
+    if ld.dz_sat >= dz0_min:
+        raise StudyError("loading.dz_sat_mm", f"the loading path cannot reach {_mm(ld.dz_sat)} mm: "
+                                              f"it must be below the unloaded distance "
+                                              f"{_mm(dz0_min)} mm at the smallest H", source)
+    low_face = ld.dz_sat - (mg.H_m / 2 if mg.placement == "covered" else 0.0)
+    if low_face <= 0:
+        raise StudyError("loading.dz_sat_mm", "the magnet would reach the Hall sensor plane; "
+                                              f"expected more than {_mm(ld.dz_sat - low_face)} mm",
+                         source)
+    if ld.theta_max > math.atan(ld.mu_f) + 1e-12:
+        raise StudyError("loading.theta_max_rad", f"must not exceed atan(mu_f) = "
+                                                  f"{math.atan(ld.mu_f):.6g} rad, got "
+                                                  f"{ld.theta_max:.6g}", source)
+    for name in ("H_original", "G_original"):
+        value, (lo, hi) = getattr(s.design, name), getattr(s.design, name[0])
+        if not lo <= value <= hi:
+            unit = "mm" if name[0] == "H" else "kPa"
+            raise StudyError(f"design.{name}_{unit}", f"{from_si(value, unit):g} {unit} lies "
+                                                      f"outside the design range", source)
+
+
+def _mm(x: float) -> str:
+    return f"{from_si(x, 'mm'):.6g}"
+
+
+def study_to_toml(s: Study) -> str:
+    """The complete study as TOML in user units (``base = "none"``: nothing implicit)."""
+    out: dict = {"base": "none", "name": s.name, "description": s.description}
+    for name in SECTIONS:
+        sec = getattr(s, name)
+        table = {}
+        for f in fields(sec):
+            value, unit = getattr(sec, f.name), f.metadata["unit"]
+            if isinstance(value, tuple):
+                value = [_tidy(v, unit) for v in value]
+            elif isinstance(value, float):
+                value = _tidy(value, unit)
+            table[key_of(f)] = value
+        out[name] = table
+    return tomli_w.dumps(out)
+
+
+def _tidy(si: float, unit: str) -> float:
+    """The shortest user-unit number that converts back to exactly ``si``."""
+    for digits in range(12, 18):
+        user = float(f"{from_si(si, unit):.{digits}g}")
+        if to_si(user, unit) == si:
+            return user
+    return float(from_si(si, unit))

@@ -1,0 +1,175 @@
+"""Typed, immutable description of a sensor study (SI units inside).
+
+Each TOML section is one frozen dataclass below. A field's metadata says how it is written in a
+study file: the key is the field name followed by the unit suffix (``R`` in metres is ``R_mm`` in
+millimetres), ``positive`` asks for a value > 0, ``choices`` lists the allowed strings. Adding a
+setting is adding one field here; loading, validation and TOML export follow from the metadata.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+
+def setting(default, unit: str = "", *, positive: bool = False, choices=None,
+            integer: bool = False, minimum=None, doc: str = ""):
+    """A study setting with its user unit (``default`` is given in SI)."""
+    return field(default=default, metadata={
+        "unit": unit, "positive": positive, "choices": choices, "integer": integer,
+        "minimum": minimum, "doc": doc,
+    })
+
+
+def key_of(f) -> str:
+    """The TOML key of a dataclass field: its name plus the unit suffix."""
+    unit = f.metadata.get("unit", "")
+    return f"{f.name}_{unit}" if unit else f.name
+
+
+@dataclass(frozen=True)
+class Body:
+    """Elastomer body: one cylinder of radius R and height H + H_g (SPEC section 1)."""
+
+    R: float = setting(6e-3, "mm", positive=True, doc="body radius")
+    H_g: float = setting(4.97e-3, "mm", positive=True, doc="height of the upper part (holds the magnet)")
+    R_g: float = setting(6e-3, "mm", positive=True, doc="radius of the upper part")
+    R_h: float = setting(1e-3, "mm", minimum=0.0, doc="radius of the rounded top edge")
+
+
+@dataclass(frozen=True)
+class Magnet:
+    """Axially magnetised cylindrical magnet."""
+
+    R_m: float = setting(2.5e-3, "mm", positive=True, doc="magnet radius")
+    H_m: float = setting(2e-3, "mm", positive=True, doc="magnet height")
+    M_z: float = setting(1.2e6, "A_per_m", positive=True, doc="axial magnetisation")
+    placement: str = setting("covered", choices=("covered", "flush"),
+                             doc="'covered': 1/2 H_m of elastomer above the magnet, distances to "
+                                 "its centre; 'flush': top at the top face, distances to its lower face")
+
+
+@dataclass(frozen=True)
+class Loading:
+    """Loading path, friction and Hall saturation (SPEC section 1)."""
+
+    dz_sat: float = setting(2.97e-3, "mm", positive=True,
+                            doc="magnet–sensor distance at which the Hall reading saturates")
+    mu_f: float = setting(0.45, positive=True, doc="Coulomb friction coefficient elastomer/plates")
+    theta_max: float = setting(math.atan(0.45), "rad", positive=True,
+                               doc="largest shear angle; at most atan(mu_f)")
+
+
+@dataclass(frozen=True)
+class Material:
+    """Incompressible neo-Hookean elastomer."""
+
+    G_ref: float = setting(29.4e3, "kPa", positive=True,
+                           doc="reference shear modulus of the structural solves (forces scale with G)")
+    bulk_ratio: float = setting(5000.0, minimum=1000.0,
+                                doc="bulk modulus / shear modulus of the nearly incompressible model")
+
+
+@dataclass(frozen=True)
+class Design:
+    """Design space (H, G) and the original design of the published sensor."""
+
+    H: tuple[float, float] = setting((3e-3, 7e-3), "mm", positive=True, doc="range of base height H")
+    G: tuple[float, float] = setting((10e3, 50e3), "kPa", positive=True, doc="range of shear modulus G")
+    H_original: float = setting(3e-3, "mm", positive=True, doc="H of the original sensor")
+    G_original: float = setting(29.4e3, "kPa", positive=True, doc="G of the original sensor")
+
+
+@dataclass(frozen=True)
+class DOE:
+    """Full-factorial levels (SPEC section 4)."""
+
+    n_t: int = setting(21, integer=True, minimum=2, doc="levels of the non-dimensional load t")
+    n_theta: int = setting(5, integer=True, minimum=1, doc="levels of the shear angle")
+    n_H: int = setting(5, integer=True, minimum=1, doc="levels of the base height H")
+    n_G: int = setting(5, integer=True, minimum=1, doc="levels of the shear modulus G")
+
+
+@dataclass(frozen=True)
+class Magnetics:
+    """Field solver settings (SPEC section 2)."""
+
+    solver: str = setting("fe", choices=("fe", "exact"), doc="field solver")
+    h_magnet: float = setting(0.25e-3, "mm", positive=True,
+                              doc="FE element size at the magnet surface")
+    growth: float = setting(0.3, positive=True,
+                            doc="FE element size growth per unit distance / size (grading)")
+    far_r: float = setting(100.0, positive=True, doc="far boundary radius in units of R_m")
+    far_z: float = setting(50.0, positive=True, doc="far boundary half-height in units of H_m")
+
+
+@dataclass(frozen=True)
+class Mechanics:
+    """Structural solver settings (SPEC section 3)."""
+
+    mesh: str = setting("default", choices=("coarse", "default", "fine"),
+                        doc="named mesh density of the hexahedral half body")
+    scale_in_G: bool = setting(True, doc="solve at G_ref and scale forces by G/G_ref")
+
+
+@dataclass(frozen=True)
+class Constraints:
+    """Force constraints of the design optimisation (SPEC section 7)."""
+
+    F_r_c: float = setting(-0.25, "N", doc="F_r,min must be at most this (shear capacity)")
+    F_z_c: float = setting(5.0, "N", positive=True, doc="F_z,max must be at least this")
+    source: str = setting("values", choices=("values", "reference"),
+                          doc="'values': the numbers above; 'reference': those of the original design")
+
+
+@dataclass(frozen=True)
+class Study:
+    """A complete sensor study. All quantities in SI (m, Pa, N, T, rad, A/m)."""
+
+    name: str = "MagOne"
+    description: str = ""
+    body: Body = field(default_factory=Body)
+    magnet: Magnet = field(default_factory=Magnet)
+    loading: Loading = field(default_factory=Loading)
+    material: Material = field(default_factory=Material)
+    design: Design = field(default_factory=Design)
+    doe: DOE = field(default_factory=DOE)
+    magnetics: Magnetics = field(default_factory=Magnetics)
+    mechanics: Mechanics = field(default_factory=Mechanics)
+    constraints: Constraints = field(default_factory=Constraints)
+
+    # ---- DOE levels (SI) -------------------------------------------------------------------
+    @property
+    def t_levels(self) -> np.ndarray:
+        """Non-dimensional load levels in [0, 1], shape (n_t,)."""
+        return np.linspace(0.0, 1.0, self.doe.n_t)
+
+    @property
+    def theta_levels(self) -> np.ndarray:
+        """Shear angle levels in [0, θ_max] [rad], shape (n_theta,)."""
+        return _levels(0.0, self.loading.theta_max, self.doe.n_theta)
+
+    @property
+    def H_levels(self) -> np.ndarray:
+        """Base height levels [m], shape (n_H,)."""
+        return _levels(*self.design.H, self.doe.n_H)
+
+    @property
+    def G_levels(self) -> np.ndarray:
+        """Shear modulus levels [Pa], shape (n_G,)."""
+        return _levels(*self.design.G, self.doe.n_G)
+
+    def to_toml(self) -> str:
+        """The study as TOML text in user units (round-trips through :func:`load_study`)."""
+        from ._load import study_to_toml
+
+        return study_to_toml(self)
+
+
+def _levels(lo: float, hi: float, n: int) -> np.ndarray:
+    return np.array([lo]) if n == 1 else np.linspace(lo, hi, n)
+
+
+SECTIONS: tuple[str, ...] = tuple(f.name for f in fields(Study) if f.name not in ("name", "description"))
