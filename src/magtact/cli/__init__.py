@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import sys
 
+from rich.markup import escape
+
 from ..study import StudyError
+from . import _study  # noqa: F401  (registers the command)
 from ._app import app, console
 
 #: Errors a user can fix: printed as one message, no traceback, exit status 2.
@@ -14,22 +17,10 @@ USER_ERRORS: tuple[type[Exception], ...] = (StudyError, FileNotFoundError, Value
 def main() -> None:
     """Entry point of the ``magtact`` console script."""
     try:
-        app(standalone_mode=False)
+        app()  # standalone: usage errors are printed by typer and exit 2
     except USER_ERRORS as exc:
-        console.print(f"[bold red]error:[/] {exc}", highlight=False)
+        console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
         sys.exit(2)
-    except SystemExit:
-        raise
-    except Exception as exc:  # click's own usage errors arrive here in non-standalone mode
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            sys.exit(exc.exit_code)
-        if isinstance(exc, click.exceptions.Abort):
-            console.print("aborted")
-            sys.exit(130)
-        raise
 
 
 __all__ = ["app", "main"]

@@ -19,6 +19,11 @@ app = typer.Typer(
 )
 console = Console(stderr=True)
 
+
+@app.callback()
+def _root() -> None:
+    """magtact: design magnetic soft tactile sensors by simulation and optimisation."""
+
 #: The optional STUDY argument of every command: a TOML file or a preset name.
 StudyArg = Annotated[
     str | None,

@@ -34,7 +34,7 @@ class Body:
     """Elastomer body: one cylinder of radius R and height H + H_g (SPEC section 1)."""
 
     R: float = setting(6e-3, "mm", positive=True, doc="body radius")
-    H_g: float = setting(4.97e-3, "mm", positive=True, doc="height of the upper part (holds the magnet)")
+    H_g: float = setting(4.97e-3, "mm", positive=True, doc="upper part height")
     R_g: float = setting(6e-3, "mm", positive=True, doc="radius of the upper part")
     R_h: float = setting(1e-3, "mm", minimum=0.0, doc="radius of the rounded top edge")
 
@@ -47,8 +47,9 @@ class Magnet:
     H_m: float = setting(2e-3, "mm", positive=True, doc="magnet height")
     M_z: float = setting(1.2e6, "A_per_m", positive=True, doc="axial magnetisation")
     placement: str = setting("covered", choices=("covered", "flush"),
-                             doc="'covered': 1/2 H_m of elastomer above the magnet, distances to "
-                                 "its centre; 'flush': top at the top face, distances to its lower face")
+                             doc="'covered': H_m/2 of elastomer above, distances to the "
+                                 "centre; 'flush': top at the top face, distances to the "
+                                 "lower face")
 
 
 @dataclass(frozen=True)
@@ -67,17 +68,17 @@ class Material:
     """Incompressible neo-Hookean elastomer."""
 
     G_ref: float = setting(29.4e3, "kPa", positive=True,
-                           doc="reference shear modulus of the structural solves (forces scale with G)")
+                           doc="shear modulus of the structural solves (F scales with G)")
     bulk_ratio: float = setting(5000.0, minimum=1000.0,
-                                doc="bulk modulus / shear modulus of the nearly incompressible model")
+                                doc="bulk / shear modulus (nearly incompressible)")
 
 
 @dataclass(frozen=True)
 class Design:
     """Design space (H, G) and the original design of the published sensor."""
 
-    H: tuple[float, float] = setting((3e-3, 7e-3), "mm", positive=True, doc="range of base height H")
-    G: tuple[float, float] = setting((10e3, 50e3), "kPa", positive=True, doc="range of shear modulus G")
+    H: tuple[float, float] = setting((3e-3, 7e-3), "mm", positive=True, doc="range of H")
+    G: tuple[float, float] = setting((10e3, 50e3), "kPa", positive=True, doc="range of G")
     H_original: float = setting(3e-3, "mm", positive=True, doc="H of the original sensor")
     G_original: float = setting(29.4e3, "kPa", positive=True, doc="G of the original sensor")
 
@@ -121,7 +122,7 @@ class Constraints:
     F_r_c: float = setting(-0.25, "N", doc="F_r,min must be at most this (shear capacity)")
     F_z_c: float = setting(5.0, "N", positive=True, doc="F_z,max must be at least this")
     source: str = setting("values", choices=("values", "reference"),
-                          doc="'values': the numbers above; 'reference': those of the original design")
+                          doc="'values': numbers above; 'reference': original design")
 
 
 @dataclass(frozen=True)
@@ -172,4 +173,6 @@ def _levels(lo: float, hi: float, n: int) -> np.ndarray:
     return np.array([lo]) if n == 1 else np.linspace(lo, hi, n)
 
 
-SECTIONS: tuple[str, ...] = tuple(f.name for f in fields(Study) if f.name not in ("name", "description"))
+SECTIONS: tuple[str, ...] = tuple(
+    f.name for f in fields(Study) if f.name not in ("name", "description")
+)

@@ -6,19 +6,18 @@ millimetres and kilopascals. Every conversion between the two goes through this 
 
 from __future__ import annotations
 
-import numpy as np
-
-#: Factor that turns a value in the named user unit into SI.
-TO_SI: dict[str, float] = {
-    "mm": 1e-3,
-    "kPa": 1e3,
-    "N": 1.0,
-    "T": 1.0,
-    "mT": 1e-3,
-    "rad": 1.0,
-    "A_per_m": 1.0,
-    "s": 1.0,
-    "": 1.0,
+#: Value in SI = value in the user unit × num / den (kept as two integers so that a value such
+#: as 2.97 mm becomes exactly the float nearest to 0.00297 m).
+SCALE: dict[str, tuple[int, int]] = {
+    "mm": (1, 1000),
+    "kPa": (1000, 1),
+    "mT": (1, 1000),
+    "N": (1, 1),
+    "T": (1, 1),
+    "rad": (1, 1),
+    "A_per_m": (1, 1),
+    "s": (1, 1),
+    "": (1, 1),
 }
 
 #: Printable form of each unit suffix.
@@ -30,20 +29,22 @@ MU0 = 1.257e-6
 
 def to_si(value, unit: str):
     """Convert ``value`` given in the user unit ``unit`` (e.g. ``"mm"``) to SI."""
-    return _scaled(value, TO_SI[unit])
+    num, den = SCALE[unit]
+    return _scaled(value, num, den)
 
 
 def from_si(value, unit: str):
     """Convert an SI ``value`` to the user unit ``unit`` (e.g. metres to ``"mm"``)."""
-    return _scaled(value, 1.0 / TO_SI[unit])
+    num, den = SCALE[unit]
+    return _scaled(value, den, num)
 
 
-def _scaled(value, factor: float):
+def _scaled(value, num: int, den: int):
     if isinstance(value, (list, tuple)):
-        return type(value)(v * factor for v in value)
-    if isinstance(value, np.ndarray):
-        return value * factor
-    return value * factor
+        return type(value)(_scaled(v, num, den) for v in value)
+    if num == den:
+        return value
+    return value * num / den if num > 1 else value / den
 
 
 def mm(value):
