@@ -126,6 +126,28 @@ class Constraints:
 
 
 @dataclass(frozen=True)
+class Metamodel:
+    """Genetic-programming metamodels (SPEC section 5); fixed generations and seed: reproducible."""
+
+    generations: int = setting(60, integer=True, minimum=1, doc="GP generations per fit")
+    population: int = setting(400, integer=True, minimum=10, doc="GP population size")
+    max_length: int = setting(40, integer=True, minimum=3, doc="largest expression (tree nodes)")
+    local_iterations: int = setting(5, integer=True, minimum=0,
+                                    doc="Levenberg-Marquardt steps on the constants per evaluation")
+    operators: str = setting("smooth", choices=("smooth", "rational"),
+                             doc="'smooth': add, sub, mul, div, exp, log, sqrt, tanh; "
+                                 "'rational': add, sub, mul, div")
+    seed: int = setting(0, integer=True, minimum=0, doc="random seed of the first fit")
+    retries: int = setting(3, integer=True, minimum=0,
+                           doc="refits with the next seeds when a model fails the guard rails")
+    holdout_paths: int = setting(4, integer=True, minimum=0,
+                                 doc="interior (theta, H) paths held out to measure accuracy")
+    b_model: str = setting("fit", choices=("fit", "exact"),
+                           doc="'fit': GP models of B_r, B_z; 'exact': the closed-form field")
+    threads: int = setting(2, integer=True, minimum=1, doc="threads of the GP")
+
+
+@dataclass(frozen=True)
 class Study:
     """A complete sensor study. All quantities in SI (m, Pa, N, T, rad, A/m)."""
 
@@ -140,6 +162,7 @@ class Study:
     magnetics: Magnetics = field(default_factory=Magnetics)
     mechanics: Mechanics = field(default_factory=Mechanics)
     constraints: Constraints = field(default_factory=Constraints)
+    metamodel: Metamodel = field(default_factory=Metamodel)
 
     # ---- DOE levels (SI) -------------------------------------------------------------------
     @property

@@ -1,0 +1,34 @@
+"""The symbols of every metamodel and the features they are built on.
+
+Responses are functions of the load t, shear angle θ and base height H (SPEC section 1). The map
+(t, θ) → u = (u_r, u_z) is singular at t = 0, so fitted models are built in the *features*
+
+    p = t,   q = t tan θ,   H
+
+which are linear in u at fixed H (u_z = a p, u_r = −a q with a = Δz_sat − Δz0(H) < 0). A model
+that is smooth in (p, q, H) is smooth in u, and the sensitivity (SPEC section 6) computed with
+derivatives in (p, q) is finite at t = 0 by construction. The same model in (t, θ, H) follows by
+substituting p = t, q = t tan θ.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+#: Non-dimensional load t [-], shear angle θ [rad], base height H [m].
+t, theta, H = sp.symbols("t theta H", real=True)
+#: Features p = t [-] and q = t tan θ [-].
+p, q = sp.symbols("p q", real=True)
+
+#: Symbols of the (t, θ, H) form, in the order of gradients and Hessians.
+TTH = (t, theta, H)
+#: Symbols of the feature form (p, q, H).
+PQH = (p, q, H)
+
+#: Substitution feature form → (t, θ, H) form.
+PQ_TO_TTH = {p: t, q: t * sp.tan(theta)}
+#: Substitution (t, θ, H) form → feature form (exact where t > 0).
+TTH_TO_PQ = {t: p, theta: sp.atan(q / p)}
+
+#: Every symbol a model may contain, by name.
+SYMBOLS: dict[str, sp.Symbol] = {s.name: s for s in (t, theta, H, p, q)}

@@ -1,0 +1,197 @@
+"""Sensitivity of force to field, Γ (SPEC section 6), and its derivatives for the optimiser.
+
+Derivation
+----------
+At fixed design H the responses are functions of the magnet displacement u = (u_r, u_z). The
+features p = t, q = t tan θ are linear in u (u_z = a p, u_r = −a q, a = Δz_sat − Δz0(H)), so
+with x = (p, q) and the constant matrix K = ∂x/∂u,
+
+    ∂F/∂B = (∂F/∂u)(∂B/∂u)⁻¹ = (∂F/∂x K)(∂B/∂x K)⁻¹ = (∂F/∂x)(∂B/∂x)⁻¹.
+
+With J = ∂(B_r, B_z)/∂(p, q) and D = det J,
+
+    ∂f/∂B = [f_p B_z,q − f_q B_z,p,  f_q B_r,p − f_p B_r,q] / D,     γ = |∂f/∂B|,
+
+and Γ = G γ [N/T] because F = G f. Everything is evaluated at (p, q) = (t, t tan θ): nothing
+divides by t, so Γ is finite at t = 0 and equals its limit t → 0 whenever the models are smooth
+in u (the fitted models are, by construction). The map (t, θ) → (p, q) enters only the chain rule
+of the derivatives with respect to (t, θ) the optimiser asks for:
+
+    ∇_(t,θ) g = Jxᵀ ∇_x g,   ∇²_(t,θ) g = Jxᵀ ∇²_x g Jx + g_q ∇²_(t,θ) q,
+    Jx = [[1, 0], [tan θ, t sec²θ]],  ∇²_(t,θ) q = [[0, sec²θ], [sec²θ, 2 t sec²θ tan θ]].
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ..metamodel import ModelSet
+
+#: Names served by :class:`Responses`: f = F / G [N/Pa] and γ = Γ / G [N/(T·Pa)].
+NAMES = ("f_r", "f_z", "gamma_r", "gamma_z")
+
+
+def _phi_functions():
+    """γ of v = (f_p, f_q, Br_p, Br_q, Bz_p, Bz_q), with its 1st and 2nd derivatives."""
+    v = sp.symbols("fp fq brp brq bzp bzq", real=True)
+    fp, fq, brp, brq, bzp, bzq = v
+    det = brp * bzq - brq * bzp
+    s1 = (fp * bzq - fq * bzp) / det
+    s2 = (fq * brp - fp * brq) / det
+    phi = sp.sqrt(s1**2 + s2**2)
+    d1 = [sp.diff(phi, a) for a in v]
+    d2 = [[sp.diff(g, a) for a in v] for g in d1]
+    return (sp.lambdify(v, phi, "numpy", cse=True), sp.lambdify(v, d1, "numpy", cse=True),
+            sp.lambdify(v, d2, "numpy", cse=True))
+
+
+_PHI = None
+
+
+def _phi():
+    global _PHI
+    if _PHI is None:
+        _PHI = _phi_functions()
+    return _PHI
+
+
+def _stack(nested, shape, tail):
+    """Nested list of broadcastable arrays → array of shape (*shape, *tail)."""
+    flat = [nested]
+    for _ in tail:
+        flat = [v for row in flat for v in row]
+    out = np.empty(shape + tail)
+    for k, v in enumerate(flat):
+        out[(...,) + np.unravel_index(k, tail)] = np.broadcast_to(v, shape)
+    return out
+
+
+def _jets(models: ModelSet, t, theta, H, order: int):
+    """Jets w.r.t. (p, q) of f_r, f_z, B_r, B_z up to ``order`` (see ``Metamodel.jet``)."""
+    return {k: m.jet(t, theta, H, order) for k, m in models.items()}
+
+
+def dF_dB(models: ModelSet, t, theta, H, G=1.0) -> np.ndarray:
+    """Jacobian ∂F/∂B at fixed design, shape (..., 2, 2) [N/T].
+
+    Rows (F_r, F_z), columns (B_r, B_z); arguments broadcast (t [-], θ [rad], H [m], G [Pa]).
+    """
+    jets = _jets(models, t, theta, H, 1)
+    J = np.stack([jets["B_r"][1], jets["B_z"][1]], axis=-2)  # (..., 2 [B], 2 [p, q])
+    dfx = np.stack([jets["f_r"][1], jets["f_z"][1]], axis=-2)  # (..., 2 [f], 2 [p, q])
+    return np.asarray(G, dtype=float)[..., None, None] * (dfx @ np.linalg.inv(J))
+
+
+def gamma(models: ModelSet, t, theta, H, G) -> tuple[np.ndarray, np.ndarray]:
+    """Sensitivities Γ_r, Γ_z [N/T] at (t, θ, H, G) (broadcast).
+
+    Γ_r = |∂F_r/∂B|, Γ_z = |∂F_z/∂B| (SPEC section 6), finite at t = 0 (see the module notes).
+    """
+    S = dF_dB(models, t, theta, H, G)
+    return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])
+
+
+class Responses:
+    """Compiled responses f_r, f_z, γ_r, γ_z (per unit G) and their derivatives in (t, θ).
+
+    ``Responses(models).at(H)`` fixes the design height H [m] and serves, vectorised over arrays
+    ``t`` and ``theta`` of any broadcastable shape S:
+
+    - ``value(name, t, theta)`` → shape S,
+    - ``grad(name, t, theta)`` → shape S + (2,), derivatives w.r.t. (t, θ),
+    - ``hess(name, t, theta)`` → shape S + (2, 2),
+
+    for ``name`` in ``"f_r", "f_z"`` [N/Pa] and ``"gamma_r", "gamma_z"`` [N/(T·Pa)]. Multiply by
+    G [Pa] for F [N] and Γ [N/T]; G does not change where the extrema are.
+    """
+
+    def __init__(self, models: ModelSet):
+        self.models = models
+
+    def at(self, H: float) -> ResponsesAtH:
+        """The responses at design height ``H`` [m]."""
+        return ResponsesAtH(self.models, float(H))
+
+
+class ResponsesAtH:
+    """Responses at one design height H; see :class:`Responses`."""
+
+    def __init__(self, models: ModelSet, H: float):
+        self.models, self.H = models, H
+
+    def _check(self, name):
+        if name not in NAMES:
+            raise ValueError(f"unknown response {name!r}; choose from {list(NAMES)}")
+
+    def value(self, name: str, t, theta) -> np.ndarray:
+        """Value of ``name`` at (t, θ), shape of the broadcast inputs."""
+        self._check(name)
+        if name in ("f_r", "f_z"):
+            return self.models[name].value(t, theta, self.H)
+        return self._gamma_jet(name, t, theta, 0)[0]
+
+    def grad(self, name: str, t, theta) -> np.ndarray:
+        """Gradient of ``name`` w.r.t. (t, θ), shape (..., 2)."""
+        self._check(name)
+        if name in ("f_r", "f_z"):
+            return self.models[name].grad(t, theta, self.H)[..., :2]
+        _, gx = self._gamma_jet(name, t, theta, 1)
+        return _to_ttheta(t, theta, gx)
+
+    def hess(self, name: str, t, theta) -> np.ndarray:
+        """Hessian of ``name`` w.r.t. (t, θ), shape (..., 2, 2)."""
+        self._check(name)
+        if name in ("f_r", "f_z"):
+            return self.models[name].hess(t, theta, self.H)[..., :2, :2]
+        _, gx, hx = self._gamma_jet(name, t, theta, 2)
+        return _to_ttheta_hess(t, theta, gx, hx)
+
+    def _gamma_jet(self, name, t, theta, order):
+        """γ and its derivatives w.r.t. x = (p, q) up to ``order`` (≤ 2)."""
+        f = "f_r" if name == "gamma_r" else "f_z"
+        jf = self.models[f].jet(t, theta, self.H, order + 1)
+        jr = self.models["B_r"].jet(t, theta, self.H, order + 1)
+        jz = self.models["B_z"].jet(t, theta, self.H, order + 1)
+        # v_i = first derivatives, shape (..., 6); dv = their x-gradients (..., 6, 2); ...
+        v = np.concatenate([jf[1], jr[1], jz[1]], axis=-1)
+        shape = v.shape[:-1]
+        phi, dphi, d2phi = _phi()
+        args = [v[..., i] for i in range(6)]
+        out = [np.broadcast_to(phi(*args), shape)]
+        if order >= 1:
+            dv = np.concatenate([jf[2], jr[2], jz[2]], axis=-2)  # (..., 6, 2)
+            Phi1 = _stack(dphi(*args), shape, (6,))
+            out.append(np.einsum("...i,...ik->...k", Phi1, dv))
+        if order >= 2:
+            d2v = np.concatenate([jf[3], jr[3], jz[3]], axis=-3)  # (..., 6, 2, 2)
+            Phi2 = _stack(d2phi(*args), shape, (6, 6))
+            out.append(np.einsum("...ij,...ik,...jl->...kl", Phi2, dv, dv)
+                       + np.einsum("...i,...ikl->...kl", Phi1, d2v))
+        return out
+
+
+def _jx(t, theta):
+    t, theta = np.broadcast_arrays(np.asarray(t, float), np.asarray(theta, float))
+    sec2 = 1.0 / np.cos(theta) ** 2
+    J = np.zeros(t.shape + (2, 2))
+    J[..., 0, 0] = 1.0
+    J[..., 1, 0] = np.tan(theta)
+    J[..., 1, 1] = t * sec2
+    return J, t, theta, sec2
+
+
+def _to_ttheta(t, theta, gx):
+    """∇_(t,θ) g = Jxᵀ ∇_x g."""
+    J = _jx(t, theta)[0]
+    return np.einsum("...ki,...k->...i", J, gx)
+
+
+def _to_ttheta_hess(t, theta, gx, hx):
+    """∇²_(t,θ) g = Jxᵀ ∇²_x g Jx + g_q ∇²_(t,θ) q."""
+    J, t, theta, sec2 = _jx(t, theta)
+    out = np.einsum("...ki,...kl,...lj->...ij", J, hx, J)
+    out[..., 0, 1] += gx[..., 1] * sec2
+    out[..., 1, 0] += gx[..., 1] * sec2
+    out[..., 1, 1] += gx[..., 1] * 2.0 * t * sec2 * np.tan(theta)
+    return out
