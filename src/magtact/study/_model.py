@@ -148,6 +148,28 @@ class Metamodel:
 
 
 @dataclass(frozen=True)
+class Optimise:
+    """Design optimisation (SPEC section 7): per-design extrema, maps, NSGA-II, reduction."""
+
+    population: int = setting(200, integer=True, minimum=4,
+                              doc="population of the per-design GA and of NSGA-II")
+    seed: int = setting(0, integer=True, minimum=0, doc="random seed of every GA run")
+    ga_generations: int = setting(25, integer=True, minimum=1,
+                                  doc="GA generations before the trust-region refinement")
+    nsga2_generations: int = setting(100, integer=True, minimum=1, doc="NSGA-II generations")
+    tol: float = setting(1e-12, positive=True, doc="refinement tolerance (relative)")
+    grid_n: int = setting(10, integer=True, minimum=2, doc="map levels along H and along G")
+    sweep_n: int = setting(1001, integer=True, minimum=3,
+                           doc="heights of the exact reduction's 1D sweep")
+    start_t: int = setting(41, integer=True, minimum=2,
+                           doc="start grid along t of the batched per-height solver")
+    start_theta: int = setting(21, integer=True, minimum=2,
+                               doc="start grid along theta of the batched per-height solver")
+    active_rtol: float = setting(1e-2, positive=True,
+                                 doc="a constraint is active when |margin| <= this x |limit|")
+
+
+@dataclass(frozen=True)
 class Study:
     """A complete sensor study. All quantities in SI (m, Pa, N, T, rad, A/m)."""
 
@@ -163,6 +185,7 @@ class Study:
     mechanics: Mechanics = field(default_factory=Mechanics)
     constraints: Constraints = field(default_factory=Constraints)
     metamodel: Metamodel = field(default_factory=Metamodel)
+    optimise: Optimise = field(default_factory=Optimise)
 
     # ---- DOE levels (SI) -------------------------------------------------------------------
     @property
