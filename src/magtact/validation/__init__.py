@@ -1,0 +1,18 @@
+"""Validation against repeat indentation tests (SPEC section 8).
+
+Read tests from CSV (:func:`read_experiment`; the format is documented in ``_io``), compare them
+with a :class:`PathModel` (metamodels, direct simulation, samples or any function) by
+:func:`validate`, which filters, resamples and returns c_v and ε per response.
+"""
+
+from ._filter import FilterSettings, bandpass
+from ._io import RESPONSES, UNITS, Curve, DataError, Experiment, read_experiment
+from ._model import PathModel
+from ._stats import ResponseStats, Validation, excluded_ranges, validate
+from ._synthetic import SYNTHETIC_DIR, synthetic_files
+
+__all__ = [
+    "RESPONSES", "SYNTHETIC_DIR", "UNITS", "Curve", "DataError", "Experiment", "FilterSettings",
+    "PathModel", "ResponseStats", "Validation", "bandpass", "excluded_ranges", "read_experiment",
+    "synthetic_files", "validate",
+]
