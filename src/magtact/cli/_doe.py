@@ -1,0 +1,59 @@
+"""`magtact doe`: compute a study's design of experiments (parallel, cached, resumable)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+
+
+@app.command("doe")
+def doe_command(
+    out: OutOpt,
+    study: StudyArg = None,
+    workers: Annotated[int | None, typer.Option(
+        "--workers", "-j", help="Local worker processes (default: the number of cores; 0: run "
+                                "in this process).")] = None,
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", help="Address of a dask.distributed scheduler (tcp://host:8786); the "
+                            "jobs run on its workers instead of local processes.")] = None,
+    cache: Annotated[Path, typer.Option(
+        "--cache", help="Job cache folder: finished jobs are kept there and never recomputed.")]
+    = Path(".magtact-cache"),
+    no_cache: Annotated[bool, typer.Option("--no-cache", help="Compute every job afresh.")]
+    = False,
+) -> None:
+    """Run STUDY's full-factorial DOE; write OUT/doe.nc (netCDF) and OUT/doe.csv (user units)."""
+    from ..doe import DOEFailed, run_doe, save_dataset, write_csv
+
+    s = get_study(study)
+    folder = out_dir(out)
+    start = time.perf_counter()
+    try:
+        ds = run_doe(s, cache=None if no_cache else cache, workers=workers, scheduler=scheduler,
+                     console=console)
+    except DOEFailed as exc:
+        report = folder / "doe_failures.json"
+        report.write_text(json.dumps([{"job": f.label, "error": f.error, "traceback": f.detail}
+                                      for f in exc.failures], indent=1), encoding="utf-8")
+        console.print(f"[bold red]{len(exc.failures)} job(s) failed[/] (tracebacks in {report}); "
+                      "the other jobs are cached: re-run to retry only the failed ones.")
+        for f in exc.failures:
+            console.print(f"  [red]{f.label}[/]: {f.error}", highlight=False)
+        sys.exit(1)
+    nc = save_dataset(ds, folder / "doe.nc")
+    csv = write_csv(ds, folder / "doe.csv")
+    a = ds.attrs
+    console.print(f"{a['run_paths_total']} structural paths: {a['run_paths_computed']} computed, "
+                  f"{a['run_paths_cached']} from the cache"
+                  + (f" ({a['run_cache_corrupt']} corrupt entries recomputed)"
+                     if a["run_cache_corrupt"] else "")
+                  + f"; field {'computed' if a['run_fields_computed'] else 'from the cache'}."
+                  f"\nwrote {nc} and {csv} ({ds['F_r'].size:,} rows) in "
+                  f"{time.perf_counter() - start:.1f} s", highlight=False)

@@ -1,0 +1,198 @@
+"""The DOE data set: assembly from job results, netCDF and CSV files, the bundled data set.
+
+Layout (docs/CONTRACTS.md): dimensions ``t, theta, H, G`` with SI coordinates (-, rad, m, Pa);
+``u_r, u_z`` (t, theta, H) [m], ``B_r, B_z`` (t, theta, H) [T], ``F_r, F_z`` (t, theta, H, G) [N];
+``units`` and ``long_name`` on every variable; provenance in the global attributes (all of them
+netCDF-safe: strings and numbers, structured values as JSON text).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import tempfile
+from datetime import UTC, datetime
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..study import Study, from_si
+from ._cache import Entry
+from ._jobs import FieldJob, PathJob, versions
+
+DIMS = ("t", "theta", "H", "G")
+#: Variable name -> (dimensions, units, long name).
+VARIABLES = {
+    "u_r": (DIMS[:3], "m", "magnet displacement along the shear direction +x"),
+    "u_z": (DIMS[:3], "m", "magnet displacement along z (negative: down)"),
+    "B_r": (DIMS[:3], "T", "flux density at the Hall point along +x"),
+    "B_z": (DIMS[:3], "T", "flux density at the Hall point along z"),
+    "F_r": (DIMS, "N", "reaction force on the lower surface along +x (full body)"),
+    "F_z": (DIMS, "N", "reaction force on the lower surface along z (full body)"),
+}
+COORDS = {"t": ("1", "non-dimensional load"), "theta": ("rad", "shear angle"),
+          "H": ("m", "base height of the body"), "G": ("Pa", "shear modulus of the elastomer")}
+#: CSV columns: name, (variable or coordinate, user unit).
+CSV_COLUMNS = {
+    "t": ("t", ""), "theta_rad": ("theta", "rad"), "H_mm": ("H", "mm"), "G_kPa": ("G", "kPa"),
+    "u_r_mm": ("u_r", "mm"), "u_z_mm": ("u_z", "mm"), "B_r_T": ("B_r", "T"),
+    "B_z_T": ("B_z", "T"), "F_r_N": ("F_r", "N"), "F_z_N": ("F_z", "N"),
+}
+#: Libraries whose versions are recorded in the provenance.
+PROVENANCE_LIBS = ("magtact", "numpy", "scipy", "felupe", "scikit-fem", "gmsh", "pypardiso",
+                   "magpylib", "xarray", "h5netcdf", "dask", "distributed")
+BUNDLED_NAME = "magone_doe.nc"
+
+
+def assemble(study: Study, field_job: FieldJob, field: Entry | None, path_jobs: list[PathJob],
+             paths: dict[str, Entry], attrs: dict) -> xr.Dataset:
+    """Build the data set from the job results (missing results are NaN).
+
+    Forces of a path solved at ``G_0`` (``job.G is None``) are scaled to each G level:
+    F(G) = F(G_0) · G / G_0 (exact for the incompressible neo-Hookean body with Coulomb friction
+    under displacement control; SPEC section 3).
+    """
+    t, theta, H, G = study.t_levels, study.theta_levels, study.H_levels, study.G_levels
+    shape3 = (len(t), len(theta), len(H))
+    data = {name: np.full(shape3 if len(dims) == 3 else shape3 + (len(G),), np.nan)
+            for name, (dims, _, _) in VARIABLES.items()}
+    if field is not None:
+        data["B_r"][:], data["B_z"][:] = field.arrays["B_r"], field.arrays["B_z"]
+    i_theta = {float(v): i for i, v in enumerate(theta)}
+    i_H = {float(v): i for i, v in enumerate(H)}
+    i_G = {float(v): i for i, v in enumerate(G)}
+    for job in path_jobs:
+        entry = paths.get(job.key)
+        if entry is None:
+            continue
+        i, j = i_theta[job.theta], i_H[job.H]
+        a = entry.arrays
+        data["u_r"][:, i, j], data["u_z"][:, i, j] = a["u_r"], a["u_z"]
+        if job.G is None:
+            scale = G / float(entry.meta["G"])
+            data["F_r"][:, i, j, :] = a["F_r"][:, None] * scale
+            data["F_z"][:, i, j, :] = a["F_z"][:, None] * scale
+        else:
+            k = i_G[job.G]
+            data["F_r"][:, i, j, k], data["F_z"][:, i, j, k] = a["F_r"], a["F_z"]
+    ds = xr.Dataset(
+        {name: (dims, data[name], {"units": u, "long_name": ln})
+         for name, (dims, u, ln) in VARIABLES.items()},
+        coords={name: (name, values, {"units": COORDS[name][0], "long_name": COORDS[name][1]})
+                for name, values in zip(DIMS, (t, theta, H, G), strict=True)},
+    )
+    ds.attrs.update(provenance(study, field_job, field, path_jobs, paths))
+    ds.attrs.update(attrs)
+    return ds
+
+
+def provenance(study: Study, field_job: FieldJob, field: Entry | None, path_jobs: list[PathJob],
+               paths: dict[str, Entry]) -> dict:
+    """Global attributes: study, versions, solvers, mesh sizes and per-job statistics."""
+    jobs = []
+    for job in path_jobs:
+        entry = paths.get(job.key)
+        rec = {"theta": job.theta, "H": job.H, "G": job.G, "key": job.key}
+        if entry is not None:
+            rec.update({k: entry.meta[k] for k in ("newton_iterations", "cutbacks", "n_dofs",
+                                                   "n_cells", "mesh", "wall_time")})
+            rec["G_solved"] = entry.meta["G"]
+            rec["job_wall_time"] = entry.meta.get("job_wall_time")
+        jobs.append(rec)
+    meshes = sorted({r["mesh"] for r in jobs if r.get("mesh")})
+    cells = [r["n_cells"] for r in jobs if "n_cells" in r]
+    return {
+        "title": f"magtact design of experiments: {study.name}",
+        "study_name": study.name,
+        "study_toml": study.to_toml(),
+        "versions": json.dumps(versions(PROVENANCE_LIBS), sort_keys=True),
+        "created_utc": datetime.now(UTC).isoformat(timespec="seconds"),
+        "field_solver": field_job.solver,
+        "field_key": field_job.key,
+        "field_wall_time_s": float(field.meta.get("job_wall_time", np.nan)) if field else np.nan,
+        "mesh": ", ".join(meshes),
+        "mesh_n_cells_min": int(min(cells)) if cells else -1,
+        "mesh_n_cells_max": int(max(cells)) if cells else -1,
+        "forces_scaled_in_G": int(study.mechanics.scale_in_G),
+        "jobs": json.dumps(jobs),
+        "jobs_doc": "JSON list, one record per structural path: theta [rad], H [m], G [Pa] or "
+                    "null (solved at G_solved and scaled), cache key, newton_iterations, "
+                    "cutbacks, n_dofs, n_cells, mesh, wall_time [s] of the solver, "
+                    "job_wall_time [s] of the whole job",
+    }
+
+
+def save_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write ``ds`` to netCDF-4 (h5netcdf, compressed) atomically; return the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars}
+        ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_dataset(path: str | os.PathLike) -> xr.Dataset:
+    """Read a DOE data set written by :func:`save_dataset` (fully into memory) and check it.
+
+    Raises ``FileNotFoundError`` if the file is missing and ``ValueError`` if it lacks a
+    dimension or variable of the layout.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"DOE data set not found: {path}")
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        ds = ds.load()
+    for dim in DIMS:
+        if dim not in ds.dims:
+            raise ValueError(f"{path}: not a DOE data set (no dimension {dim!r})")
+    for name, (dims, units, _) in VARIABLES.items():
+        if name not in ds.data_vars:
+            raise ValueError(f"{path}: not a DOE data set (no variable {name!r})")
+        if ds[name].dims != dims or ds[name].attrs.get("units") != units:
+            raise ValueError(f"{path}: variable {name!r} should have dims {dims} and units "
+                             f"{units!r}, has {ds[name].dims} and {ds[name].attrs.get('units')!r}")
+    return ds
+
+
+def bundled_path() -> Path:
+    """Location of the bundled data set inside the installed package."""
+    return Path(str(resources.files("magtact.doe").joinpath("data", BUNDLED_NAME)))
+
+
+def load_bundled() -> xr.Dataset:
+    """The default MagOne study's DOE shipped with magtact (see ``magtact/doe/data/README.md``)."""
+    path = bundled_path()
+    if not path.is_file():
+        raise FileNotFoundError(f"the bundled DOE data set is missing ({path}); rebuild it with "
+                                "'python -m magtact.doe.bundle'")
+    return load_dataset(path)
+
+
+def write_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Export ``ds`` as CSV, one row per (t, theta, H, G), G fastest; user units in the header.
+
+    Columns: ``t,theta_rad,H_mm,G_kPa,u_r_mm,u_z_mm,B_r_T,B_z_T,F_r_N,F_z_N``. Numbers are
+    written in their shortest exact form (they read back to the same doubles).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    def column(var: str, unit: str) -> np.ndarray:
+        return from_si(ds[var].broadcast_like(ds["F_r"]).transpose(*DIMS).values.ravel(), unit)
+
+    full = {name: column(var, unit) for name, (var, unit) in CSV_COLUMNS.items()}
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(CSV_COLUMNS)
+        for row in zip(*(full[name].tolist() for name in CSV_COLUMNS), strict=True):
+            writer.writerow([repr(x) for x in row])
+    return path

@@ -1,0 +1,262 @@
+"""The jobs of a design of experiments, their cache keys, and the functions workers run.
+
+Two kinds of job (SPEC section 4):
+
+* a **path** job: one structural loading path at (θ, H) through every t level, solved at the
+  reference modulus ``G_ref`` and scaled to each G level (or, with
+  ``mechanics.scale_in_G = false``, one job per (θ, H, G));
+* the **field** job: the Hall reading B over the whole (t, θ, H) grid (the field does not depend
+  on the deformation, so it is one cheap job).
+
+A job's key is the SHA-256 of a canonical JSON text of every input that can change its result:
+the study settings it reads (in SI), its own levels, the identity and source code of the solver
+(a hash of the source files of the solver's sub-packages and of the geometry) and the versions of
+the numerical libraries. Settings a job does not read (the other levels, the design ranges, the
+constraints, ``theta_max`` and, for path jobs, the G levels) are left out, so changing them reuses
+the cached jobs.
+
+The functions :func:`run_path` and :func:`run_field` run in the workers (local processes or
+dask); they never raise for a failed solve but return a :class:`Outcome` holding the error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import json
+import sys
+import time
+import traceback
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from ..study import Study, mm
+from ._cache import Entry
+
+#: Arrays a path result must provide, each of shape (n_t,): SI units.
+PATH_ARRAYS = ("t", "u_r", "u_z", "F_r", "F_z")
+#: Scalars a path result must provide (beyond the arrays).
+PATH_SCALARS = ("G", "newton_iterations", "cutbacks", "wall_time", "n_dofs", "n_cells")
+#: Libraries whose version is part of a path (resp. field) job's key.
+PATH_LIBS = ("numpy", "scipy", "felupe", "gmsh", "pypardiso")
+FIELD_LIBS = ("numpy", "scipy", "scikit-fem", "gmsh", "magpylib")
+_ROOT = Path(__file__).resolve().parents[1]  # the magtact package folder
+
+
+@dataclass(frozen=True)
+class PathJob:
+    """One structural path: (θ, H) [rad, m] through the levels ``t``; ``G`` [Pa] or ``None``.
+
+    ``G = None`` means solved at ``study.material.G_ref`` and scaled to every G level.
+    """
+
+    study: Study
+    theta: float
+    H: float
+    G: float | None
+    t: tuple[float, ...]
+    key: str
+
+    kind = "path"
+
+    @property
+    def label(self) -> str:
+        """Short human-readable name, in user units."""
+        g = "" if self.G is None else f", G={self.G / 1e3:.4g} kPa"
+        return f"path θ={self.theta:.4f} rad, H={mm(self.H):.4g} mm{g}"
+
+
+@dataclass(frozen=True)
+class FieldJob:
+    """The Hall reading over the grid ``t`` × ``theta`` × ``H`` with the named field solver."""
+
+    study: Study
+    t: tuple[float, ...]
+    theta: tuple[float, ...]
+    H: tuple[float, ...]
+    solver: str
+    key: str
+
+    kind = "field"
+
+    @property
+    def label(self) -> str:
+        """Short human-readable name."""
+        return f"field B ({self.solver}, {len(self.t)}×{len(self.theta)}×{len(self.H)} points)"
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a worker returns: a cache entry, or the error that stopped the job."""
+
+    entry: Entry | None
+    error: str | None = None
+    detail: str = ""
+    wall_time: float = 0.0
+
+
+# ---- keys ---------------------------------------------------------------------------------------
+@functools.cache
+def source_fingerprint(*parts: str) -> str:
+    """SHA-256 of the ``.py`` sources under the given magtact sub-packages or files.
+
+    ``parts`` are paths relative to the magtact package folder (``"mechanics"``) or absolute
+    file paths. A missing part contributes its name only.
+    """
+    h = hashlib.sha256()
+    for part in parts:
+        p = Path(part) if Path(part).is_absolute() else _ROOT / part
+        files = sorted(p.rglob("*.py")) if p.is_dir() else [p] if p.is_file() else []
+        h.update(f"<{part}:{len(files)}>".encode())
+        for f in files:
+            h.update(str(f.relative_to(p) if p.is_dir() else f.name).encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def solver_identity(func, packages: tuple[str, ...]) -> dict:
+    """Name and source fingerprint of a solver function and the sub-packages it relies on."""
+    module = sys.modules.get(func.__module__)
+    extra = getattr(module, "__file__", None)
+    parts = packages + ((str(Path(extra).resolve()),) if extra else ())
+    return {"name": f"{func.__module__}.{func.__qualname__}", "code": source_fingerprint(*parts)}
+
+
+def versions(names) -> dict[str, str]:
+    """Installed versions of the named distributions (``"absent"`` when not installed)."""
+    out = {}
+    for name in names:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "absent"
+    return out
+
+
+def digest(payload: dict) -> str:
+    """The cache key of a canonical JSON payload (floats written exactly)."""
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:40]
+
+
+def _section(study: Study, name: str, drop: tuple[str, ...] = ()) -> dict:
+    d = dataclasses.asdict(getattr(study, name))
+    return {k: v for k, v in d.items() if k not in drop}
+
+
+def path_key_inputs(study: Study, solver: dict) -> dict:
+    """Everything except the job's own levels that a path job's result depends on."""
+    return {
+        "kind": "path",
+        "solver": solver,
+        "versions": versions(PATH_LIBS),
+        "body": _section(study, "body"),
+        "magnet": _section(study, "magnet"),
+        "loading": _section(study, "loading", drop=("theta_max",)),
+        "material": _section(study, "material"),
+        "mechanics": _section(study, "mechanics"),
+    }
+
+
+def field_key_inputs(study: Study, solver: dict) -> dict:
+    """Everything except the grid that the field job's result depends on."""
+    return {
+        "kind": "field",
+        "solver": solver,
+        "versions": versions(FIELD_LIBS),
+        "body": _section(study, "body"),
+        "magnet": _section(study, "magnet"),
+        "loading": _section(study, "loading", drop=("theta_max", "mu_f")),
+        "magnetics": _section(study, "magnetics"),
+    }
+
+
+def plan(study: Study, path_solver, field_solver) -> tuple[FieldJob, list[PathJob]]:
+    """The field job and the path jobs of ``study`` (θ-major, then H, then G), with their keys."""
+    t = tuple(float(x) for x in study.t_levels)
+    thetas = tuple(float(x) for x in study.theta_levels)
+    Hs = tuple(float(x) for x in study.H_levels)
+    p_inputs = path_key_inputs(study, solver_identity(path_solver, ("mechanics", "geometry")))
+    Gs: tuple[float | None, ...] = (
+        (None,) if study.mechanics.scale_in_G else tuple(float(x) for x in study.G_levels))
+    paths = []
+    for theta in thetas:
+        for H in Hs:
+            for G in Gs:
+                key = digest({**p_inputs, "theta": theta, "H": H, "G": G, "t": t})
+                paths.append(PathJob(study, theta, H, G, t, key))
+    solver = study.magnetics.solver
+    f_inputs = field_key_inputs(study, solver_identity(field_solver, ("magnetics", "geometry")))
+    fkey = digest({**f_inputs, "solver_name": solver, "t": t, "theta": thetas, "H": Hs})
+    return FieldJob(study, t, thetas, Hs, solver, fkey), paths
+
+
+# ---- worker functions ---------------------------------------------------------------------------
+def _plain(value):
+    """A JSON-safe copy of a scalar or array metadata value."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def path_entry(job: PathJob, result) -> Entry:
+    """Check a path solver's result against the job and turn it into a cache entry.
+
+    Raises ``ValueError`` if an array is missing, has the wrong shape, is not finite, or if the
+    result is for other levels than the job's.
+    """
+    n = len(job.t)
+    arrays = {}
+    for name in PATH_ARRAYS:
+        a = np.asarray(getattr(result, name), dtype=float)
+        if a.shape != (n,):
+            raise ValueError(f"path result {name!r} has shape {a.shape}, expected ({n},)")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"path result {name!r} is not finite")
+        arrays[name] = a
+    if not np.allclose(arrays["t"], job.t, rtol=0, atol=1e-12):
+        raise ValueError("path result is at other t levels than requested")
+    meta = {name: _plain(getattr(result, name)) for name in PATH_SCALARS}
+    meta["mesh"] = str(getattr(result, "mesh", ""))
+    if not (np.isfinite(meta["G"]) and meta["G"] > 0):
+        raise ValueError(f"path result has G = {meta['G']!r}, expected a positive modulus")
+    return Entry(arrays=arrays, meta=meta)
+
+
+def run_path(job: PathJob, path_solver) -> Outcome:
+    """Solve one path job (in a worker); errors are returned, not raised."""
+    start = time.perf_counter()
+    try:
+        result = path_solver(job.study, job.H, job.theta, G=job.G, t=np.asarray(job.t))
+        entry = path_entry(job, result)
+    except Exception as exc:
+        return Outcome(None, f"{type(exc).__name__}: {exc}", traceback.format_exc(),
+                       time.perf_counter() - start)
+    wall = time.perf_counter() - start
+    entry.meta["job_wall_time"] = wall
+    return Outcome(entry, wall_time=wall)
+
+
+def run_field(job: FieldJob, field_solver) -> Outcome:
+    """Compute the field job (in a worker); errors are returned, not raised."""
+    start = time.perf_counter()
+    try:
+        T, TH, HH = np.meshgrid(job.t, job.theta, job.H, indexing="ij")
+        B_r, B_z = (np.asarray(b, dtype=float)
+                    for b in field_solver(job.study, T, TH, HH, solver=job.solver))
+        for name, b in (("B_r", B_r), ("B_z", B_z)):
+            if b.shape != T.shape:
+                raise ValueError(f"field {name} has shape {b.shape}, expected {T.shape}")
+            if not np.all(np.isfinite(b)):
+                raise ValueError(f"field {name} is not finite")
+    except Exception as exc:
+        return Outcome(None, f"{type(exc).__name__}: {exc}", traceback.format_exc(),
+                       time.perf_counter() - start)
+    wall = time.perf_counter() - start
+    return Outcome(Entry({"B_r": B_r, "B_z": B_z}, {"job_wall_time": wall}), wall_time=wall)

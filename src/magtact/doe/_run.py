@@ -1,0 +1,156 @@
+"""Running a design of experiments: plan, look up the cache, compute the rest, assemble."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+
+import xarray as xr
+from rich.console import Console
+
+from ..study import Study
+from ._cache import JobCache
+from ._dataset import assemble
+from ._executor import Task, default_workers, execute
+from ._jobs import plan, run_field, run_path
+from ._progress import Display
+
+
+@dataclass(frozen=True)
+class JobFailure:
+    """A job that could not be completed: its label, error message and worker traceback."""
+
+    label: str
+    error: str
+    detail: str = ""
+
+
+class DOEFailed(RuntimeError):
+    """Some jobs failed; every other job finished and is cached.
+
+    Attributes
+    ----------
+    failures : list of JobFailure
+    dataset : xarray.Dataset
+        The incomplete data set (NaN where a job failed; ``attrs["complete"] == 0``).
+    """
+
+    def __init__(self, failures: list[JobFailure], dataset: xr.Dataset):
+        self.failures = failures
+        self.dataset = dataset
+        lines = "\n".join(f"  {f.label}: {f.error}" for f in failures)
+        super().__init__(f"{len(failures)} DOE job(s) failed (the others are cached; re-run to "
+                         f"retry only these):\n{lines}")
+
+
+@dataclass
+class RunStats:
+    """Counters of one run (also written to the data set's ``run_*`` attributes)."""
+
+    paths_total: int = 0
+    paths_cached: int = 0
+    paths_computed: int = 0
+    fields_computed: int = 0
+    cache_corrupt: int = 0
+    failures: list[JobFailure] = field(default_factory=list)
+
+
+def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: int | None = None,
+            scheduler: str | None = None, console: Console | None = None,
+            path_solver=None, field_solver=None) -> xr.Dataset:
+    """Compute the full-factorial design of experiments of ``study`` (SPEC section 4).
+
+    Parameters
+    ----------
+    study : Study
+    cache : path, optional
+        Job cache folder. Jobs found there (and verified) are not recomputed; every computed job
+        is written there as soon as it finishes, so an interrupted run resumes. ``None``: no cache.
+    workers : int, optional
+        Local worker processes (default: the number of cores; 0: compute in this process).
+    scheduler : str, optional
+        Address of a dask.distributed scheduler; the jobs then run on its workers.
+    console : rich.console.Console, optional
+        Draw a live per-job status table and progress bar with ETA there.
+    path_solver, field_solver : callable, optional
+        The structural path solver (default :func:`magtact.mechanics.simulate_path`) and the
+        field solver (default :func:`magtact.magnetics.hall_field`); their source code is part
+        of the cache keys.
+
+    Returns
+    -------
+    xarray.Dataset
+        dims ``t, theta, H, G``; ``u_r, u_z, B_r, B_z`` (t, theta, H), ``F_r, F_z``
+        (t, theta, H, G) in SI, with units and provenance attributes. The ``run_*`` attributes
+        count this run's work: ``run_paths_computed`` structural solves, ``run_paths_cached``
+        paths read from the cache, ``run_cache_corrupt`` corrupt entries recomputed.
+
+    Raises
+    ------
+    DOEFailed
+        If any job failed, after all other jobs finished (they are cached).
+    """
+    if path_solver is None:
+        from ..mechanics import simulate_path as path_solver
+    if field_solver is None:
+        from ..magnetics import hall_field as field_solver
+    start = time.perf_counter()
+    store = JobCache(cache) if cache is not None else None
+    field_job, path_jobs = plan(study, path_solver, field_solver)
+    stats = RunStats(paths_total=len(path_jobs))
+    results, field_entry, tasks = {}, None, []
+    display = Display([field_job, *path_jobs], console)
+    for job in (field_job, *path_jobs):
+        entry = store.get(job.kind, job.key) if store is not None else None
+        if entry is None:
+            is_field = job is field_job
+            tasks.append(Task(job, run_field if is_field else run_path,
+                              (field_solver if is_field else path_solver,)))
+            continue
+        display.cached(job)
+        if job is field_job:
+            field_entry = entry
+        else:
+            results[job.key] = entry
+            stats.paths_cached += 1
+    stats.cache_corrupt = store.corrupt if store is not None else 0
+    display.queue(len(tasks))
+    with display:
+        for job, outcome in execute(tasks, workers=workers, scheduler=scheduler,
+                                    on_start=display.start):
+            display.finish(job, outcome)
+            if outcome.entry is None:
+                stats.failures.append(JobFailure(job.label, outcome.error or "", outcome.detail))
+                continue
+            if store is not None:
+                store.put(job.kind, job.key, outcome.entry)
+            if job is field_job:
+                field_entry = outcome.entry
+                stats.fields_computed += 1
+            else:
+                results[job.key] = outcome.entry
+                stats.paths_computed += 1
+    attrs = {
+        "complete": int(not stats.failures),
+        "failed_jobs": "\n".join(f"{f.label}: {f.error}" for f in stats.failures),
+        "run_paths_total": stats.paths_total,
+        "run_paths_computed": stats.paths_computed,
+        "run_paths_cached": stats.paths_cached,
+        "run_fields_computed": stats.fields_computed,
+        "run_cache_corrupt": stats.cache_corrupt,
+        "run_wall_time_s": time.perf_counter() - start,
+        "run_executor": _executor_name(workers, scheduler),
+    }
+    ds = assemble(study, field_job, field_entry, path_jobs, results, attrs)
+    if stats.failures:
+        raise DOEFailed(stats.failures, ds)
+    return ds
+
+
+def _executor_name(workers: int | None, scheduler: str | None) -> str:
+    if scheduler is not None:
+        return f"dask.distributed scheduler {scheduler}"
+    if workers == 0:
+        return "in process"
+    return f"{workers or default_workers()} local worker processes"
