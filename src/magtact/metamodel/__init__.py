@@ -1,6 +1,13 @@
 """Closed-form metamodels of the study's responses by genetic programming (SPEC section 5)."""
 
+from ._io import load_model, load_models, model_from_dict, model_to_dict, save_model, save_models
 from ._model import RESPONSES, Metamodel, ModelSet
+from ._parse import format_expression, parse_expression
+from ._regressor import OPERATOR_SETS, SymbolicRegressor
 from ._symbols import H, p, q, t, theta
 
-__all__ = ["RESPONSES", "H", "Metamodel", "ModelSet", "p", "q", "t", "theta"]
+__all__ = [
+    "OPERATOR_SETS", "RESPONSES", "H", "Metamodel", "ModelSet", "SymbolicRegressor",
+    "format_expression", "load_model", "load_models", "model_from_dict", "model_to_dict", "p",
+    "parse_expression", "q", "save_model", "save_models", "t", "theta",
+]

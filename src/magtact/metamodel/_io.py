@@ -1,0 +1,142 @@
+"""Metamodel files: JSON, one file per response, read without executing anything.
+
+File layout (``format = "magtact-metamodel/1"``)::
+
+    {"format": ..., "name": "B_r", "units": "T",
+     "variables": {"t": ..., "theta": ..., "H": ..., "p": ..., "q": ...},
+     "expression": "<model in t, theta, H>", "expression_pq": "<model in p, q, H>",
+     "latex": "<for reading only, never parsed>",
+     "info": {"transform": ..., "accuracy": {...}, "settings": {...}, "data_hash": ..., ...}}
+
+Both expressions are read by :func:`magtact.metamodel.parse_expression` (a whitelist grammar) and
+checked to agree with each other where t > 0.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import sympy as sp
+
+from ._model import RESPONSES, Metamodel, ModelSet
+from ._parse import format_expression, parse_expression
+from ._symbols import PQ_TO_TTH, TTH
+
+FORMAT = "magtact-metamodel/1"
+VARIABLES = {
+    "t": "non-dimensional load [-]",
+    "theta": "shear angle [rad]",
+    "H": "base height of the body [m]",
+    "p": "feature p = t [-]",
+    "q": "feature q = t tan(theta) [-]",
+}
+
+
+def model_to_dict(model: Metamodel) -> dict:
+    """The JSON-ready content of a model file."""
+    return {
+        "format": FORMAT,
+        "name": model.name,
+        "units": model.units,
+        "variables": VARIABLES,
+        "expression": format_expression(model.expr),
+        "expression_pq": format_expression(model.expr_pq),
+        "latex": sp.latex(model.expr),
+        "info": model.info,
+    }
+
+
+def model_from_dict(data: dict, source: str = "<dict>") -> Metamodel:
+    """A model from the content of a model file (see the module notes).
+
+    Raises
+    ------
+    ValueError
+        Wrong format tag, missing keys, an expression outside the grammar, or two expressions
+        that disagree.
+    """
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise ValueError(f"{source}: not a magtact metamodel file (expected format {FORMAT!r})")
+    for key in ("name", "units", "expression", "expression_pq"):
+        if not isinstance(data.get(key), str):
+            raise ValueError(f"{source}: key {key!r} is missing or not a string")
+    try:
+        expr = parse_expression(data["expression"], ("t", "theta", "H"))
+        expr_pq = parse_expression(data["expression_pq"], ("p", "q", "H"))
+    except ValueError as exc:
+        raise ValueError(f"{source}: {exc}") from None
+    _check_agree(expr, expr_pq, source)
+    info = data.get("info", {})
+    if not isinstance(info, dict):
+        raise ValueError(f"{source}: 'info' must be an object")
+    return Metamodel(name=data["name"], expr=expr, units=data["units"], expr_pq=expr_pq, info=info)
+
+
+def _check_agree(expr, expr_pq, source, n: int = 16) -> None:
+    """Both forms must give the same values at random points with t > 0."""
+    rng = np.random.default_rng(0)
+    tt, th, hh = rng.uniform(0.05, 1.0, n), rng.uniform(0.0, 0.6, n), rng.uniform(2e-3, 8e-3, n)
+    a = sp.lambdify(TTH, expr, "numpy")(tt, th, hh)
+    b = sp.lambdify(TTH, expr_pq.subs(PQ_TO_TTH), "numpy")(tt, th, hh)
+    a, b = np.broadcast_to(a, (n,)), np.broadcast_to(b, (n,))
+    ok = np.isfinite(a) & np.isfinite(b)
+    if not np.allclose(a[ok], b[ok], rtol=1e-9, atol=1e-12 * np.max(np.abs(a[ok]), initial=1.0)):
+        raise ValueError(f"{source}: 'expression' and 'expression_pq' describe different models")
+
+
+def save_model(model: Metamodel, path: str | Path) -> Path:
+    """Write one model file (JSON) and return its path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(model_to_dict(model), indent=2) + "\n")
+    return path
+
+
+def load_model(path: str | Path) -> Metamodel:
+    """Read one model file written by :func:`save_model` (restricted parser, no code execution).
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    ValueError
+        If it is not valid JSON or not a valid model file.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    return model_from_dict(data, str(path))
+
+
+def save_models(models: ModelSet, folder: str | Path) -> list[Path]:
+    """Write ``<folder>/<name>.json`` for each fitted response; return the paths.
+
+    Responses that are not closed-form :class:`Metamodel` objects (the exact field) are skipped.
+    """
+    return [save_model(m, Path(folder) / f"{k}.json") for k, m in models.items()
+            if isinstance(m, Metamodel)]
+
+
+def load_models(folder: str | Path, B_model=None) -> ModelSet:
+    """Read ``B_r, B_z, f_r, f_z`` from ``<folder>/<name>.json``.
+
+    Parameters
+    ----------
+    folder : path
+    B_model : tuple, optional
+        ``(B_r, B_z)`` models to use instead of files (e.g. the exact field).
+    """
+    folder = Path(folder)
+    names = ["f_r", "f_z"] if B_model is not None else list(RESPONSES)
+    models = {k: load_model(folder / f"{k}.json") for k in names}
+    for k, m in models.items():
+        if m.name != k or m.units != RESPONSES[k]:
+            raise ValueError(f"{folder / (k + '.json')}: holds {m.name!r} [{m.units}], "
+                             f"expected {k!r} [{RESPONSES[k]}]")
+    if B_model is not None:
+        models["B_r"], models["B_z"] = B_model
+    return ModelSet(**models)
