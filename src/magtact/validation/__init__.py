@@ -8,11 +8,12 @@ with a :class:`PathModel` (metamodels, direct simulation, samples or any functio
 from ._filter import FilterSettings, bandpass
 from ._io import RESPONSES, UNITS, Curve, DataError, Experiment, read_experiment
 from ._model import PathModel
+from ._outputs import write_outputs
 from ._stats import ResponseStats, Validation, excluded_ranges, validate
 from ._synthetic import SYNTHETIC_DIR, synthetic_files
 
 __all__ = [
     "RESPONSES", "SYNTHETIC_DIR", "UNITS", "Curve", "DataError", "Experiment", "FilterSettings",
     "PathModel", "ResponseStats", "Validation", "bandpass", "excluded_ranges", "read_experiment",
-    "synthetic_files", "validate",
+    "synthetic_files", "validate", "write_outputs",
 ]

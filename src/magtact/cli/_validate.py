@@ -1,0 +1,116 @@
+"""`magtact validate`: compare repeat indentation tests with the model (SPEC section 8)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from ..study import PRESETS, Study
+from ._app import app, console, get_study, out_dir
+
+
+def split_study_and_data(args: list[str]) -> tuple[str | None, list[Path]]:
+    """Split ``[STUDY] DATA...``: the first item is the study if it is a preset or a .toml file."""
+    if args and (args[0] in PRESETS or args[0].lower().endswith(".toml")):
+        return args[0], [Path(a) for a in args[1:]]
+    return None, [Path(a) for a in args]
+
+
+def design_from(experiment, H_mm: float | None, G_kPa: float | None) -> tuple[float, float]:
+    """The design (H, G) [m, Pa]: the options, else the data's metadata ``design_H_mm`` etc."""
+    meta = experiment.metadata
+    H_mm = H_mm if H_mm is not None else _meta_float(meta, "design_h_mm", "--H")
+    G_kPa = G_kPa if G_kPa is not None else _meta_float(meta, "design_g_kpa", "--G")
+    return H_mm * 1e-3, G_kPa * 1e3
+
+
+def _meta_float(meta: dict, key: str, option: str) -> float:
+    if key not in meta:
+        raise ValueError(f"give the design with {option} (the data has no metadata '{key}')")
+    try:
+        return float(meta[key])
+    except ValueError:
+        raise ValueError(f"metadata '{key}' is not a number: {meta[key]!r}; "
+                         f"give {option}") from None
+
+
+def path_model(study: Study, H: float, G: float, theta: float, models_file: Path | None,
+               solver: str):
+    """The model of the design: metamodels from ``models_file``, else a direct simulation."""
+    from ..validation import PathModel
+
+    if models_file is not None:
+        from ..metamodel import load_models
+
+        return PathModel.from_metamodels(load_models(models_file), study, H, G, theta)
+    return PathModel.from_simulation(study, H, G, theta, solver=solver)
+
+
+def print_table(validation) -> None:
+    """Print the c_v / ε table (rich) on standard output."""
+    table = Table(title=validation.title, caption=f"model: {validation.model_label}")
+    for col in ("response", "c_v (%)", "at u_z (mm)", "ε (%)", "at u_z (mm)", "excluded from ε"):
+        table.add_column(col, justify="left" if col.startswith(("resp", "excl")) else "right")
+    for row in validation.rows():
+        table.add_row(row["response"], f"{row['c_v_percent']:.3g}", f"{row['c_v_at_u_z_mm']:.3g}",
+                      f"{row['eps_percent']:.3g}", f"{row['eps_at_u_z_mm']:.3g}",
+                      row["eps_excluded"])
+    Console().print(table)
+    for note in validation.notes:
+        console.print(f"note: {note}", highlight=False)
+
+
+@app.command("validate")
+def validate_command(
+    args: Annotated[list[str] | None, typer.Argument(
+        metavar="[STUDY] DATA...",
+        help="Optional study (preset or .toml), then CSV files of repeat tests; no files: the "
+             "shipped SYNTHETIC example.")] = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path("validation"),
+    H: Annotated[float | None, typer.Option("--H", help="Body height H of the tested design "
+                                            "(mm); default: the data's metadata.")] = None,
+    G: Annotated[float | None, typer.Option("--G", help="Shear modulus G of the tested design "
+                                            "(kPa); default: the data's metadata.")] = None,
+    models: Annotated[Path | None, typer.Option(
+        "--models", help="Metamodels JSON (from 'magtact fit'); default: simulate the design "
+                         "directly (one structural path).")] = None,
+    solver: Annotated[str, typer.Option(help="Field solver of the direct simulation: exact|fe.")]
+    = "exact",
+    f_lo: Annotated[float, typer.Option("--f-lo", help="Low cut-off (cycles per mm of u_z).")]
+    = 0.0,
+    f_hi: Annotated[float, typer.Option("--f-hi", help="High cut-off (cycles per mm of u_z); 0: no "
+                                        "low-pass.")] = 2.0,
+    n_grid: Annotated[int, typer.Option("--n-grid", help="Points of the common grid.")] = 201,
+    floor: Annotated[float, typer.Option(help="Ratios are evaluated where |denominator| > floor "
+                                         "× its largest value.")] = 0.05,
+) -> None:
+    """Validate the model of a design against repeat indentation tests: c_v, ε and figures."""
+    from ..validation import (
+        FilterSettings,
+        read_experiment,
+        synthetic_files,
+        validate,
+        write_outputs,
+    )
+
+    study_src, data = split_study_and_data(args or [])
+    study = get_study(study_src)
+    if not data:
+        data = synthetic_files()
+        console.print("no data files given: using the shipped SYNTHETIC example "
+                      f"({len(data)} files)", highlight=False)
+    experiment = read_experiment(data)
+    H_m, G_pa = design_from(experiment, H, G)
+    if solver not in ("exact", "fe"):
+        raise ValueError(f"--solver must be 'exact' or 'fe', got {solver!r}")
+    filt = FilterSettings(f_lo=f_lo * 1e3, f_hi=f_hi * 1e3 if f_hi > 0 else None)
+    model = path_model(study, H_m, G_pa, experiment.theta, models, solver)
+    result = validate(experiment, model, filter=filt, n_grid=n_grid, floor=floor)
+    written = write_outputs(result, out_dir(out), sources=data)
+    print_table(result)
+    for path in written:
+        console.print(f"wrote {path}", highlight=False)

@@ -1,0 +1,60 @@
+"""Files of a validation: the c_v / ε table (CSV, JSON) and the figure."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from ._stats import Validation
+
+
+def write_outputs(validation: Validation, out: str | Path, *, sources=()) -> list[Path]:
+    """Write ``validation[_synthetic].csv``, ``.json`` and the figure (PNG, SVG) into ``out``.
+
+    The names carry ``_synthetic`` for generated data, and so do the table's ``data`` column
+    and the figure's title.
+
+    Parameters
+    ----------
+    validation : Validation
+        Result of :func:`magtact.validation.validate`.
+    out : path
+        Output folder (created).
+    sources : sequence of path
+        Data files, recorded in the JSON.
+
+    Returns
+    -------
+    list of Path
+        Files written.
+    """
+    from ..report._fig_validation import fig_validation
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = "validation_synthetic" if validation.synthetic else "validation"
+    written = [validation.write_csv(out / f"{stem}.csv")]
+    summary = {
+        "title": validation.title,
+        "synthetic": validation.synthetic,
+        "theta_rad": validation.theta,
+        "n_tests": validation.n_tests,
+        "sensors": list(validation.sensors),
+        "model": validation.model_label,
+        "filter_cycles_per_mm": [validation.filter.f_lo * 1e-3,
+                                 None if validation.filter.f_hi is None
+                                 else validation.filter.f_hi * 1e-3],
+        "floor": validation.floor,
+        "n_grid": int(validation.u_z.size),
+        "u_z_range_mm": [float(validation.u_z.min() * 1e3), float(validation.u_z.max() * 1e3)],
+        "notes": list(validation.notes),
+        "sources": [str(s) for s in sources],
+        "rows": [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                  for k, v in row.items()} for row in validation.rows()],
+    }
+    path = out / f"{stem}.json"
+    path.write_text(json.dumps(summary, indent=2, ensure_ascii=False), encoding="utf-8")
+    written.append(path)
+    written += fig_validation(validation, out / stem)
+    return written
