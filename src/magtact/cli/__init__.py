@@ -9,6 +9,7 @@ from rich.markup import escape
 from ..study import StudyError
 from . import _study  # noqa: F401  (registers the command)
 from . import _doe  # noqa: F401
+from . import _validate  # noqa: F401
 from ._app import app, console
 
 #: Errors a user can fix: printed as one message, no traceback, exit status 2.
