@@ -244,3 +244,11 @@ def test_cli_doe_writes_netcdf_and_csv(tmp_path, monkeypatch):
     assert len((tmp_path / "o" / "doe.csv").read_text().splitlines()) == 1 + 3 * 2
     assert "1 computed" in res.output
     assert os.listdir(tmp_path / "c")
+
+
+def test_doe_figure_is_written(tmp_path):
+    from magtact.report._fig_doe import fig_doe
+
+    files = fig_doe(run(tiny()), tmp_path / "doe")
+    assert [f.suffix for f in files] == [".png", ".svg"]
+    assert all(f.stat().st_size > 1000 for f in files)

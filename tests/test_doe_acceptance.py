@@ -1,0 +1,177 @@
+"""DOE acceptance with the real solvers on a tiny study (issue 4).
+
+The tiny study: coarse mesh, 3 levels of t, 2 of θ, 1 of H (3 mm), 2 of G, a short loading path
+(Δz_sat = 5.4 mm: 0.57 mm of travel) and the exact field, so that each structural path takes a
+few seconds. One clean run (local processes) is the reference every other run must reproduce.
+"""
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from magtact.doe import CacheCorruptWarning, JobCache, load_bundled, run_doe
+from magtact.study import load_study
+
+TINY = """\
+name = "tiny"
+[doe]
+n_t = 3
+n_theta = 2
+n_H = 1
+n_G = 2
+[loading]
+dz_sat_mm = 5.4
+[mechanics]
+mesh = "coarse"
+[magnetics]
+solver = "exact"
+"""
+N_PATHS = 2
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    """The tiny study file, its study, a filled cache and the clean run's data set."""
+    root = tmp_path_factory.mktemp("doe")
+    path = root / "tiny.toml"
+    path.write_text(TINY)
+    study = load_study(path)
+    cache = root / "clean-cache"
+    ds = run_doe(study, cache=cache, workers=2)
+    assert ds.attrs["run_paths_computed"] == N_PATHS
+    return path, study, cache, ds
+
+
+def test_clean_run_is_physical(tiny):
+    _, study, _, ds = tiny
+    assert np.all(ds.F_z.isel(t=slice(1, None)) > 0)  # compression pushes the support down
+    assert np.all(ds.F_r.isel(t=-1, theta=-1) < 0)  # shear: the support holds the body back
+    # exact proportionality in G (one solve per path, scaled)
+    np.testing.assert_allclose(ds.F_z.isel(G=1) / ds.F_z.isel(G=0).where(ds.t > 0),
+                               (study.G_levels[1] / study.G_levels[0]), rtol=1e-12)
+
+
+def _data(ds: xr.Dataset) -> xr.Dataset:
+    """The data set without its global attributes (timings and run counters differ by run)."""
+    out = ds.copy()
+    out.attrs = {}
+    return out
+
+
+def _entries(cache: Path) -> int:
+    return len(JobCache(cache).keys("path"))
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def test_sigkill_mid_run_then_resume(tiny, tmp_path):
+    study_file, study, _, clean = tiny
+    cache, out = tmp_path / "cache", tmp_path / "out"
+    cmd = [sys.executable, "-m", "magtact", "doe", str(study_file), "--out", str(out),
+           "--cache", str(cache), "--workers", "1"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while _entries(cache) < 1:
+            assert proc.poll() is None, "the DOE ended before it could be interrupted"
+            assert time.monotonic() < deadline, "no path finished within 120 s"
+            time.sleep(0.05)
+        os.kill(proc.pid, signal.SIGKILL)  # the worker pool's parent
+        proc.wait()
+        # its worker notices the parent's death and exits by itself
+        children = subprocess.run(["pgrep", "-s", str(proc.pid)], capture_output=True,
+                                  text=True).stdout.split()
+        deadline = time.monotonic() + 10
+        while any(_alive(int(p)) for p in children) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not any(_alive(int(p)) for p in children), "orphan worker still running"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    done = _entries(cache)
+    assert 1 <= done < N_PATHS and not (out / "doe.nc").exists()
+    resumed = run_doe(study, cache=cache, workers=1)
+    assert resumed.attrs["run_paths_computed"] == N_PATHS - done
+    assert resumed.attrs["run_paths_cached"] == done
+    xr.testing.assert_identical(_data(resumed), _data(clean))
+
+
+def test_dask_local_cluster_equals_local_processes(tiny, tmp_path):
+    from distributed import LocalCluster
+
+    _, study, _, clean = tiny
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster:
+        ds = run_doe(study, cache=tmp_path / "c", scheduler=cluster.scheduler_address)
+    assert ds.attrs["run_paths_computed"] == N_PATHS
+    assert ds.attrs["run_executor"].startswith("dask.distributed")
+    xr.testing.assert_identical(_data(ds), _data(clean))
+
+
+def test_corrupt_cache_entry_is_recomputed(tiny, tmp_path):
+    _, study, cache, clean = tiny
+    copy = shutil.copytree(cache, tmp_path / "cache")
+    victim = sorted((copy / "path").glob("*.mtc"))[0]
+    victim.write_bytes(victim.read_bytes()[: victim.stat().st_size // 2])  # truncated
+    with pytest.warns(CacheCorruptWarning, match="truncated"):
+        ds = run_doe(study, cache=copy, workers=0)
+    assert ds.attrs["run_cache_corrupt"] == 1 and ds.attrs["run_paths_computed"] == 1
+    xr.testing.assert_identical(_data(ds), _data(clean))
+    assert JobCache(copy).get("path", victim.stem) is not None  # rewritten, verified
+
+
+def test_changing_G_levels_runs_no_structural_solve(tiny):
+    _, study, cache, clean = tiny
+    other = replace(study, design=replace(study.design, G=(20e3, 40e3)),
+                    doe=replace(study.doe, n_G=3))
+    ds = run_doe(other, cache=cache, workers=0)
+    assert ds.attrs["run_paths_computed"] == 0 and ds.attrs["run_fields_computed"] == 0
+    np.testing.assert_allclose(ds.F_z.isel(G=0), clean.F_z.isel(G=0) * 20 / 10, rtol=1e-13)
+    xr.testing.assert_identical(ds.B_z, clean.B_z)
+
+
+def test_bundled_dataset_present_documented_and_fast():
+    from magtact.doe import bundled_path
+
+    readme = bundled_path().with_name("README.md").read_text()
+    assert "python -m magtact.doe.bundle" in readme
+    start = time.perf_counter()
+    ds = load_bundled()
+    elapsed = time.perf_counter() - start
+    assert elapsed < 1.0, f"loading the bundled data set took {elapsed:.2f} s"
+    assert dict(ds.sizes) == {"t": 21, "theta": 5, "H": 5, "G": 5}
+    assert ds.attrs["complete"] == 1 and "default" in ds.attrs["mesh"]
+    assert load_study(None).to_toml() == ds.attrs["study_toml"]
+    assert not any(np.isnan(ds[v]).any() for v in ds.data_vars)
+
+
+def test_bundled_paths_agree_with_a_coarse_recomputation():
+    from magtact.mechanics import simulate_path
+
+    ds = load_bundled()
+    study = load_study(None)
+    for i_theta, i_H in [(4, 4), (2, 0)]:
+        theta, H = float(ds.theta[i_theta]), float(ds.H[i_H])
+        t_idx = [4, 8]
+        res = simulate_path(study, H, theta, mesh="coarse", t=ds.t.values[t_idx])
+        ref = ds.sel(G=study.material.G_ref, method="nearest").isel(theta=i_theta, H=i_H, t=t_idx)
+        g = float(ref.G)
+        for name in ("F_r", "F_z"):
+            np.testing.assert_allclose(getattr(res.scaled(g), name), ref[name].values,
+                                       rtol=0.08, atol=0, err_msg=name)
