@@ -10,6 +10,8 @@ from ..study import StudyError
 from . import _study  # noqa: F401  (registers the command)
 from . import _doe  # noqa: F401
 from . import _validate  # noqa: F401
+from . import _run  # noqa: F401
+from . import _report  # noqa: F401
 from ._app import app, console
 
 #: Errors a user can fix: printed as one message, no traceback, exit status 2.

@@ -1,0 +1,43 @@
+"""`magtact run`: the whole study into one results folder, with its HTML report."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._app import StudyArg, app, console, get_study, out_dir
+
+
+@app.command("run")
+def run_command(
+    study: StudyArg = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Results folder (created).")]
+    = Path("results"),
+    recompute: Annotated[bool, typer.Option(
+        "--recompute", help="Run the full FE design of experiments (cached) instead of using "
+                            "the data set bundled with magtact.")] = False,
+    data: Annotated[list[Path] | None, typer.Option(
+        "--data", help="Validation CSV file (repeat the option for several); default: the "
+                       "shipped SYNTHETIC example.")] = None,
+    cache: Annotated[Path, typer.Option("--cache", help="DOE job cache folder (--recompute).")]
+    = Path(".magtact-cache"),
+    workers: Annotated[int | None, typer.Option(
+        "--workers", "-j", help="DOE worker processes (default: the number of cores).")] = None,
+) -> None:
+    """Run STUDY: field, DOE, metamodels, optimisation, validation; write OUT/report.html."""
+    from ..pipeline import run_study
+
+    s = get_study(study)
+    result = run_study(s, out_dir(out), recompute=recompute, data=data, cache=cache,
+                       workers=workers, command="magtact " + " ".join(sys.argv[1:]),
+                       log=lambda m: console.print(m, highlight=False, markup=False))
+    console.print(f"report: {result.report} ({result.wall_time_s:.1f} s)", highlight=False)
+    bad = [r for r in result.stages if r.status != "ok"]
+    if bad:
+        console.print("[bold yellow]incomplete:[/] "
+                      + "; ".join(f"{r.title}: {r.status} ({r.message})" for r in bad),
+                      highlight=False)
+        raise typer.Exit(1)

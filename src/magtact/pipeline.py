@@ -1,0 +1,297 @@
+"""The whole study in one call: field → DOE → metamodels → optimisation → validation → report.
+
+Each stage writes its files into its own folder of the results folder and is recorded in
+``run.json`` (status, wall time, message) as soon as it ends, so the report — built from the
+folder alone by :func:`magtact.report.build_report` — always says what ran, what failed and
+why. A failed stage does not stop the run; the stages that need its output are marked
+``skipped`` with the reason. Nothing is ever shown in place of a missing result.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import shutil
+import sys
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from datetime import UTC, datetime
+from importlib import metadata
+from pathlib import Path
+
+from .study import Study
+
+#: Packages whose versions the report lists.
+PACKAGES = ("magtact", "numpy", "scipy", "xarray", "h5netcdf", "gmsh", "scikit-fem", "felupe",
+            "pypardiso", "pyoperon", "sympy", "pymoo", "scikit-learn", "matplotlib", "dask",
+            "typer", "rich")
+
+
+class StageSkipped(Exception):
+    """A stage could not run because an input it needs is missing (not an error of its own)."""
+
+
+@dataclass
+class StageRecord:
+    """What happened to one stage.
+
+    Attributes
+    ----------
+    key, title : str
+        Folder name and human title.
+    status : str
+        ``"ok"``, ``"failed"`` or ``"skipped"``.
+    wall_time_s : float
+        Wall time [s].
+    message : str
+        One line: what was produced, or why it failed / was skipped.
+    notes : list of str
+        Further remarks (shown in the report).
+    """
+
+    key: str
+    title: str
+    status: str = "pending"
+    wall_time_s: float = 0.0
+    message: str = ""
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """Outcome of :func:`run_study`: the folder, the report file and the stage records."""
+
+    folder: Path
+    report: Path
+    stages: tuple[StageRecord, ...]
+    wall_time_s: float
+
+    @property
+    def ok(self) -> bool:
+        """True if every stage succeeded."""
+        return all(s.status == "ok" for s in self.stages)
+
+
+@dataclass
+class _Context:
+    """Objects the stages hand to each other (in memory) and the run's options."""
+
+    study: Study
+    folder: Path
+    recompute: bool
+    data: list[Path] | None
+    cache: Path | None
+    workers: int | None
+    log: Callable[[str], None]
+    dataset: object = None
+    models: object = None
+    chosen: object = None
+    doe_source: str = "none"
+
+
+def run_study(study: Study, out: str | Path, *, recompute: bool = False,
+              data: list[str | Path] | None = None, cache: str | Path | None = ".magtact-cache",
+              workers: int | None = None, command: str = "",
+              log: Callable[[str], None] = print) -> RunResult:
+    """Run every stage of a study into ``out`` and build the HTML report.
+
+    Parameters
+    ----------
+    study : Study
+        The study.
+    out : path
+        Results folder (created). Each stage writes into ``out/<stage>/``; ``run.json``,
+        ``study.toml``, ``evidence/`` and ``report.html`` sit at the top.
+    recompute : bool
+        False (default): use the DOE data set bundled with magtact (only valid for the
+        built-in MagOne study); True: run the full FE design of experiments (cached in
+        ``cache``).
+    data : list of path, optional
+        Validation CSV files; default: the shipped SYNTHETIC example (labelled so).
+    cache : path, optional
+        DOE job cache folder (with ``recompute``); None: no cache.
+    workers : int, optional
+        DOE worker processes (default: the number of cores).
+    command : str
+        The command line, recorded in the report.
+    log : callable
+        Progress messages.
+
+    Returns
+    -------
+    RunResult
+    """
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    ctx = _Context(study=study, folder=folder, recompute=recompute,
+                   data=[Path(p) for p in data] if data else None,
+                   cache=Path(cache) if cache is not None else None, workers=workers, log=log)
+    (folder / "study.toml").write_text(study.to_toml(), encoding="utf-8")
+    manifest = {
+        "study": study.name, "command": command or "run_study(...)",
+        "started": datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
+        "recompute": recompute, "versions": versions(), "stages": [],
+    }
+    records = []
+    for n, (key, title, fn) in enumerate(STAGES, start=1):
+        rec = StageRecord(key=key, title=title)
+        log(f"[{n}/{len(STAGES)}] {title} ...")
+        t0 = time.perf_counter()
+        try:
+            rec.message = fn(ctx, rec) or ""
+            rec.status = "ok"
+        except StageSkipped as exc:
+            rec.status, rec.message = "skipped", str(exc)
+        except Exception as exc:  # a failed stage is reported, the run goes on
+            rec.status, rec.message = "failed", f"{type(exc).__name__}: {exc}"
+            logs = folder / "logs"
+            logs.mkdir(exist_ok=True)
+            (logs / f"{key}.traceback.txt").write_text(traceback.format_exc(), encoding="utf-8")
+        rec.wall_time_s = time.perf_counter() - t0
+        log(f"      {rec.status} ({rec.wall_time_s:.1f} s) {rec.message}")
+        records.append(rec)
+        manifest["stages"] = [asdict(r) for r in records]
+        manifest["doe_source"] = ctx.doe_source
+        manifest["wall_time_s"] = time.perf_counter() - start
+        _write_json(folder / "run.json", manifest)
+    _copy_evidence(folder)
+    manifest["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+    manifest["wall_time_s"] = time.perf_counter() - start
+    _write_json(folder / "run.json", manifest)
+    from .report._html import build_report
+
+    report = build_report(folder)
+    return RunResult(folder=folder, report=report, stages=tuple(records),
+                     wall_time_s=time.perf_counter() - start)
+
+
+def versions() -> dict[str, str]:
+    """Versions of Python, the platform and the packages in :data:`PACKAGES`."""
+    out = {"python": sys.version.split()[0], "platform": platform.platform(),
+           "machine": platform.machine(), "cpus": str(os.cpu_count())}
+    for name in PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "not installed"
+    return out
+
+
+# ---- stages ----------------------------------------------------------------------------------
+def _stage_field(ctx: _Context, rec: StageRecord) -> str:
+    from .magnetics import write_field_outputs
+
+    files = write_field_outputs(ctx.study, ctx.folder / "field")
+    return f"{len(files)} files"
+
+
+def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
+    from .doe import load_bundled, run_doe, save_dataset, write_csv
+
+    folder = ctx.folder / "doe"
+    if ctx.recompute:
+        ds = run_doe(ctx.study, cache=ctx.cache, workers=ctx.workers)
+        a = ds.attrs
+        ctx.doe_source = (f"recomputed: {a.get('run_paths_computed')} structural paths "
+                          f"computed, {a.get('run_paths_cached')} from the cache")
+    else:
+        ds = load_bundled()
+        bundled = ds.attrs.get("study_toml")
+        if bundled is not None and not _same_study(bundled, ctx.study):
+            raise StageSkipped("the bundled data set belongs to the built-in MagOne study, not "
+                               "to this one: run with --recompute")
+        ctx.doe_source = "bundled with magtact (precomputed FE DOE of the MagOne study)"
+    folder.mkdir(parents=True, exist_ok=True)
+    save_dataset(ds, folder / "doe.nc")
+    write_csv(ds, folder / "doe.csv")
+    ctx.dataset = ds
+    try:
+        from .report._fig_doe import fig_doe
+
+        fig_doe(ds, folder / "doe_forces")
+    except ImportError as exc:
+        rec.notes.append(f"no DOE figure: {exc}")
+    return f"{ds['F_r'].size:,} force points, {ds['B_r'].size:,} field points; {ctx.doe_source}"
+
+
+def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
+    if ctx.dataset is None:
+        raise StageSkipped("needs the DOE data set, which is missing")
+    from .metamodel import write_fit_outputs
+
+    ctx.models = write_fit_outputs(ctx.dataset, ctx.study, ctx.folder / "metamodel")
+    return "models of B_r, B_z, f_r, f_z fitted"
+
+
+def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
+    if ctx.models is None:
+        raise StageSkipped("needs the metamodels, which are missing")
+    from .optimise import write_optimise_outputs
+
+    ctx.chosen = write_optimise_outputs(ctx.models, ctx.study, ctx.folder / "optimise")
+    return "design chosen"
+
+
+def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
+    if ctx.models is None:
+        raise StageSkipped("needs the metamodels, which are missing")
+    from .cli._validate import design_from
+    from .validation import PathModel, read_experiment, synthetic_files, validate, write_outputs
+
+    files = ctx.data or synthetic_files()
+    if not ctx.data:
+        rec.notes.append("no data given: the shipped SYNTHETIC example data set was used")
+    experiment = read_experiment(files)
+    H, G = design_from(experiment, None, None)
+    model = PathModel.from_metamodels(ctx.models, ctx.study, H, G, experiment.theta)
+    result = validate(experiment, model)
+    write_outputs(result, ctx.folder / "validation", sources=files)
+    rec.notes.extend(result.notes)
+    worst = max(result.rows(), key=lambda r: r["eps_percent"]
+                if r["eps_percent"] == r["eps_percent"] else -1.0)
+    kind = "SYNTHETIC data" if result.synthetic else "experiment"
+    return (f"{kind}, {result.n_tests} tests; largest ε = {worst['eps_percent']:.3g} % "
+            f"({worst['response']})")
+
+
+STAGES: tuple[tuple[str, str, Callable], ...] = (
+    ("field", "Magnetic field", _stage_field),
+    ("doe", "Design of experiments", _stage_doe),
+    ("metamodel", "Metamodels", _stage_metamodel),
+    ("optimise", "Optimisation", _stage_optimise),
+    ("validation", "Validation against experiments", _stage_validation),
+)
+
+
+# ---- helpers ---------------------------------------------------------------------------------
+def _same_study(toml_text: str, study: Study) -> bool:
+    """True if a data set's study TOML describes ``study`` (compared through load_study)."""
+    from .study import study_from_dict
+
+    try:
+        import tomllib
+
+        return study_from_dict(tomllib.loads(toml_text)) == study
+    except Exception:
+        return False
+
+
+def _copy_evidence(folder: Path) -> None:
+    """Copy bench/results/*.json of a source checkout into ``folder/evidence`` (if present)."""
+    root = Path(__file__).resolve().parents[2] / "bench" / "results"
+    if not root.is_dir():
+        return
+    target = folder / "evidence"
+    target.mkdir(exist_ok=True)
+    for path in sorted(root.glob("*.json")):
+        shutil.copy2(path, target / path.name)
+
+
+def _write_json(path: Path, data: dict) -> None:
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(data, indent=1, ensure_ascii=False), encoding="utf-8")
+    tmp.replace(path)

@@ -1,0 +1,322 @@
+"""The self-contained HTML report of a results folder (SPEC section 9).
+
+The report is built from the files a run leaves in its folder, never from memory, so that
+``magtact report DIR`` can rebuild it at any time and a missing stage is reported as missing:
+
+* ``run.json`` — the manifest written by :func:`magtact.pipeline.run_study`: per stage its
+  status (``ok``, ``failed``, ``skipped``), wall time and message; versions; timings.
+* ``study.toml`` — the full study settings.
+* one folder per stage (``field``, ``doe``, ``metamodel``, ``optimise``, ``validation``) with its
+  figures (PNG, embedded as base64), tables (CSV), text (TXT, TEX) and summaries (JSON); an
+  optional ``captions.json`` maps a file name without suffix to its caption.
+* ``evidence/*.json`` — accuracy and convergence benchmarks (copied from ``bench/results``).
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import html
+import json
+from datetime import UTC, datetime
+from pathlib import Path
+
+#: Stages in pipeline order: (folder, title, what it is).
+STAGES: tuple[tuple[str, str, str], ...] = (
+    ("field", "Magnetic field",
+     "Field of the magnet (finite elements, checked against the exact closed form) and the "
+     "field at the Hall point along the loading paths."),
+    ("doe", "Design of experiments",
+     "Full-factorial data set of field and forces over (t, θ, H, G)."),
+    ("metamodel", "Metamodels",
+     "Closed-form expressions fitted by genetic programming, with held-out accuracy."),
+    ("optimise", "Optimisation",
+     "Per-design extrema, maps over (H, G), Pareto set (NSGA-II) and its exact reduction, "
+     "and the chosen design."),
+    ("validation", "Validation against experiments",
+     "Mean ± standard deviation of repeat indentation tests against the model; c_v and ε."),
+)
+#: Rows of a CSV table shown in the report (the file has them all).
+MAX_ROWS = 30
+
+CSS = """
+body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,sans-serif;max-width:1100px;
+margin:2em auto;padding:0 1em;color:#222;line-height:1.45}
+h1{font-size:1.6em;margin-bottom:.2em}h2{border-bottom:2px solid #ddd;padding-bottom:.2em;
+margin-top:2em}h3{font-size:1.05em;margin-top:1.4em}
+table{border-collapse:collapse;font-size:.85em;margin:.5em 0}
+th,td{border:1px solid #ccc;padding:.2em .5em;text-align:right}th{background:#f3f3f3}
+td.l,th.l{text-align:left}
+figure{margin:1em 0;text-align:center}figure img{max-width:100%;border:1px solid #eee}
+figcaption{font-size:.85em;color:#555}
+pre{background:#f7f7f7;padding:.7em;overflow-x:auto;font-size:.8em}
+.ok{color:#176b2c;font-weight:bold}.failed{color:#b00020;font-weight:bold}
+.skipped,.absent{color:#8a6d00;font-weight:bold}
+.banner{background:#fff3cd;border:1px solid #e0c060;padding:.6em 1em;margin:1em 0}
+.missing{background:#fbe9eb;border:1px solid #e0a0a8;padding:.6em 1em;margin:1em 0}
+.design{background:#eef6ee;border:1px solid #9c9;padding:.6em 1em;margin:1em 0}
+details{margin:.5em 0}summary{cursor:pointer}
+"""
+
+
+def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> Path:
+    """Write ``report.html`` for a results folder and return its path.
+
+    Parameters
+    ----------
+    folder : path
+        Results folder of ``magtact run`` (or any folder with the layout in the module
+        docstring; absent parts are reported as absent).
+    evidence : path, optional
+        Folder of benchmark JSON files to show in addition to ``folder/evidence``.
+
+    Returns
+    -------
+    Path
+        ``folder/report.html``: one file, every figure embedded.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``folder`` does not exist.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{folder}: no such results folder")
+    manifest = _load_json(folder / "run.json") or {}
+    stages = {s.get("key"): s for s in manifest.get("stages", [])}
+    study_name = manifest.get("study", "unknown study")
+    parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
+             f"<p>Results folder <code>{_e(folder.resolve())}</code>; report built "
+             f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}.</p>"]
+    if not manifest:
+        parts.append('<div class="missing">No <code>run.json</code> in this folder: the stages '
+                     "below are reported from the files present only; statuses and timings are "
+                     "unknown.</div>")
+    if _is_synthetic(folder / "validation"):
+        parts.append('<div class="banner"><b>SYNTHETIC validation data.</b> The validation '
+                     "section compares the model with a generated example data set (model plus "
+                     "noise, drift and scatter), not with measurements.</div>")
+    parts.append(_summary(manifest, stages))
+    parts.append(_chosen(folder / "optimise"))
+    for key, title, what in STAGES:
+        parts.append(_stage(folder / key, key, title, what, stages.get(key)))
+    parts.append(_evidence([folder / "evidence"] + ([Path(evidence)] if evidence else [])))
+    parts.append(_settings(folder / "study.toml"))
+    parts.append(_versions(manifest))
+    doc = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+           f"<title>magtact report — {_e(study_name)}</title><style>{CSS}</style></head>"
+           "<body>\n" + "\n".join(p for p in parts if p) + "\n</body></html>\n")
+    path = folder / "report.html"
+    path.write_text(doc, encoding="utf-8")
+    return path
+
+
+# ---- sections ------------------------------------------------------------------------------
+def _summary(manifest: dict, stages: dict) -> str:
+    rows = []
+    for key, title, _ in STAGES:
+        s = stages.get(key)
+        if s is None:
+            status, wall, msg = "absent", "", "not run"
+        else:
+            status = s.get("status", "unknown")
+            wall = _fmt_time(s.get("wall_time_s"))
+            msg = s.get("message", "")
+        rows.append(f'<tr><td class="l">{_e(title)}</td><td class="l {_e(status)}">'
+                    f'{_e(status)}</td><td>{wall}</td><td class="l">{_e(msg)}</td></tr>')
+    total = manifest.get("wall_time_s")
+    head = "<h2>Run summary</h2>"
+    if manifest:
+        head += (f"<p>Command <code>{_e(manifest.get('command', ''))}</code>; started "
+                 f"{_e(manifest.get('started', '?'))}, total wall time {_fmt_time(total)}; "
+                 f"data set: {_e(manifest.get('doe_source', 'unknown'))}.</p>")
+    return (head + '<table><tr><th class="l">stage</th><th class="l">status</th><th>wall time'
+            '</th><th class="l">message</th></tr>' + "".join(rows) + "</table>")
+
+
+def _chosen(folder: Path) -> str:
+    data = _load_json(folder / "chosen.json")
+    if not data:
+        return ('<h2>Chosen design</h2><div class="missing">No chosen design in this folder '
+                "(the optimisation stage did not produce <code>optimise/chosen.json</code>)."
+                "</div>")
+    rows = "".join(f'<tr><td class="l">{_e(k)}</td><td>{_fmt(v)}</td></tr>'
+                   for k, v in data.items() if not isinstance(v, (dict, list)))
+    extra = "".join(f"<h3>{_e(k)}</h3>{_dict_table(v)}" for k, v in data.items()
+                    if isinstance(v, dict))
+    return f'<h2>Chosen design</h2><div class="design"><table>{rows}</table>{extra}</div>'
+
+
+def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> str:
+    out = [f'<h2 id="{key}">{_e(title)}</h2><p>{_e(what)}</p>']
+    if info is not None:
+        status = info.get("status", "unknown")
+        out.append(f'<p>Status: <span class="{_e(status)}">{_e(status)}</span>, wall time '
+                   f"{_fmt_time(info.get('wall_time_s'))}. {_e(info.get('message', ''))}</p>")
+        for note in info.get("notes", []):
+            out.append(f"<p>Note: {_e(note)}</p>")
+    if not folder.is_dir() or not any(folder.iterdir()):
+        reason = info.get("message", "") if info else "this stage was not run"
+        out.append(f'<div class="missing">No results for this stage in the folder ({_e(reason)}).'
+                   " Nothing is shown in its place.</div>")
+        return "\n".join(out)
+    if key == "validation" and _is_synthetic(folder):
+        out.append('<div class="banner"><b>SYNTHETIC example data</b> — generated from the model '
+                   "with noise, drift and sensor-to-sensor scatter; not a measurement.</div>")
+    captions = _load_json(folder / "captions.json") or {}
+    files = sorted(p for p in folder.iterdir() if p.is_file())
+    for p in files:
+        if p.suffix == ".json" and p.name not in ("captions.json", "chosen.json"):
+            out.append(_json_summary(p))
+    for p in files:
+        if p.suffix == ".png":
+            out.append(_figure(p, captions.get(p.stem)))
+    for p in files:
+        if p.suffix == ".csv":
+            out.append(_csv_table(p, captions.get(p.stem)))
+    for p in files:
+        if p.suffix in (".txt", ".tex", ".md"):
+            text = p.read_text(encoding="utf-8", errors="replace")
+            out.append(f"<details open><summary>{_e(p.name)}</summary><pre>{_e(text)}</pre>"
+                       "</details>")
+    others = [p.name for p in files if p.suffix not in (".png", ".csv", ".txt", ".tex", ".md",
+                                                        ".json")]
+    if others:
+        out.append(f"<p>Other files: {_e(', '.join(others))}.</p>")
+    return "\n".join(out)
+
+
+def _evidence(folders: list[Path]) -> str:
+    files = sorted({p.name: p for f in folders if f.is_dir() for p in f.glob("*.json")}.values())
+    out = ["<h2>Accuracy and convergence evidence</h2>"]
+    if not files:
+        out.append('<div class="missing">No benchmark results (<code>bench/results/*.json</code>)'
+                   " were available to this run.</div>")
+        return "\n".join(out)
+    out.append("<p>Benchmarks measured on this code (bench/results); each table lists the "
+               "scalar results, nested values are in the expandable raw file.</p>")
+    for p in files:
+        out.append(_json_summary(p, level=3))
+    return "\n".join(out)
+
+
+def _settings(path: Path) -> str:
+    if not path.is_file():
+        return '<h2>Study settings</h2><div class="missing">No study.toml in this folder.</div>'
+    return (f"<h2>Study settings</h2><p>The full study (user units), as loaded and validated."
+            f"</p><pre>{_e(path.read_text(encoding='utf-8'))}</pre>")
+
+
+def _versions(manifest: dict) -> str:
+    versions = manifest.get("versions")
+    if not versions:
+        return ""
+    rows = "".join(f'<tr><td class="l">{_e(k)}</td><td class="l">{_e(v)}</td></tr>'
+                   for k, v in versions.items())
+    return f"<h2>Versions and machine</h2><table>{rows}</table>"
+
+
+# ---- pieces --------------------------------------------------------------------------------
+def _figure(path: Path, caption: str | None) -> str:
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    cap = caption or path.stem.replace("_", " ")
+    return (f'<figure><img src="data:image/png;base64,{data}" alt="{_e(cap)}">'
+            f"<figcaption>{_e(cap)} <small>({_e(path.name)})</small></figcaption></figure>")
+
+
+def _csv_table(path: Path, caption: str | None) -> str:
+    try:
+        with path.open(newline="", encoding="utf-8") as f:
+            rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        return f"<p>{_e(path.name)}: unreadable ({_e(exc)})</p>"
+    if not rows:
+        return f"<p>{_e(path.name)}: empty table</p>"
+    head, body = rows[0], rows[1:]
+    title = caption or path.stem.replace("_", " ")
+    if "synthetic" in path.name.lower():
+        title += " (SYNTHETIC data)"
+    html_rows = "".join("<tr>" + "".join(f"<td>{_e(_num(c))}</td>" for c in r) + "</tr>"
+                        for r in body[:MAX_ROWS])
+    more = (f"<p><small>{len(body) - MAX_ROWS} more rows in {_e(path.name)}</small></p>"
+            if len(body) > MAX_ROWS else "")
+    return (f"<h3>{_e(title)}</h3><p><small>{_e(path.name)}</small></p><div style=\"overflow-x:"
+            "auto\"><table><tr>" + "".join(f"<th>{_e(h)}</th>" for h in head) + "</tr>"
+            + html_rows + "</table></div>" + more)
+
+
+def _json_summary(path: Path, level: int = 3) -> str:
+    data = _load_json(path)
+    if data is None:
+        return f"<p>{_e(path.name)}: unreadable JSON</p>"
+    title = data.get("title", path.stem) if isinstance(data, dict) else path.stem
+    body = _dict_table(data) if isinstance(data, dict) else ""
+    raw = json.dumps(data, indent=1, ensure_ascii=False)
+    if len(raw) > 20000:
+        raw = raw[:20000] + "\n… (truncated; see the file)"
+    return (f"<h{level}>{_e(title)}</h{level}><p><small>{_e(path.name)}</small></p>{body}"
+            f"<details><summary>raw {_e(path.name)}</summary><pre>{_e(raw)}</pre></details>")
+
+
+def _dict_table(data: dict, prefix: str = "", depth: int = 0) -> str:
+    rows = []
+    for k, v in _flatten(data, prefix, depth):
+        rows.append(f'<tr><td class="l">{_e(k)}</td><td class="l">{_fmt(v)}</td></tr>')
+    return f"<table>{''.join(rows)}</table>" if rows else ""
+
+
+def _flatten(data: dict, prefix: str, depth: int):
+    for k, v in data.items():
+        name = f"{prefix}{k}"
+        if isinstance(v, dict) and depth < 2:
+            yield from _flatten(v, name + ".", depth + 1)
+        elif isinstance(v, list):
+            if len(v) <= 6 and all(not isinstance(x, (dict, list)) for x in v):
+                yield name, ", ".join(_plain(x) for x in v)
+            else:
+                yield name, f"[{len(v)} items]"
+        elif not isinstance(v, dict):
+            yield name, v
+
+
+def _is_synthetic(folder: Path) -> bool:
+    if not folder.is_dir():
+        return False
+    if any("synthetic" in p.name.lower() for p in folder.iterdir()):
+        return True
+    return any((_load_json(p) or {}).get("synthetic") is True for p in folder.glob("*.json"))
+
+
+def _load_json(path: Path):
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def _e(x) -> str:
+    return html.escape(str(x), quote=True)
+
+
+def _plain(v) -> str:
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
+def _fmt(v) -> str:
+    return _e(_plain(v))
+
+
+def _num(cell: str) -> str:
+    try:
+        return f"{float(cell):.6g}"
+    except ValueError:
+        return cell
+
+
+def _fmt_time(seconds) -> str:
+    if not isinstance(seconds, (int, float)):
+        return "?"
+    if seconds < 120:
+        return f"{seconds:.1f} s"
+    return f"{seconds / 60:.1f} min"
