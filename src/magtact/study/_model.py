@@ -98,10 +98,15 @@ class Magnetics:
     """Field solver settings (SPEC section 2)."""
 
     solver: str = setting("fe", choices=("fe", "exact"), doc="field solver")
-    h_magnet: float = setting(0.25e-3, "mm", positive=True,
+    h_magnet: float = setting(0.1e-3, "mm", positive=True,
                               doc="FE element size at the magnet surface")
+    growth_near: float = setting(0.0125, minimum=0.0,
+                                 doc="FE size growth per unit distance within `near` of the magnet")
+    near: float = setting(13e-3, "mm", positive=True,
+                          doc="thickness of the finely graded zone around the magnet (holds the "
+                              "Hall point path)")
     growth: float = setting(0.3, positive=True,
-                            doc="FE element size growth per unit distance / size (grading)")
+                            doc="FE element size growth per unit distance beyond `near` (grading)")
     far_r: float = setting(100.0, positive=True, doc="far boundary radius in units of R_m")
     far_z: float = setting(50.0, positive=True, doc="far boundary half-height in units of H_m")
 

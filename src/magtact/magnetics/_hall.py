@@ -1,0 +1,75 @@
+"""Field at the Hall sensing point along the loading path (SPEC sections 1 and 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..geometry import hall_from_magnet_centre, loading_path
+from ..study import Study
+from ._exact import cylinder_field
+from ._fe import solve_fe
+
+SOLVERS = ("fe", "exact")
+
+
+def hall_field(study: Study, t, theta, H, solver: str | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Flux density (B_r, B_z) [T] at the Hall point for load t, shear angle θ and height H.
+
+    Parameters
+    ----------
+    study : Study
+        Magnet, placement, loading path and field solver settings.
+    t : array_like
+        Non-dimensional load in [0, 1].
+    theta : array_like
+        Shear angle [rad].
+    H : array_like
+        Base height of the body [m]. ``t``, ``theta`` and ``H`` broadcast together.
+    solver : {"fe", "exact"}, optional
+        ``"fe"``: the axisymmetric finite-element solution (:func:`solve_fe`, solved once per
+        process and magnet); ``"exact"``: the closed form :func:`cylinder_field`. Default:
+        ``study.magnetics.solver``.
+
+    Returns
+    -------
+    B_r, B_z : numpy.ndarray
+        Each of the broadcast shape of (t, theta, H) [T].
+
+    Raises
+    ------
+    ValueError
+        For an unknown solver.
+
+    Notes
+    -----
+    Sign conventions. x is the shear direction, z is up; the magnet moves by
+    u = (u_r, u_z) (:func:`magtact.geometry.loading_path`, u_r ≥ 0 along +x, u_z ≤ 0), so the
+    Hall point sits at (x, z) = (−u_r, −Δ_z) relative to the displaced magnet's centre, with Δ_z
+    the height of the centre above the Hall point (covered or flush placement,
+    :func:`magtact.geometry.hall_from_magnet_centre`). In the magnet's cylindrical frame
+    ρ = |x| and the field is (B_ρ, B_z). ``B_r`` is the component along +x:
+
+    .. math::
+
+        B_r = B_x = \\operatorname{sign}(x)\\, B_\\rho(|x|, z) = -B_\\rho(u_r, z)
+        \\quad (u_r > 0),
+
+    Below a +z magnetised magnet the field points up and towards the axis (B_ρ < 0), and the
+    Hall point of a magnet sheared along +x is on its −x side, so B_r > 0 there; B_r = 0 for
+    θ = 0.
+    ``B_z`` is the upward component; below an axially magnetised (+z) magnet it is positive.
+    """
+    solver = study.magnetics.solver if solver is None else solver
+    if solver not in SOLVERS:
+        raise ValueError(f"hall_field: solver must be one of {SOLVERS}, got {solver!r}")
+    u_r, u_z = loading_path(study, t, theta, H)
+    x, z = hall_from_magnet_centre(study, u_r, u_z, H)
+    x, z = np.broadcast_arrays(x, z)
+    rho = np.abs(x)
+    if solver == "exact":
+        m = study.magnet
+        B_rho, B_z = cylinder_field(rho, z, m.R_m, m.H_m, m.M_z)
+    else:
+        B_rho, B_z = solve_fe(study).B(rho, z)
+    return np.sign(x) * B_rho, B_z
