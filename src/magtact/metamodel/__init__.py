@@ -1,5 +1,18 @@
 """Closed-form metamodels of the study's responses by genetic programming (SPEC section 5)."""
 
+from ._exact_field import ExactField
+from ._fit import (
+    TRANSFORMS,
+    Accuracy,
+    FitReport,
+    FitResult,
+    accuracy,
+    data_hash,
+    fit_models,
+    fit_response,
+    hall_features,
+    holdout_paths,
+)
 from ._io import load_model, load_models, model_from_dict, model_to_dict, save_model, save_models
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
@@ -7,7 +20,9 @@ from ._regressor import OPERATOR_SETS, SymbolicRegressor
 from ._symbols import H, p, q, t, theta
 
 __all__ = [
-    "OPERATOR_SETS", "RESPONSES", "H", "Metamodel", "ModelSet", "SymbolicRegressor",
-    "format_expression", "load_model", "load_models", "model_from_dict", "model_to_dict", "p",
-    "parse_expression", "q", "save_model", "save_models", "t", "theta",
+    "OPERATOR_SETS", "RESPONSES", "TRANSFORMS", "Accuracy", "ExactField", "FitReport",
+    "FitResult", "H", "Metamodel", "ModelSet", "SymbolicRegressor", "accuracy", "data_hash",
+    "fit_models", "fit_response", "format_expression", "hall_features", "holdout_paths",
+    "load_model", "load_models", "model_from_dict", "model_to_dict", "p", "parse_expression", "q",
+    "save_model", "save_models", "t", "theta",
 ]

@@ -1,0 +1,332 @@
+"""Fitting the four metamodels from a DOE data set, with guard rails and an accuracy report.
+
+Targets, features and transforms (why each)
+-------------------------------------------
+All models are built in features that are affine in the displacement u at fixed H, so they are
+smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel._symbols`).
+
+- **B_r, B_z** depend on the sensor only through the Hall point's position (X, Z) relative to the
+  magnet's centre [mm] (the body does not change the field, SPEC section 2). X = a(H) q and
+  Z = −c(H) − a(H) p are affine in (p, q) with coefficients from :mod:`magtact.geometry`, so the
+  fit is two-dimensional and exact in H.
+- **B_r** changes sign with X and vanishes on the axis (symmetry). It is fitted as g(X, Z) and
+  used as g(X, Z) − g(0, Z), which is exactly zero on the axis for any g ("anchor" transform).
+- **B_z** is positive and decays roughly like a power of the distance: log B_z is close to
+  linear over the range and errors become relative, so B_z = exp(g(X, Z)) ("log" transform;
+  identity if the data are not all positive).
+- **f_r = F_r / G** vanishes at θ = 0 (mirror symmetry): g(p, q, h) − g(p, 0, h), h = H in mm.
+- **f_z = F_z / G** vanishes in the unloaded state: g(p, q, h) − g(0, 0, h).
+
+F is exactly proportional to G (SPEC section 3), so f is the mean of F / G over the G levels;
+the spread between levels is reported as ``G_spread`` (0 for a data set scaled in G).
+
+Held-out accuracy uses whole (θ, H) paths (all t) chosen among the interior levels, never seen
+by the regressor: R², max |error| / range(y) and max |error| / |y| where |y| > 5 % of max |y|.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import sympy as sp
+
+from ..geometry import hall_from_magnet_centre, loading_path
+from ..study import Study
+from ._model import RESPONSES, Metamodel, ModelSet
+from ._regressor import SymbolicRegressor
+from ._symbols import H, p, q
+
+#: Transform of each response (see the module notes).
+TRANSFORMS = {"B_r": "anchor_x", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
+#: Fraction of max |y| below which relative errors are not reported.
+REL_FLOOR = 0.05
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """Accuracy of one model on a set of points (values in the response's SI units)."""
+
+    r2: float
+    max_abs_err: float
+    max_abs_err_over_range: float
+    max_rel_err: float
+    n_points: int
+
+
+@dataclass(frozen=True)
+class FitReport:
+    """How one response was fitted."""
+
+    name: str
+    transform: str
+    features: tuple[str, ...]
+    seed: int
+    tries: int
+    fit_time_s: float
+    n_train: int
+    train: Accuracy
+    test: Accuracy | None
+    rejected: tuple[str, ...] = field(default_factory=tuple)
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Fitted models and their reports."""
+
+    models: ModelSet
+    reports: dict[str, FitReport]
+    data_hash: str
+    holdout: tuple[tuple[float, float], ...]
+
+
+def accuracy(y, y_hat) -> Accuracy:
+    """R², max abs error (absolute and over the range of ``y``), max relative error where
+    |y| > 5 % of max |y|."""
+    y, y_hat = np.ravel(y), np.ravel(y_hat)
+    err = np.abs(y_hat - y)
+    ss = np.sum((y - y.mean()) ** 2)
+    rng = np.ptp(y)
+    big = np.abs(y) > REL_FLOOR * np.max(np.abs(y))
+    return Accuracy(
+        r2=float(1.0 - np.sum(err**2) / ss) if ss > 0 else float("nan"),
+        max_abs_err=float(err.max()),
+        max_abs_err_over_range=float(err.max() / rng) if rng > 0 else float("nan"),
+        max_rel_err=float(np.max(err[big] / np.abs(y[big]))) if big.any() else float("nan"),
+        n_points=int(y.size),
+    )
+
+
+def data_hash(ds) -> str:
+    """SHA-256 of the coordinates and response arrays of a DOE data set."""
+    h = hashlib.sha256()
+    for name in ("t", "theta", "H", "G", "B_r", "B_z", "F_r", "F_z"):
+        a = np.ascontiguousarray(np.asarray(ds[name].values, dtype=np.float64))
+        h.update(name.encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _affine_in_H(fun, study: Study) -> tuple[float, float]:
+    """Coefficients (c0, c1) of a function of H that is affine: fun(H) = c0 + c1 H."""
+    lo, hi = study.design.H
+    c1 = (fun(hi) - fun(lo)) / (hi - lo)
+    c0 = fun(lo) - c1 * lo
+    mid = 0.5 * (lo + hi)
+    scale = max(abs(fun(lo)), abs(fun(hi)))
+    if not abs(fun(mid) - (c0 + c1 * mid)) <= 1e-12 * scale:
+        raise ValueError("the loading path is not affine in H; the field features do not apply")
+    # Rounding leaves ~1e-16 where a coefficient is exactly zero (e.g. H_g = dz_sat + H_m).
+    c0 = 0.0 if abs(c0) <= 1e-12 * scale else c0
+    c1 = 0.0 if abs(c1) * hi <= 1e-12 * scale else c1
+    return float(c0), float(c1)
+
+
+def hall_features(study: Study) -> tuple[sp.Expr, sp.Expr]:
+    """(X, Z) [mm]: Hall point relative to the magnet's centre as expressions of (p, q, H)."""
+    a0, a1 = _affine_in_H(lambda h: float(loading_path(study, 1.0, 0.0, h)[1]), study)
+    x0, x1 = _affine_in_H(lambda h: float(hall_from_magnet_centre(study, 0.0, 0.0, h)[1]), study)
+    a = sp.Float(a0) + sp.Float(a1) * H  # u_z per unit t [m]
+    X = -(-a * q) * 1000      # x = −u_r, u_r = −a q
+    Z = (sp.Float(x0) + sp.Float(x1) * H - a * p) * 1000  # z = −(centre + u_z)
+    return sp.expand(X), sp.expand(Z)
+
+
+def _table(ds):
+    """Flattened training table: t, θ, H, path index and the four responses."""
+    t_, th_, H_ = (np.asarray(ds[k].values, dtype=float) for k in ("t", "theta", "H"))
+    T, TH, HH = np.meshgrid(t_, th_, H_, indexing="ij")
+    G = np.asarray(ds["G"].values, dtype=float)
+    out = {"t": T.ravel(), "theta": TH.ravel(), "H": HH.ravel()}
+    for k in ("B_r", "B_z"):
+        out[k] = np.asarray(ds[k].transpose("t", "theta", "H").values, dtype=float).ravel()
+    spread = {}
+    for k in ("r", "z"):
+        F = np.asarray(ds[f"F_{k}"].transpose("t", "theta", "H", "G").values, dtype=float)
+        f = F / G
+        mean = f.mean(axis=-1)
+        spread[f"f_{k}"] = float(np.max(np.abs(f - mean[..., None])) / max(np.ptp(mean), 1e-300))
+        out[f"f_{k}"] = mean.ravel()
+    for k in RESPONSES:
+        if not np.all(np.isfinite(out[k])):
+            raise ValueError(f"data set has non-finite values of {k}: an incomplete DOE?")
+    return out, spread, (t_, th_, H_)
+
+
+def holdout_paths(theta_levels, H_levels, n: int, seed: int) -> list[tuple[float, float]]:
+    """``n`` (θ, H) paths held out for testing, chosen among interior levels (reproducible)."""
+    if n == 0:
+        return []
+    ti = range(1, len(theta_levels) - 1) if len(theta_levels) > 2 else range(len(theta_levels))
+    hi = range(1, len(H_levels) - 1) if len(H_levels) > 2 else range(len(H_levels))
+    pairs = [(i, j) for i in ti for j in hi]
+    if n >= len(theta_levels) * len(H_levels):
+        raise ValueError(f"holdout_paths = {n} leaves no training path")
+    if n > len(pairs):
+        raise ValueError(f"holdout_paths = {n} exceeds the {len(pairs)} interior (theta, H) paths")
+    pick = np.random.default_rng(seed).choice(len(pairs), size=n, replace=False)
+    return [(float(theta_levels[pairs[k][0]]), float(H_levels[pairs[k][1]])) for k in sorted(pick)]
+
+
+def _model_expr(name: str, g: sp.Expr, gsyms, feats: dict[str, sp.Expr], transform: str):
+    """Assemble the model in (p, q, H) from the fitted g in the feature symbols."""
+    sub = {s: feats[s.name] for s in gsyms}
+    G_ = g.xreplace(sub)
+    if transform == "log":
+        return sp.exp(G_)
+    if transform == "identity":
+        return G_
+    if transform == "anchor_x":
+        return G_ - g.xreplace(sub | {gsyms[0]: sp.Integer(0)})
+    if transform == "anchor_q":
+        return G_ - G_.xreplace({q: sp.Integer(0)})
+    if transform == "anchor_0":
+        return G_ - G_.xreplace({q: sp.Integer(0), p: sp.Integer(0)})
+    raise ValueError(f"unknown transform {transform!r} for {name}")
+
+
+def _guard(model: Metamodel, study: Study, y_max: float, n: tuple[int, int, int] = (25, 11, 11)):
+    """Reasons to reject ``model`` on a dense off-grid set inside the domain ('' if none)."""
+    lo, hi = study.design.H
+    # Off-grid: shifted midpoints plus the domain's faces (t = 0 included).
+    tt = np.concatenate([np.linspace(0, 1, n[0]), (np.arange(n[0] - 1) + 0.37) / (n[0] - 1)])
+    th = np.concatenate([np.linspace(0, study.loading.theta_max, n[1]),
+                         (np.arange(n[1] - 1) + 0.61) / (n[1] - 1) * study.loading.theta_max])
+    hh = np.concatenate([np.linspace(lo, hi, n[2]), lo + (np.arange(n[2] - 1) + 0.43) / (n[2] - 1)
+                         * (hi - lo)])
+    T, TH, HH = np.meshgrid(tt, th, hh, indexing="ij")
+    with np.errstate(all="ignore"):
+        v = model.value(T, TH, HH)
+        checks = {"value": v, "gradient": model.grad(T, TH, HH), "Hessian": model.hess(T, TH, HH)}
+        for k, a in enumerate(model.jet(T, TH, HH, 3)[1:], start=1):
+            checks[f"order-{k} feature derivative"] = a
+    for what, a in checks.items():
+        if not np.all(np.isfinite(a)):
+            return f"non-finite {what} inside the domain"
+    if np.max(np.abs(v)) > 10 * y_max:
+        return f"value {np.max(np.abs(v)):.3g} exceeds 10 x max|data| = {10 * y_max:.3g} (pole?)"
+    return ""
+
+
+def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=None,
+                 log=None) -> tuple[Metamodel, FitReport]:
+    """Fit one response (see the module notes for features and transforms).
+
+    Parameters
+    ----------
+    name : {"B_r", "B_z", "f_r", "f_z"}
+    table : dict of numpy.ndarray
+        Flattened data: ``t, theta, H`` [-, rad, m] and the response [SI].
+    test_mask : numpy.ndarray of bool
+        Points held out of the fit.
+    study : Study
+    settings : magtact.study Metamodel section, optional
+        Defaults to ``study.metamodel``.
+    log : callable, optional
+        Called with progress messages.
+
+    Raises
+    ------
+    RuntimeError
+        If every try (seed, seed + 1, ...) fails the guard rails.
+    """
+    cfg = settings or study.metamodel
+    y = table[name]
+    transform = TRANSFORMS[name]
+    if transform == "log" and not np.all(y > 0):
+        transform = "identity"
+    pv, qv = table["t"], table["t"] * np.tan(table["theta"])
+    if name.startswith("B"):
+        X_, Z_ = hall_features(study)
+        fx = sp.lambdify((p, q, H), [X_, Z_], "numpy")
+        Xv, Zv = (np.broadcast_to(a, pv.shape) for a in fx(pv, qv, table["H"]))
+        feats, cols = {"X": X_, "Z": Z_}, np.column_stack([Xv, Zv])
+    else:
+        feats = {"p": p, "q": q, "h": H * 1000}
+        cols = np.column_stack([pv, qv, table["H"] * 1000])
+    target = np.log(y) if transform == "log" else y
+    train = ~test_mask
+    rejected = []
+    t0 = time.perf_counter()
+    for k in range(cfg.retries + 1):
+        seed = cfg.seed + k
+        reg = SymbolicRegressor(
+            generations=cfg.generations, population_size=cfg.population,
+            max_length=cfg.max_length, operators=cfg.operators,
+            local_iterations=cfg.local_iterations, n_threads=cfg.threads, random_state=seed,
+            feature_names=list(feats),
+        ).fit(cols[train], target[train])
+        expr = _model_expr(name, reg.expression_, reg.symbols_, feats, transform)
+        model = Metamodel.from_expr(name, expr, RESPONSES[name])
+        reason = _guard(model, study, float(np.max(np.abs(y))))
+        if not reason:
+            break
+        rejected.append(f"seed {seed}: {reason}")
+        if log:
+            log(f"{name}: rejected seed {seed} ({reason}); refitting")
+    else:
+        raise RuntimeError(f"{name}: every fit failed the guard rails: {rejected}")
+    elapsed = time.perf_counter() - t0
+    y_hat = model.value(table["t"], table["theta"], table["H"])
+    report = FitReport(
+        name=name, transform=transform, features=tuple(feats), seed=seed, tries=k + 1,
+        fit_time_s=elapsed, n_train=int(train.sum()),
+        train=accuracy(y[train], y_hat[train]),
+        test=accuracy(y[test_mask], y_hat[test_mask]) if test_mask.any() else None,
+        rejected=tuple(rejected),
+    )
+    return model, report
+
+
+def fit_models(ds, study: Study, *, settings=None, names=tuple(RESPONSES), log=None) -> FitResult:
+    """Fit B_r, B_z, f_r, f_z to a DOE data set (layout of ``magtact.doe``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        DOE data set with dims ``t, theta, H, G`` (SI coordinates).
+    study : Study
+        The study the data set belongs to (geometry of the features, domain, settings).
+    settings : optional
+        A ``Metamodel`` settings section (default ``study.metamodel``).
+    names : sequence of str
+        Responses to fit (all four by default; with ``b_model = "exact"`` the field is not fitted
+        by :func:`magtact.metamodel.fit_study`).
+    log : callable, optional
+        Progress messages.
+
+    Returns
+    -------
+    FitResult
+        Models (with accuracy, settings and data hash in each ``info``) and reports.
+    """
+    cfg = settings or study.metamodel
+    table, spread, (t_, th_, H_) = _table(ds)
+    hold = holdout_paths(th_, H_, cfg.holdout_paths, cfg.seed)
+    test = np.zeros(table["t"].shape, dtype=bool)
+    for a, b in hold:
+        test |= (table["theta"] == a) & (table["H"] == b)
+    digest = data_hash(ds)
+    models, reports = {}, {}
+    for name in names:
+        if log:
+            log(f"fitting {name} ({cfg.generations} generations, population {cfg.population})")
+        m, rep = fit_response(name, table, test, study, settings=cfg, log=log)
+        info = {
+            "transform": rep.transform, "features": list(rep.features),
+            "accuracy": {"train": asdict(rep.train),
+                         "test": asdict(rep.test) if rep.test else None,
+                         "holdout_paths_theta_H": [list(h) for h in hold]},
+            "settings": asdict(cfg), "seed": rep.seed, "tries": rep.tries,
+            "rejected": list(rep.rejected), "fit_time_s": rep.fit_time_s,
+            "data_hash": digest, "G_spread": spread.get(name, 0.0),
+        }
+        models[name] = Metamodel(name=m.name, expr=m.expr, units=m.units, expr_pq=m.expr_pq,
+                                 info=info)
+        reports[name] = rep
+    full = ModelSet(**models) if set(models) == set(RESPONSES) else None
+    return FitResult(models=full if full is not None else models, reports=reports,
+                     data_hash=digest, holdout=tuple(hold))
