@@ -1,0 +1,48 @@
+"""Sensitivity-optimal design (SPEC section 7).
+
+Per design (H, G): stable shear bounds and the largest F_z, Γ_r, Γ_z (:func:`per_design`); maps
+over (H, G) (:func:`design_maps`); over designs: NSGA-II (:func:`pareto_nsga2`), the exact
+reduction to a curve over H (:func:`exact_reduction`), the decision rule (:func:`choose`);
+:func:`compare` two designs; :func:`optimise` runs it all.
+"""
+
+from ._box import BatchOptimum, BoxOptimum, batch_optimum, box_optimum
+from ._design import (
+    DesignMaps,
+    DesignResult,
+    HeightResult,
+    HeightTable,
+    as_responses,
+    design_maps,
+    heights_batch,
+    per_design,
+    per_height,
+)
+from ._pareto import (
+    Choice,
+    Comparison,
+    ForceConstraints,
+    InfeasibleError,
+    ParetoSet,
+    Reduction,
+    choose,
+    compare,
+    decision_index,
+    exact_reduction,
+    feasible_G,
+    force_constraints,
+    front_gap,
+    nondominated,
+    pareto_nsga2,
+    sweep,
+)
+from ._run import Optimisation, Timings, optimise
+
+__all__ = [
+    "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignResult",
+    "ForceConstraints", "HeightResult", "HeightTable", "InfeasibleError", "Optimisation",
+    "ParetoSet", "Reduction", "Timings", "as_responses", "batch_optimum", "box_optimum",
+    "choose", "compare", "decision_index", "design_maps", "exact_reduction", "feasible_G",
+    "force_constraints", "front_gap", "heights_batch", "nondominated", "optimise",
+    "pareto_nsga2", "per_design", "per_height", "sweep",
+]

@@ -1,0 +1,357 @@
+"""Per-design extrema (SPEC section 7 (i)): stable shear bounds, then the largest F_z, Γ_r, Γ_z.
+
+Every force and sensitivity is G times a function of (t, θ, H): F = G f, Γ = G γ. The stable shear
+bounds (t_m, θ_m) and the locations of the maxima therefore do not depend on G; they are computed
+once per height H (:class:`HeightResult`) and scaled by G for a design (:class:`DesignResult`).
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..metamodel import ModelSet
+from ..sensitivity import Responses, ResponsesAtH
+from ..study import Study, from_si
+from ._box import BoxOptimum, batch_optimum, box_optimum
+
+#: Stage-2 responses, maximised over [0, t_m] × [0, θ_m].
+MAXIMISED: tuple[str, ...] = ("f_z", "gamma_r", "gamma_z")
+
+
+def as_responses(models: Responses | ModelSet) -> Responses:
+    """``models`` as :class:`magtact.sensitivity.Responses` (a ModelSet is wrapped)."""
+    if isinstance(models, Responses):
+        return models
+    if isinstance(models, ModelSet):
+        return Responses(models)
+    raise TypeError(f"expected Responses or ModelSet, got {type(models).__name__}")
+
+
+def _at(responses: Responses, H) -> ResponsesAtH:
+    """Responses at height(s) H; an array H broadcasts against (t, θ)."""
+    return ResponsesAtH(responses.models, H)
+
+
+@dataclass(frozen=True)
+class HeightResult:
+    """Per-unit-G extrema at one height H (independent of G).
+
+    Attributes
+    ----------
+    H : float
+        Base height [m].
+    f_r_min : BoxOptimum
+        Minimum of f_r = F_r / G [N/Pa] over t ∈ [0, 1], θ ∈ [0, θ_max]; its location is
+        (t_m, θ_m), the stable shear bounds.
+    f_z_max, gamma_r_max, gamma_z_max : BoxOptimum
+        Maxima of f_z [N/Pa], γ_r, γ_z [N/(T·Pa)] over t ∈ [0, t_m], θ ∈ [0, θ_m].
+    """
+
+    H: float
+    f_r_min: BoxOptimum
+    f_z_max: BoxOptimum
+    gamma_r_max: BoxOptimum
+    gamma_z_max: BoxOptimum
+
+    @property
+    def t_m(self) -> float:
+        """Load at the minimum of F_r [-]."""
+        return self.f_r_min.t
+
+    @property
+    def theta_m(self) -> float:
+        """Shear angle at the minimum of F_r [rad]."""
+        return self.f_r_min.theta
+
+    @property
+    def degenerate(self) -> str | None:
+        """``None``, or which side of the stable box [0, t_m] × [0, θ_m] has zero width."""
+        return _degenerate(self.t_m, self.theta_m)
+
+
+def _degenerate(t_m: float, theta_m: float) -> str | None:
+    if t_m == 0 and theta_m == 0:
+        return "t_m = theta_m = 0"
+    if t_m == 0:
+        return "t_m = 0"
+    if theta_m == 0:
+        return "theta_m = 0"
+    return None
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """Extrema of a design (H, G) (SPEC Eqs. 17–18), in SI units.
+
+    Attributes
+    ----------
+    H, G : float
+        Design [m], [Pa].
+    height : HeightResult
+        The per-unit-G extrema at H, with locations and refinement diagnostics.
+    """
+
+    H: float
+    G: float
+    height: HeightResult
+
+    @property
+    def t_m(self) -> float:
+        """Stable shear bound in t [-]."""
+        return self.height.t_m
+
+    @property
+    def theta_m(self) -> float:
+        """Stable shear bound in θ [rad]."""
+        return self.height.theta_m
+
+    @property
+    def degenerate(self) -> str | None:
+        """See :attr:`HeightResult.degenerate`."""
+        return self.height.degenerate
+
+    @property
+    def F_r_min(self) -> float:
+        """Smallest (most negative) shear force F_r,min [N]."""
+        return self.G * self.height.f_r_min.value
+
+    @property
+    def F_z_max(self) -> float:
+        """Largest normal force F_z,max in the stable box [N]."""
+        return self.G * self.height.f_z_max.value
+
+    @property
+    def Gamma_r_max(self) -> float:
+        """Largest shear sensitivity Γ_r,max in the stable box [N/T]."""
+        return self.G * self.height.gamma_r_max.value
+
+    @property
+    def Gamma_z_max(self) -> float:
+        """Largest normal sensitivity Γ_z,max in the stable box [N/T]."""
+        return self.G * self.height.gamma_z_max.value
+
+
+def per_height(models: Responses | ModelSet, H: float, study: Study) -> HeightResult:
+    """Per-unit-G extrema at height H [m]: GA start + trust-region refinement for each.
+
+    Parameters
+    ----------
+    models : Responses or ModelSet
+        The metamodels (with their sensitivities).
+    H : float
+        Base height [m].
+    study : Study
+        Supplies θ_max and the ``[optimise]`` settings (population, seed, ga_generations, tol).
+
+    Returns
+    -------
+    HeightResult
+
+    Notes
+    -----
+    Step 1 minimises f_r over [0, 1] × [0, θ_max] → (t_m, θ_m). Step 2 maximises f_z, γ_r, γ_z over
+    [0, t_m] × [0, θ_m]; a side of zero width (degenerate box) fixes that variable, and the
+    single point (0, 0) is simply evaluated. Each problem: :func:`box_optimum`.
+    """
+    R = _at(as_responses(models), float(H))
+    o = study.optimise
+    kw = {"population": o.population, "generations": o.ga_generations, "seed": o.seed,
+          "tol": o.tol}
+
+    def funcs(name):
+        return (lambda x: R.value(name, x[:, 0], x[:, 1]),
+                lambda x: R.grad(name, x[:, 0], x[:, 1]),
+                lambda x: R.hess(name, x[:, 0], x[:, 1]))
+
+    fr = box_optimum(*funcs("f_r"), [0.0, 0.0], [1.0, study.loading.theta_max],
+                     maximise=False, **kw)
+    hi = [fr.t, fr.theta]
+    rest = [box_optimum(*funcs(n), [0.0, 0.0], hi, maximise=True, **kw) for n in MAXIMISED]
+    return HeightResult(float(H), fr, *rest)
+
+
+def per_design(models: Responses | ModelSet, H: float, G: float, study: Study) -> DesignResult:
+    """Extrema of the design (H [m], G [Pa]): :func:`per_height` at H, scaled by G.
+
+    Raises
+    ------
+    ValueError
+        If G is not positive.
+    """
+    if not G > 0:
+        raise ValueError(f"shear modulus G must be positive, got {G} Pa")
+    return DesignResult(float(H), float(G), per_height(models, H, study))
+
+
+@dataclass(frozen=True)
+class HeightTable:
+    """Per-unit-G extrema at many heights, from the batched solver (arrays of shape (n,)).
+
+    ``H`` [m]; ``t_m, theta_m`` the stable shear bounds; ``f_r_min, f_z_max`` [N/Pa];
+    ``gamma_r_max, gamma_z_max`` [N/(T·Pa)]; ``loc_*`` the (t, θ) of each maximum, shape (n, 2);
+    ``converged`` whether all four refinements met the tolerance.
+    """
+
+    H: np.ndarray
+    t_m: np.ndarray
+    theta_m: np.ndarray
+    f_r_min: np.ndarray
+    f_z_max: np.ndarray
+    gamma_r_max: np.ndarray
+    gamma_z_max: np.ndarray
+    loc_f_z: np.ndarray
+    loc_gamma_r: np.ndarray
+    loc_gamma_z: np.ndarray
+    converged: np.ndarray
+
+
+def heights_batch(models: Responses | ModelSet, H, study: Study,
+                  warm: HeightTable | None = None) -> HeightTable:
+    """Per-unit-G extrema at many heights at once (vectorised over H).
+
+    The same two steps as :func:`per_height`, each solved for all heights together by
+    :func:`batch_optimum` (best point of a ``start_t × start_theta`` grid on each box, then
+    projected Newton with the exact gradient and Hessian, tolerance ``tol``). Used by NSGA-II and
+    the exact reduction, where thousands of heights are needed; it agrees with
+    :func:`per_height` wherever the start grid resolves the basin of the global optimum.
+
+    Parameters
+    ----------
+    H : array_like, shape (n,)
+        Heights [m].
+    warm : HeightTable, optional
+        Solved heights (a dense sweep): each problem starts from the optimum at the nearest
+        height of ``warm`` instead of the start grid (NSGA-II's inner loop). Near a height
+        where a maximum jumps between two basins this may return the other basin's value,
+        which there differs from the global one by O(ΔH) of the table's spacing.
+    """
+    H = np.atleast_1d(np.asarray(H, dtype=float))
+    R = as_responses(models)
+    o = study.optimise
+    n = H.size
+
+    def funcs(name):
+        def fun(r, t, th):
+            return _at(R, _rows(H, r, t)).value(name, t, th)
+
+        def jac(r, t, th):
+            return _at(R, _rows(H, r, t)).grad(name, t, th)
+
+        def hess(r, t, th):
+            return _at(R, _rows(H, r, t)).hess(name, t, th)
+
+        return fun, jac, hess
+
+    kw = {"grid": (o.start_t, o.start_theta), "tol": o.tol}
+    lo = np.zeros((n, 2))
+    hi = np.tile([1.0, study.loading.theta_max], (n, 1))
+    starts = [None] * 4
+    if warm is not None:
+        k = _nearest(warm.H, H)
+        starts = [np.stack([warm.t_m[k], warm.theta_m[k]], axis=1), warm.loc_f_z[k],
+                  warm.loc_gamma_r[k], warm.loc_gamma_z[k]]
+    fr = batch_optimum(*funcs("f_r"), lo, hi, maximise=False, start=starts[0], **kw)
+    box = np.stack([fr.t, fr.theta], axis=1)
+    res = [batch_optimum(*funcs(name), lo, box, maximise=True, start=s, **kw)
+           for name, s in zip(MAXIMISED, starts[1:], strict=True)]
+    conv = fr.converged & np.logical_and.reduce([r.converged for r in res])
+    locs = [np.stack([r.t, r.theta], axis=1) for r in res]
+    return HeightTable(H, fr.t, fr.theta, fr.value, res[0].value, res[1].value, res[2].value,
+                       *locs, conv)
+
+
+def _nearest(grid: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Index of the nearest element of the sorted array ``grid`` for each ``x``."""
+    if grid.size == 1:
+        return np.zeros(np.shape(x), int)
+    k = np.clip(np.searchsorted(grid, x), 1, grid.size - 1)
+    return np.where(np.abs(x - grid[k - 1]) <= np.abs(grid[k] - x), k - 1, k)
+
+
+def _rows(H: np.ndarray, r, t) -> np.ndarray:
+    """Heights of the problems ``r``, shaped to broadcast against ``t``."""
+    h = H[np.asarray(r)]
+    return h.reshape(h.shape + (1,) * (np.ndim(t) - h.ndim))
+
+
+@dataclass(frozen=True)
+class DesignMaps:
+    """Per-design results on a grid of (H, G) (SPEC section 7 (i)).
+
+    Attributes
+    ----------
+    H : numpy.ndarray, shape (n_H,)
+        Heights [m].
+    G : numpy.ndarray, shape (n_G,)
+        Shear moduli [Pa].
+    heights : tuple of HeightResult
+        The per-unit-G extrema at each H (GA + trust region).
+
+    Properties ``F_r_min, F_z_max, Gamma_r_max, Gamma_z_max`` are arrays of shape (n_H, n_G)
+    [N, N, N/T, N/T].
+    """
+
+    H: np.ndarray
+    G: np.ndarray
+    heights: tuple[HeightResult, ...]
+
+    def _grid(self, attr) -> np.ndarray:
+        per_h = np.array([getattr(h, attr).value for h in self.heights])
+        return per_h[:, None] * self.G[None, :]
+
+    @property
+    def F_r_min(self) -> np.ndarray:
+        """F_r,min [N], shape (n_H, n_G)."""
+        return self._grid("f_r_min")
+
+    @property
+    def F_z_max(self) -> np.ndarray:
+        """F_z,max [N], shape (n_H, n_G)."""
+        return self._grid("f_z_max")
+
+    @property
+    def Gamma_r_max(self) -> np.ndarray:
+        """Γ_r,max [N/T], shape (n_H, n_G)."""
+        return self._grid("gamma_r_max")
+
+    @property
+    def Gamma_z_max(self) -> np.ndarray:
+        """Γ_z,max [N/T], shape (n_H, n_G)."""
+        return self._grid("gamma_z_max")
+
+    def design(self, i: int, j: int) -> DesignResult:
+        """The design (H[i], G[j])."""
+        return DesignResult(float(self.H[i]), float(self.G[j]), self.heights[i])
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write one row per design in user units (mm, kPa, N, N/T, rad); return the path."""
+        path = Path(path)
+        cols = ["H_mm", "G_kPa", "F_r_min_N", "F_z_max_N", "Gamma_r_max_N_per_T",
+                "Gamma_z_max_N_per_T", "t_m", "theta_m_rad", "degenerate"]
+        with path.open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(cols)
+            for i in range(self.H.size):
+                for j in range(self.G.size):
+                    d = self.design(i, j)
+                    w.writerow([f"{from_si(d.H, 'mm'):.12g}", f"{from_si(d.G, 'kPa'):.12g}",
+                                f"{d.F_r_min:.12g}", f"{d.F_z_max:.12g}",
+                                f"{d.Gamma_r_max:.12g}", f"{d.Gamma_z_max:.12g}",
+                                f"{d.t_m:.12g}", f"{d.theta_m:.12g}", d.degenerate or ""])
+        return path
+
+
+def design_maps(models: Responses | ModelSet, study: Study) -> DesignMaps:
+    """Per-design results on the ``grid_n × grid_n`` grid of (H, G) over the design bounds.
+
+    One :func:`per_height` per H level (the G levels only scale it).
+    """
+    n = study.optimise.grid_n
+    H = np.linspace(*study.design.H, n)
+    G = np.linspace(*study.design.G, n)
+    R = as_responses(models)
+    return DesignMaps(H, G, tuple(per_height(R, h, study) for h in H))

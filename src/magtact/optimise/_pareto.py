@@ -1,0 +1,416 @@
+"""Optimisation over designs (SPEC section 7 (ii)): constraints, NSGA-II, exact reduction, choice.
+
+Problem (published study, Eq. 19)::
+
+    minimise (Γ_r,max(H, G), Γ_z,max(H, G))
+    subject to H ∈ [H_lo, H_hi], G ∈ [G_lo, G_hi],
+               g_r = F_r,min − F_r,c ≤ 0,   g_z = F_z,c − F_z,max ≤ 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..metamodel import ModelSet
+from ..sensitivity import Responses
+from ..study import Study, from_si
+from ._design import DesignResult, HeightTable, as_responses, heights_batch, per_design
+
+
+class InfeasibleError(ValueError):
+    """No design within the bounds satisfies the force constraints."""
+
+
+@dataclass(frozen=True)
+class ForceConstraints:
+    """Force constraints F_r,min ≤ F_r,c and F_z,max ≥ F_z,c [N].
+
+    ``source`` is ``"values"`` (numbers given) or ``"reference"`` (those of ``reference``, a
+    design whose F_r,min and F_z,max were computed).
+    """
+
+    F_r_c: float
+    F_z_c: float
+    source: str = "values"
+    reference: DesignResult | None = None
+
+    def margins(self, F_r_min, F_z_max) -> tuple[np.ndarray, np.ndarray]:
+        """(g_r, g_z) = (F_r,min − F_r,c, F_z,c − F_z,max) [N]; ≤ 0 is feasible."""
+        return np.asarray(F_r_min) - self.F_r_c, self.F_z_c - np.asarray(F_z_max)
+
+
+def force_constraints(models: Responses | ModelSet, study: Study, *, F_r_c: float | None = None,
+                      F_z_c: float | None = None,
+                      reference: tuple[float, float] | None = None) -> ForceConstraints:
+    """The force constraints to use.
+
+    Parameters
+    ----------
+    models : Responses or ModelSet
+        Needed when the constraints come from a reference design.
+    study : Study
+        Its ``[constraints]`` table is the default: numbers (``source = "values"``) or the
+        original design ``design.H_original, G_original`` (``source = "reference"``).
+    F_r_c, F_z_c : float, optional
+        Numbers [N] overriding the study's (a missing one is taken from the study).
+    reference : (H [m], G [Pa]), optional
+        Use this design's F_r,min and F_z,max as F_r,c and F_z,c.
+
+    Raises
+    ------
+    ValueError
+        If both numbers and a reference design are given.
+    """
+    given = F_r_c is not None or F_z_c is not None
+    if given and reference is not None:
+        raise ValueError("give either constraint values (F_r_c, F_z_c) or a reference design, "
+                         "not both")
+    c = study.constraints
+    if reference is None and not given and c.source == "reference":
+        reference = (study.design.H_original, study.design.G_original)
+    if reference is not None:
+        d = per_design(models, reference[0], reference[1], study)
+        return ForceConstraints(d.F_r_min, d.F_z_max, "reference", d)
+    return ForceConstraints(c.F_r_c if F_r_c is None else float(F_r_c),
+                            c.F_z_c if F_z_c is None else float(F_z_c), "values")
+
+
+def feasible_G(f_r_min, f_z_max, constraints: ForceConstraints,
+               G_bounds: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Interval [G_low, G_high] of feasible shear moduli at each height (empty if low > high).
+
+    Notes
+    -----
+    With a = f_r,min(H) and b = f_z,max(H) (per unit G), G a ≤ F_r,c and G b ≥ F_z,c give
+    G ≥ F_r,c / a where a < 0 (G ≤ F_r,c / a where a > 0; for a = 0 feasible iff F_r,c ≥ 0) and
+    G ≥ F_z,c / b where b > 0 (G ≤ F_z,c / b where b < 0; for b = 0 feasible iff F_z,c ≤ 0).
+    With F_r,c < 0 and f_r,min < 0 the first bound is the positive ratio F_r,c / f_r,min.
+    """
+    a, b = np.asarray(f_r_min, float), np.asarray(f_z_max, float)
+    low = np.full(np.broadcast(a, b).shape, float(G_bounds[0]))
+    high = np.full(low.shape, float(G_bounds[1]))
+    cr, cz = constraints.F_r_c, constraints.F_z_c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        low = np.where(a < 0, np.maximum(low, cr / a), low)
+        high = np.where(a > 0, np.minimum(high, cr / a), high)
+        low = np.where(b > 0, np.maximum(low, cz / b), low)
+        high = np.where(b < 0, np.minimum(high, cz / b), high)
+    impossible = (a == 0) & (cr < 0) | (b == 0) & (cz > 0)
+    high = np.where(impossible, -np.inf, high)
+    return low, high
+
+
+def _infeasible_message(table: HeightTable, constraints: ForceConstraints, study: Study) -> str:
+    """Why no design is feasible: the best reachable value of each constraint on its own."""
+    G_lo, G_hi = study.design.G
+    H_lo, H_hi = study.design.H
+    Fr = np.stack([table.f_r_min * G_lo, table.f_r_min * G_hi])  # (2, n)
+    Fz = np.stack([table.f_z_max * G_lo, table.f_z_max * G_hi])
+    ir = np.unravel_index(np.argmin(Fr), Fr.shape)
+    iz = np.unravel_index(np.argmax(Fz), Fz.shape)
+    Gs = (G_lo, G_hi)
+
+    def at(i):
+        return f"H = {from_si(table.H[i[1]], 'mm'):.3f} mm, G = {from_si(Gs[i[0]], 'kPa'):.2f} kPa"
+
+    best_r, best_z = Fr[ir], Fz[iz]
+    alone = best_r <= constraints.F_r_c and best_z >= constraints.F_z_c
+    return (f"no design with H in [{from_si(H_lo, 'mm'):g}, {from_si(H_hi, 'mm'):g}] mm and "
+            f"G in [{from_si(G_lo, 'kPa'):g}, {from_si(G_hi, 'kPa'):g}] kPa satisfies "
+            f"F_r,min <= {constraints.F_r_c:.4g} N and F_z,max >= {constraints.F_z_c:.4g} N. "
+            f"Best reachable: F_r,min = {best_r:.4g} N ({at(ir)}); "
+            f"F_z,max = {best_z:.4g} N ({at(iz)})"
+            + ("; each is reachable alone but not both in one design." if alone else "."))
+
+
+def nondominated(objectives: np.ndarray) -> np.ndarray:
+    """Mask of the non-dominated rows of ``objectives`` (n, 2), both minimised.
+
+    Of identical rows only the first is kept.
+    """
+    obj = np.asarray(objectives, float)
+    order = np.lexsort((obj[:, 1], obj[:, 0]))
+    keep = np.zeros(obj.shape[0], bool)
+    best = np.inf
+    for k in order:
+        if obj[k, 1] < best:
+            keep[k] = True
+            best = obj[k, 1]
+    return keep
+
+
+@dataclass(frozen=True)
+class Reduction:
+    """Exact reduction of the design problem to a curve over H (SPEC section 7).
+
+    Attributes
+    ----------
+    table : HeightTable
+        Per-unit-G extrema on the sweep of heights.
+    G_star : numpy.ndarray, shape (n,)
+        Smallest feasible G at each height [Pa] (NaN where none is feasible).
+    Gamma_r, Gamma_z : numpy.ndarray, shape (n,)
+        Objectives at (H, G*(H)) [N/T] (NaN where infeasible).
+    front : numpy.ndarray of bool, shape (n,)
+        The non-dominated feasible heights: the exact Pareto set.
+    constraints : ForceConstraints
+    """
+
+    table: HeightTable
+    G_star: np.ndarray
+    Gamma_r: np.ndarray
+    Gamma_z: np.ndarray
+    front: np.ndarray
+    constraints: ForceConstraints
+
+    @property
+    def H(self) -> np.ndarray:
+        """Heights of the sweep [m]."""
+        return self.table.H
+
+    @property
+    def feasible(self) -> np.ndarray:
+        """Heights at which some G in the bounds is feasible."""
+        return np.isfinite(self.G_star)
+
+
+def sweep(models: Responses | ModelSet, study: Study) -> HeightTable:
+    """Per-unit-G extrema on ``sweep_n`` equally spaced heights over the H bounds."""
+    return heights_batch(models, np.linspace(*study.design.H, study.optimise.sweep_n), study)
+
+
+def exact_reduction(models: Responses | ModelSet, study: Study, constraints: ForceConstraints,
+                    table: HeightTable | None = None) -> Reduction:
+    """The Pareto set by a 1D sweep over H: G*(H) = smallest feasible G.
+
+    Parameters
+    ----------
+    table : HeightTable, optional
+        A precomputed :func:`sweep` (computed when not given).
+
+    Raises
+    ------
+    InfeasibleError
+        If no height admits a feasible G; the message gives the best reachable F_r,min and
+        F_z,max.
+
+    Notes
+    -----
+    Γ_r,max = G γ_r,max(H) and Γ_z,max = G γ_z,max(H) grow with G, and the feasible G at a
+    height form an interval (:func:`feasible_G`), so only its lower end
+    G*(H) = max(G_lo, F_r,c / f_r,min(H), F_z,c / f_z,max(H)) (with the signs of the defaults)
+    can be Pareto-optimal. The Pareto set is the non-dominated part of the curve
+    H ↦ (G* γ_r,max, G* γ_z,max).
+    """
+    table = sweep(models, study) if table is None else table
+    low, high = feasible_G(table.f_r_min, table.f_z_max, constraints, study.design.G)
+    ok = low <= high
+    if not ok.any():
+        raise InfeasibleError(_infeasible_message(table, constraints, study))
+    G_star = np.where(ok, low, np.nan)
+    Gr, Gz = G_star * table.gamma_r_max, G_star * table.gamma_z_max
+    front = np.zeros(ok.size, bool)
+    idx = np.flatnonzero(ok)
+    front[idx[nondominated(np.stack([Gr[idx], Gz[idx]], axis=1))]] = True
+    return Reduction(table, G_star, Gr, Gz, front, constraints)
+
+
+@dataclass(frozen=True)
+class ParetoSet:
+    """NSGA-II's Pareto set over designs (H, G), sorted by H (arrays of shape (n,)).
+
+    ``H`` [m], ``G`` [Pa], ``Gamma_r_max, Gamma_z_max`` [N/T], ``F_r_min, F_z_max`` [N];
+    ``constraints`` used; ``seed``, ``generations`` and ``evaluations`` of the run.
+    """
+
+    H: np.ndarray
+    G: np.ndarray
+    Gamma_r_max: np.ndarray
+    Gamma_z_max: np.ndarray
+    F_r_min: np.ndarray
+    F_z_max: np.ndarray
+    constraints: ForceConstraints
+    seed: int
+    generations: int
+    evaluations: int
+
+    @property
+    def objectives(self) -> np.ndarray:
+        """(Γ_r,max, Γ_z,max) [N/T], shape (n, 2)."""
+        return np.stack([self.Gamma_r_max, self.Gamma_z_max], axis=1)
+
+
+def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceConstraints,
+                 table: HeightTable | None = None) -> ParetoSet:
+    """NSGA-II (pymoo, seeded) over (H, G) minimising (Γ_r,max, Γ_z,max) under the constraints.
+
+    Parameters
+    ----------
+    table : HeightTable, optional
+        A dense :func:`sweep`; each design's per-height problems start from the optimum at the
+        nearest swept height (see :func:`heights_batch`). Computed when not given.
+
+    Raises
+    ------
+    InfeasibleError
+        If no design is feasible (message from :func:`exact_reduction`).
+
+    Notes
+    -----
+    Variables are scaled to [0, 1]² over the bounds; constraints enter NSGA-II as
+    g_r / |F_r,c| ≤ 0 and g_z / |F_z,c| ≤ 0 (1 N where a limit is zero) so that both weigh alike
+    in the constraint violation. Population ``optimise.population``, ``nsga2_generations``
+    generations, seed ``optimise.seed``; the same seed gives the same set.
+    """
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.core.problem import Problem
+    from pymoo.optimize import minimize
+
+    R = as_responses(models)
+    o = study.optimise
+    table = sweep(R, study) if table is None else table
+    (H_lo, H_hi), (G_lo, G_hi) = study.design.H, study.design.G
+    s_r = abs(constraints.F_r_c) or 1.0
+    s_z = abs(constraints.F_z_c) or 1.0
+
+    def designs(x):
+        return H_lo + x[:, 0] * (H_hi - H_lo), G_lo + x[:, 1] * (G_hi - G_lo)
+
+    def evaluate(x):
+        H, G = designs(x)
+        tab = heights_batch(R, H, study, warm=table)
+        g_r, g_z = constraints.margins(G * tab.f_r_min, G * tab.f_z_max)
+        return H, G, tab, g_r, g_z
+
+    class _Designs(Problem):
+        def __init__(self):
+            super().__init__(n_var=2, n_obj=2, n_ieq_constr=2, xl=np.zeros(2), xu=np.ones(2))
+
+        def _evaluate(self, x, out, *args, **kwargs):
+            _, G, tab, g_r, g_z = evaluate(x)
+            out["F"] = np.stack([G * tab.gamma_r_max, G * tab.gamma_z_max], axis=1)
+            out["G"] = np.stack([g_r / s_r, g_z / s_z], axis=1)
+
+    res = minimize(_Designs(), NSGA2(pop_size=o.population), ("n_gen", o.nsga2_generations),
+                   seed=o.seed, verbose=False)
+    opt = res.opt
+    X = np.atleast_2d(opt.get("X"))
+    feasible = np.ravel(opt.get("CV")) <= 0
+    if not feasible.any():
+        exact_reduction(R, study, constraints, table)  # raises the informative error
+        raise InfeasibleError("NSGA-II found no feasible design although some exist; "
+                              "increase optimise.nsga2_generations or optimise.population")
+    X = X[feasible]
+    X = X[np.argsort(X[:, 0], kind="stable")]
+    H, G, tab, _, _ = evaluate(X)
+    return ParetoSet(H, G, G * tab.gamma_r_max, G * tab.gamma_z_max, G * tab.f_r_min,
+                     G * tab.f_z_max, constraints, o.seed, o.nsga2_generations,
+                     int(res.algorithm.evaluator.n_eval))
+
+
+def front_gap(pareto: ParetoSet, reduction: Reduction) -> float:
+    """Largest relative distance of NSGA-II's set from the exact Pareto curve in objective space.
+
+    For each NSGA-II point P the distance is min over the curve Q of max_i |P_i − Q_i| / Q_i,
+    the curve being the exact front refined by linear interpolation (20 points per segment)
+    between neighbouring front heights.
+    """
+    idx = np.flatnonzero(reduction.front)
+    Q = np.stack([reduction.Gamma_r[idx], reduction.Gamma_z[idx]], axis=1)
+    if Q.shape[0] > 1:
+        s = np.linspace(0, 1, 20, endpoint=False)
+        contiguous = np.diff(idx) == 1
+        segs = [Q[k] + s[:, None] * (Q[k + 1] - Q[k]) for k in range(Q.shape[0] - 1)
+                if contiguous[k]]
+        Q = np.concatenate(segs + [Q], axis=0)
+    P = pareto.objectives
+    d = np.max(np.abs(P[:, None, :] - Q[None, :, :]) / np.abs(Q[None, :, :]), axis=2)
+    return float(np.max(np.min(d, axis=1)))
+
+
+def decision_index(objectives: np.ndarray) -> int:
+    """Index of the chosen point: objectives normalised to [0, 1] over the set, equal weights,
+    smallest sum (an objective constant over the set contributes 0)."""
+    obj = np.asarray(objectives, float)
+    lo, hi = obj.min(axis=0), obj.max(axis=0)
+    span = np.where(hi > lo, hi - lo, 1.0)
+    return int(np.argmin(np.sum((obj - lo) / span, axis=1)))
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The chosen design and its constraints.
+
+    Attributes
+    ----------
+    design : DesignResult
+        Re-evaluated with the per-design method (GA + trust region).
+    index : int
+        Its position in the set it was chosen from.
+    constraints : ForceConstraints
+    g_r, g_z : float
+        Constraint values F_r,min − F_r,c and F_z,c − F_z,max [N] (≤ 0 feasible).
+    active : tuple of str
+        ``"F_r"`` and/or ``"F_z"``: constraints with |g| ≤ ``active_rtol`` |limit|.
+    """
+
+    design: DesignResult
+    index: int
+    constraints: ForceConstraints
+    g_r: float
+    g_z: float
+    active: tuple[str, ...]
+
+
+def choose(models: Responses | ModelSet, study: Study, candidates: ParetoSet | Reduction
+           ) -> Choice:
+    """Apply the decision rule to NSGA-II's set or to the exact front (:func:`decision_index`)."""
+    if isinstance(candidates, Reduction):
+        idx = np.flatnonzero(candidates.front)
+        obj = np.stack([candidates.Gamma_r[idx], candidates.Gamma_z[idx]], axis=1)
+        k = decision_index(obj)
+        H, G, index = candidates.H[idx[k]], candidates.G_star[idx[k]], int(idx[k])
+    else:
+        index = decision_index(candidates.objectives)
+        H, G = candidates.H[index], candidates.G[index]
+    c = candidates.constraints
+    d = per_design(models, float(H), float(G), study)
+    g_r, g_z = (float(v) for v in c.margins(d.F_r_min, d.F_z_max))
+    rtol = study.optimise.active_rtol
+    active = tuple(name for name, g, lim in (("F_r", g_r, c.F_r_c), ("F_z", g_z, c.F_z_c))
+                   if abs(g) <= rtol * max(abs(lim), 1e-300))
+    return Choice(d, index, c, g_r, g_z, active)
+
+
+#: Quantities of :func:`compare`: attribute, label, unit.
+COMPARED: tuple[tuple[str, str, str], ...] = (
+    ("Gamma_r_max", "Γ_r,max", "N/T"), ("Gamma_z_max", "Γ_z,max", "N/T"),
+    ("F_r_min", "F_r,min", "N"), ("F_z_max", "F_z,max", "N"),
+)
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Two designs side by side; ``rows`` gives (label, unit, first, second, change %)."""
+
+    first: DesignResult
+    second: DesignResult
+
+    def change(self, attr: str) -> float:
+        """Percentage change of ``attr`` from the first design to the second:
+        (v₂ − v₁) / v₁ × 100 (for negative F_r,min, growth in magnitude is positive)."""
+        v1, v2 = getattr(self.first, attr), getattr(self.second, attr)
+        return (v2 - v1) / v1 * 100.0 if v1 != 0 else float("nan")
+
+    @property
+    def rows(self) -> list[tuple[str, str, float, float, float]]:
+        """(label, unit, value of first, value of second, change %) per compared quantity."""
+        return [(label, unit, getattr(self.first, a), getattr(self.second, a), self.change(a))
+                for a, label, unit in COMPARED]
+
+
+def compare(first: DesignResult, second: DesignResult) -> Comparison:
+    """Percentage changes of Γ_r,max, Γ_z,max, F_r,min, F_z,max from ``first`` to ``second``."""
+    return Comparison(first, second)

@@ -1,0 +1,190 @@
+"""The whole optimisation stage: maps, exact reduction, NSGA-II, decision; and its files."""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..metamodel import ModelSet
+from ..sensitivity import Responses
+from ..study import Study, from_si
+from ._design import DesignMaps, DesignResult, as_responses, design_maps
+from ._pareto import (
+    Choice,
+    ForceConstraints,
+    ParetoSet,
+    Reduction,
+    choose,
+    exact_reduction,
+    force_constraints,
+    front_gap,
+    pareto_nsga2,
+    sweep,
+)
+
+
+@dataclass(frozen=True)
+class Timings:
+    """Wall times of the parts of :func:`optimise` [s]."""
+
+    constraints: float
+    sweep: float
+    nsga2: float
+    decision: float
+    maps: float
+
+    @property
+    def total(self) -> float:
+        """Sum of the parts [s]."""
+        return self.constraints + self.sweep + self.nsga2 + self.decision + self.maps
+
+
+@dataclass(frozen=True)
+class Optimisation:
+    """Everything the optimisation stage computes for one study.
+
+    Attributes
+    ----------
+    constraints : ForceConstraints
+    maps : DesignMaps
+        Per-design results on the ``grid_n × grid_n`` grid.
+    reduction : Reduction
+        The exact Pareto set over H.
+    pareto : ParetoSet
+        NSGA-II's Pareto set.
+    choice : Choice
+        The design the decision rule picks from NSGA-II's set (the stage's answer).
+    reduction_choice : Choice
+        The decision rule applied to the exact front (cross-check).
+    gap : float
+        :func:`front_gap` of NSGA-II's set from the exact front (relative).
+    timings : Timings
+    """
+
+    study: Study
+    constraints: ForceConstraints
+    maps: DesignMaps
+    reduction: Reduction
+    pareto: ParetoSet
+    choice: Choice
+    reduction_choice: Choice
+    gap: float
+    timings: Timings
+
+    def write(self, out: str | Path, figures: bool = True) -> list[Path]:
+        """Write ``design.json``, ``pareto.csv``, ``reduction.csv``, ``maps.csv`` and figures.
+
+        Returns the files written. Tables are in user units (mm, kPa, N, N/T).
+        """
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        files = [self._write_json(out / "design.json"), self._write_pareto(out / "pareto.csv"),
+                 self._write_reduction(out / "reduction.csv"), self.maps.to_csv(out / "maps.csv")]
+        if figures:
+            from ..report._fig_optimise import fig_maps, fig_pareto
+
+            files += fig_maps(self.maps, self.constraints, out)
+            files += fig_pareto(self, out / "pareto")
+        return files
+
+    def _write_json(self, path: Path) -> Path:
+        c = self.constraints
+        doc = {
+            "study": self.study.name,
+            "constraints": {
+                "F_r_c_N": c.F_r_c, "F_z_c_N": c.F_z_c, "source": c.source,
+                "reference": None if c.reference is None else _design_json(c.reference),
+            },
+            "chosen": _choice_json(self.choice),
+            "exact_reduction_choice": _choice_json(self.reduction_choice),
+            "pareto": {"points": int(self.pareto.H.size), "seed": self.pareto.seed,
+                       "population": self.study.optimise.population,
+                       "generations": self.pareto.generations,
+                       "evaluations": self.pareto.evaluations,
+                       "gap_to_exact_front": self.gap},
+            "timings_s": {"constraints": self.timings.constraints, "sweep": self.timings.sweep,
+                          "nsga2": self.timings.nsga2, "decision": self.timings.decision,
+                          "maps": self.timings.maps, "total": self.timings.total},
+        }
+        path.write_text(json.dumps(doc, indent=2) + "\n")
+        return path
+
+    def _write_pareto(self, path: Path) -> Path:
+        p = self.pareto
+        g_r, g_z = self.constraints.margins(p.F_r_min, p.F_z_max)
+        rows = zip(from_si(p.H, "mm"), from_si(p.G, "kPa"), p.Gamma_r_max, p.Gamma_z_max,
+                   p.F_r_min, p.F_z_max, g_r, g_z, strict=True)
+        return _csv(path, ["H_mm", "G_kPa", "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T",
+                           "F_r_min_N", "F_z_max_N", "g_r_N", "g_z_N"], rows)
+
+    def _write_reduction(self, path: Path) -> Path:
+        r = self.reduction
+        t = r.table
+        rows = zip(from_si(r.H, "mm"), from_si(r.G_star, "kPa"), r.Gamma_r, r.Gamma_z,
+                   r.G_star * t.f_r_min, r.G_star * t.f_z_max, t.t_m, t.theta_m,
+                   r.front.astype(int), strict=True)
+        return _csv(path, ["H_mm", "G_star_kPa", "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T",
+                           "F_r_min_N", "F_z_max_N", "t_m", "theta_m_rad", "on_front"], rows)
+
+
+def _csv(path: Path, header: list[str], rows) -> Path:
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for row in rows:
+            w.writerow([f"{v:.12g}" if isinstance(v, float | np.floating) else v for v in row])
+    return path
+
+
+def _design_json(d: DesignResult) -> dict:
+    return {"H_mm": from_si(d.H, "mm"), "G_kPa": from_si(d.G, "kPa"),
+            "Gamma_r_max_N_per_T": d.Gamma_r_max, "Gamma_z_max_N_per_T": d.Gamma_z_max,
+            "F_r_min_N": d.F_r_min, "F_z_max_N": d.F_z_max, "t_m": d.t_m,
+            "theta_m_rad": d.theta_m, "degenerate": d.degenerate}
+
+
+def _choice_json(c: Choice) -> dict:
+    return {**_design_json(c.design), "g_r_N": c.g_r, "g_z_N": c.g_z,
+            "active_constraints": list(c.active)}
+
+
+def optimise(models: Responses | ModelSet, study: Study,
+             constraints: ForceConstraints | None = None) -> Optimisation:
+    """Run the optimisation stage: constraints, sweep + exact reduction, NSGA-II, choice, maps.
+
+    Parameters
+    ----------
+    models : Responses or ModelSet
+    study : Study
+    constraints : ForceConstraints, optional
+        Default: :func:`force_constraints` from the study's ``[constraints]`` table.
+
+    Raises
+    ------
+    InfeasibleError
+        If no design in the bounds meets the constraints (with the best reachable values).
+    """
+    R = as_responses(models)
+    clock = time.perf_counter
+    t0 = clock()
+    constraints = force_constraints(R, study) if constraints is None else constraints
+    t1 = clock()
+    table = sweep(R, study)
+    reduction = exact_reduction(R, study, constraints, table)
+    t2 = clock()
+    pareto: ParetoSet = pareto_nsga2(R, study, constraints, table)
+    t3 = clock()
+    choice = choose(R, study, pareto)
+    reduction_choice = choose(R, study, reduction)
+    gap = front_gap(pareto, reduction)
+    t4 = clock()
+    maps = design_maps(R, study)
+    t5 = clock()
+    return Optimisation(study, constraints, maps, reduction, pareto, choice, reduction_choice,
+                        gap, Timings(t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4))
+
