@@ -97,7 +97,7 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
         parts.append('<div class="banner"><b>SYNTHETIC validation data.</b> The validation '
                      "section compares the model with a generated example data set (model plus "
                      "noise, drift and scatter), not with measurements.</div>")
-    parts.append(_summary(manifest, stages))
+    parts.append(_summary(manifest, stages, folder))
     parts.append(_chosen(folder / "optimise"))
     for key, title, what in STAGES:
         parts.append(_stage(folder / key, key, title, what, stages.get(key)))
@@ -113,12 +113,14 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
 
 
 # ---- sections ------------------------------------------------------------------------------
-def _summary(manifest: dict, stages: dict) -> str:
+def _summary(manifest: dict, stages: dict, folder: Path) -> str:
     rows = []
     for key, title, _ in STAGES:
         s = stages.get(key)
         if s is None:
-            status, wall, msg = "absent", "", "not run"
+            present = (folder / key).is_dir() and any((folder / key).iterdir())
+            status, wall = ("files present", "?") if present else ("absent", "")
+            msg = "no record of this stage in run.json" if present else "not run"
         else:
             status = s.get("status", "unknown")
             wall = _fmt_time(s.get("wall_time_s"))
