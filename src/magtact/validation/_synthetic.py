@@ -6,7 +6,7 @@ structural simulation), with noise, drift and sensor-to-sensor scatter added. It
 start with ``synthetic_``, its metadata says ``synthetic = true``, and every table and figure made
 from it says SYNTHETIC. Regenerate it with::
 
-    python -m magtact.validation._synthetic --out src/magtact/validation/data
+    python -m magtact.validation --out src/magtact/validation/data
 """
 
 from __future__ import annotations

@@ -1,0 +1,112 @@
+"""HTML report built from a results folder, and the run orchestration's bookkeeping."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+
+import matplotlib.pyplot as plt
+import pytest
+from typer.testing import CliRunner
+
+from magtact import pipeline
+from magtact.cli._app import app
+from magtact.report import save
+from magtact.report._html import MAX_ROWS, build_report
+from magtact.study import load_study
+
+
+def png(path):
+    fig, ax = plt.subplots(figsize=(2, 1.5))
+    ax.plot([0, 1], [0, 1])
+    return save(fig, path, formats=("png",))[0]
+
+
+def results_folder(tmp_path):
+    """A folder as a run leaves it: doe ok with a figure and a table, optimise failed."""
+    folder = tmp_path / "res"
+    (folder / "doe").mkdir(parents=True)
+    png(folder / "doe" / "forces")
+    rows = "\n".join(f"{k},{k * 0.5}" for k in range(MAX_ROWS + 5))
+    (folder / "doe" / "table.csv").write_text("a,b\n" + rows + "\n", encoding="utf-8")
+    (folder / "doe" / "captions.json").write_text(json.dumps({"forces": "F over <t>"}))
+    (folder / "study.toml").write_text('name = "MagOne"\n', encoding="utf-8")
+    manifest = {"study": "MagOne", "command": "magtact run", "started": "now", "wall_time_s": 3.0,
+                "versions": {"numpy": "9.9"},
+                "stages": [{"key": "doe", "title": "DOE", "status": "ok", "wall_time_s": 1.5,
+                            "message": "done", "notes": []},
+                           {"key": "optimise", "title": "Optimisation", "status": "failed",
+                            "wall_time_s": 0.1, "message": "RuntimeError: boom", "notes": []}]}
+    (folder / "run.json").write_text(json.dumps(manifest), encoding="utf-8")
+    return folder
+
+
+def test_report_embeds_figures_and_reports_absent_and_failed_stages(tmp_path):
+    folder = results_folder(tmp_path)
+    text = build_report(folder).read_text(encoding="utf-8")
+    imgs = re.findall(r'<img src="([^"]+)"', text)
+    assert len(imgs) == 1 and imgs[0].startswith("data:image/png;base64,")
+    decoded = base64.b64decode(imgs[0].split(",", 1)[1])
+    assert decoded == (folder / "doe" / "forces.png").read_bytes()
+    assert "F over &lt;t&gt;" in text  # caption from captions.json, escaped
+    assert "5 more rows in table.csv" in text
+    assert "RuntimeError: boom" in text and 'class="l failed"' in text
+    assert text.count("No results for this stage") == 4  # field, metamodel, optimise, validation
+    assert "No chosen design" in text and "No benchmark results" in text
+    assert "numpy" in text and 'name = &quot;MagOne&quot;' in text
+    assert "SYNTHETIC" not in text
+
+
+def test_report_labels_synthetic_validation(tmp_path):
+    folder = results_folder(tmp_path)
+    (folder / "validation").mkdir()
+    (folder / "validation" / "validation_synthetic.csv").write_text("data,response\n"
+                                                                    "synthetic,B_r\n")
+    text = build_report(folder).read_text(encoding="utf-8")
+    assert "SYNTHETIC validation data" in text
+    assert "validation synthetic (SYNTHETIC data)" in text
+
+
+def test_report_of_missing_folder_is_an_error(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nothere"):
+        build_report(tmp_path / "nothere")
+
+
+def test_report_command_rebuilds_html(tmp_path):
+    folder = results_folder(tmp_path)
+    result = CliRunner().invoke(app, ["report", str(folder)])
+    assert result.exit_code == 0, result.output
+    assert (folder / "report.html").is_file()
+
+
+def test_run_records_ok_failed_and_skipped_stages(tmp_path, monkeypatch):
+    """The orchestration never hides a failure: statuses, messages and tracebacks are kept."""
+
+    def ok(ctx, rec):
+        png(ctx.folder / "field" / "map")
+        ctx.dataset = "data"
+        return "one map"
+
+    def boom(ctx, rec):
+        raise RuntimeError("solver diverged at t = 0.4")
+
+    def needs(ctx, rec):
+        if ctx.models is None:
+            raise pipeline.StageSkipped("needs the metamodels, which are missing")
+        return "unreachable"
+
+    monkeypatch.setattr(pipeline, "STAGES", (("field", "Field", ok),
+                                             ("metamodel", "Metamodels", boom),
+                                             ("optimise", "Optimisation", needs)))
+    result = pipeline.run_study(load_study(None), tmp_path / "out", log=lambda m: None)
+    assert [s.status for s in result.stages] == ["ok", "failed", "skipped"]
+    assert not result.ok
+    manifest = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert [s["status"] for s in manifest["stages"]] == ["ok", "failed", "skipped"]
+    assert manifest["stages"][1]["message"] == "RuntimeError: solver diverged at t = 0.4"
+    assert "solver diverged" in (tmp_path / "out" / "logs" / "metamodel.traceback.txt").read_text()
+    assert load_study(tmp_path / "out" / "study.toml") == load_study(None)
+    text = result.report.read_text(encoding="utf-8")
+    assert "solver diverged at t = 0.4" in text and "needs the metamodels" in text
+    assert text.count("<img ") == 1
