@@ -240,3 +240,53 @@ def test_duplicate_test_across_files_names_both(tmp_path):
     a, b = write(tmp_path, "a.csv", text), write(tmp_path, "b.csv", text)
     with pytest.raises(DataError, match=r"b\.csv: line 4, columns 'sensor', 'repeat'.*a\.csv"):
         read_experiment([a, b])
+
+
+def test_validate_command_with_metamodels_recovers_exact_data(tmp_path):
+    """Data made from known metamodels, validated against the same metamodels: ε ≈ 0."""
+    from typer.testing import CliRunner
+
+    from magtact.cli._app import app
+    from magtact.metamodel import H as Hs
+    from magtact.metamodel import ModelSet, save_models, t, theta
+    from magtact.study import load_study
+
+    models = ModelSet.from_exprs({"B_r": 0.02 * t * theta, "B_z": 0.04 + 0.1 * t ** 2,
+                                  "f_r": -1e-6 * t * theta * (1 - t), "f_z": 3e-4 * t * Hs})
+    save_models(models, tmp_path / "models")
+    study = load_study(None)
+    H, G, th = 4e-3, 20e3, 0.3
+    pm = PathModel.from_metamodels(models, study, H, G, th)
+    u = np.linspace(0.0, pm.u_z_range[0], 81)
+    paths = []
+    for k in range(3):
+        vals = pm(u)
+        lines = [f"# theta_rad = {th}", f"# repeat = {k}", HEADER]
+        lines += [f"{float(u[i]) * 1e3!r}," + ",".join(repr(float(vals[r][i])) for r in RESPONSES)
+                  for i in range(u.size)]
+        paths.append(write(tmp_path, f"r{k}.csv", "\n".join(lines)))
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["validate", *map(str, paths), "--H", "4", "--G", "20",
+                                      "--models", str(tmp_path / "models"), "--out", str(out),
+                                      "--f-hi", "0", "--n-grid", "81"])  # grid = the samples
+    assert result.exit_code == 0, result.output
+    import csv
+
+    rows = list(csv.DictReader((out / "validation.csv").open()))
+    assert [r["response"] for r in rows] == list(RESPONSES)
+    for r in rows:
+        assert float(r["c_v_percent"]) < 1e-9 and float(r["eps_percent"]) < 1e-6, r
+        assert r["data"] == "experiment"
+    assert (out / "validation.png").is_file() and (out / "validation.svg").is_file()
+    assert "c_v" in result.output
+
+
+def test_validate_command_without_design_names_the_option(tmp_path):
+    from typer.testing import CliRunner
+
+    from magtact.cli._app import app
+
+    paths = tiny(tmp_path)
+    result = CliRunner().invoke(app, ["validate", *map(str, paths), "--out", str(tmp_path)])
+    assert result.exit_code != 0
+    assert "--H" in str(result.exception)
