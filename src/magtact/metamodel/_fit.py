@@ -74,12 +74,32 @@ class FitReport:
 
 @dataclass(frozen=True)
 class FitResult:
-    """Fitted models and their reports."""
+    """Fitted models (by response name) and their reports."""
 
-    models: ModelSet
+    models: dict[str, Metamodel]
     reports: dict[str, FitReport]
     data_hash: str
     holdout: tuple[tuple[float, float], ...]
+
+    def model_set(self, study: Study | None = None) -> ModelSet:
+        """The four models; B_r, B_z from the exact field when they were not fitted.
+
+        Raises
+        ------
+        ValueError
+            If a force model is missing, or B is missing and no ``study`` is given.
+        """
+        models = dict(self.models)
+        if not {"B_r", "B_z"} <= set(models):
+            if study is None:
+                raise ValueError("B_r, B_z were not fitted: pass the study for the exact field")
+            from ._exact_field import ExactField
+
+            models |= {k: ExactField(study, k) for k in ("B_r", "B_z")}
+        missing = set(RESPONSES) - set(models)
+        if missing:
+            raise ValueError(f"no model for {sorted(missing)}")
+        return ModelSet(**{k: models[k] for k in RESPONSES})
 
 
 def accuracy(y, y_hat) -> Accuracy:
@@ -169,6 +189,14 @@ def holdout_paths(theta_levels, H_levels, n: int, seed: int) -> list[tuple[float
         raise ValueError(f"holdout_paths = {n} exceeds the {len(pairs)} interior (theta, H) paths")
     pick = np.random.default_rng(seed).choice(len(pairs), size=n, replace=False)
     return [(float(theta_levels[pairs[k][0]]), float(H_levels[pairs[k][1]])) for k in sorted(pick)]
+
+
+def holdout_mask(table: dict, holdout) -> np.ndarray:
+    """Boolean mask of the table's points on the held-out (θ, H) paths."""
+    test = np.zeros(np.shape(table["t"]), dtype=bool)
+    for a, b in holdout:
+        test |= (table["theta"] == a) & (table["H"] == b)
+    return test
 
 
 def _model_expr(name: str, g: sp.Expr, gsyms, feats: dict[str, sp.Expr], transform: str):
@@ -281,7 +309,7 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     return model, report
 
 
-def fit_models(ds, study: Study, *, settings=None, names=tuple(RESPONSES), log=None) -> FitResult:
+def fit_models(ds, study: Study, *, settings=None, names=None, log=None) -> FitResult:
     """Fit B_r, B_z, f_r, f_z to a DOE data set (layout of ``magtact.doe``).
 
     Parameters
@@ -292,9 +320,9 @@ def fit_models(ds, study: Study, *, settings=None, names=tuple(RESPONSES), log=N
         The study the data set belongs to (geometry of the features, domain, settings).
     settings : optional
         A ``Metamodel`` settings section (default ``study.metamodel``).
-    names : sequence of str
-        Responses to fit (all four by default; with ``b_model = "exact"`` the field is not fitted
-        by :func:`magtact.metamodel.fit_study`).
+    names : sequence of str, optional
+        Responses to fit; default: all four, or only f_r, f_z when the settings say
+        ``b_model = "exact"`` (then :meth:`FitResult.model_set` uses the exact field).
     log : callable, optional
         Progress messages.
 
@@ -304,11 +332,11 @@ def fit_models(ds, study: Study, *, settings=None, names=tuple(RESPONSES), log=N
         Models (with accuracy, settings and data hash in each ``info``) and reports.
     """
     cfg = settings or study.metamodel
+    if names is None:
+        names = ("f_r", "f_z") if cfg.b_model == "exact" else tuple(RESPONSES)
     table, spread, (t_, th_, H_) = _table(ds)
     hold = holdout_paths(th_, H_, cfg.holdout_paths, cfg.seed)
-    test = np.zeros(table["t"].shape, dtype=bool)
-    for a, b in hold:
-        test |= (table["theta"] == a) & (table["H"] == b)
+    test = holdout_mask(table, hold)
     digest = data_hash(ds)
     models, reports = {}, {}
     for name in names:
@@ -327,6 +355,4 @@ def fit_models(ds, study: Study, *, settings=None, names=tuple(RESPONSES), log=N
         models[name] = Metamodel(name=m.name, expr=m.expr, units=m.units, expr_pq=m.expr_pq,
                                  info=info)
         reports[name] = rep
-    full = ModelSet(**models) if set(models) == set(RESPONSES) else None
-    return FitResult(models=full if full is not None else models, reports=reports,
-                     data_hash=digest, holdout=tuple(hold))
+    return FitResult(models=models, reports=reports, data_hash=digest, holdout=tuple(hold))

@@ -1,0 +1,95 @@
+"""Figures of the metamodel stage: the shear force map, the sensitivities, model vs data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ..geometry import loading_path
+from ..study import Study, kpa, mm
+from ._style import CMAP_DIV, CMAP_SEQ, save, style
+
+
+def _grid(study: Study, n: int = 121):
+    t = np.linspace(0.0, 1.0, n)
+    th = np.linspace(0.0, study.loading.theta_max, n)
+    return np.meshgrid(t, th, indexing="ij")
+
+
+def stable_region(F_r: np.ndarray, T: np.ndarray, TH: np.ndarray) -> tuple[float, float, float]:
+    """(F_r,min, t_m, θ_m) of a gridded F_r: the grid minimum and where it is."""
+    k = np.unravel_index(np.argmin(F_r), F_r.shape)
+    return float(F_r[k]), float(T[k]), float(TH[k])
+
+
+def fig_force_map(models, study: Study, H: float, G: float, path: str | Path) -> list[Path]:
+    """F_r over (t, θ) and over (u_r, u_z) at design (H [m], G [Pa]).
+
+    Shades the region F_r < 0, draws the line F_r = 0 and the stable region t ≤ t_m, θ ≤ θ_m
+    up to the minimum of F_r (grid minimum, marked by a star).
+    """
+    T, TH = _grid(study)
+    F_r, _ = models.forces(T, TH, H, G)
+    fmin, tm, thm = stable_region(F_r, T, TH)
+    u_r, u_z = loading_path(study, T, TH, H)
+    lim = np.max(np.abs(F_r))
+    with style():
+        fig, axes = plt.subplots(1, 2, figsize=(7.0, 3.0))
+        for ax, (x, y, xl, yl) in zip(axes, [
+                (T, np.degrees(TH), "load $t$ [-]", r"shear angle $\theta$ [deg]"),
+                (mm(u_r), mm(u_z), "$u_r$ [mm]", "$u_z$ [mm]")], strict=True):
+            cs = ax.contourf(x, y, F_r, levels=21, cmap=CMAP_DIV, vmin=-lim, vmax=lim)
+            ax.contourf(x, y, F_r, levels=[-np.inf, 0.0], colors="none", hatches=["////"])
+            ax.contour(x, y, F_r, levels=[0.0], colors="k", linewidths=1.2)
+            stable = (T <= tm) & (TH <= thm)
+            ax.contour(x, y, stable.astype(float), levels=[0.5], colors="C2", linewidths=1.2,
+                       linestyles="--")
+            k = np.unravel_index(np.argmin(F_r), F_r.shape)
+            ax.plot(x[k], y[k], "*", color="C2", ms=9, mec="k", mew=0.5)
+            ax.set_xlabel(xl)
+            ax.set_ylabel(yl)
+        cb = fig.colorbar(cs, ax=axes, shrink=0.9)
+        cb.set_label("$F_r$ [N]")
+        fig.suptitle(f"$F_r$ at H = {mm(H):.3g} mm, G = {kpa(G):.3g} kPa: hatched $F_r<0$, "
+                     f"black $F_r=0$, dashed: stable region up to $F_{{r,min}}$ = {fmin:.3g} N")
+        return save(fig, path)
+
+
+def fig_gamma(models, study: Study, H: float, G: float, path: str | Path) -> list[Path]:
+    """Γ_r and Γ_z [N/T] over (t, θ) at design (H [m], G [Pa])."""
+    from ..sensitivity import gamma
+
+    T, TH = _grid(study)
+    gr, gz = gamma(models, T, TH, H, G)
+    with style():
+        fig, axes = plt.subplots(1, 2, figsize=(7.0, 3.0))
+        for ax, g, lab in zip(axes, (gr, gz), (r"$\Gamma_r$", r"$\Gamma_z$"), strict=True):
+            cs = ax.contourf(T, np.degrees(TH), g, levels=21, cmap=CMAP_SEQ)
+            ax.contour(T, np.degrees(TH), g, levels=cs.levels[::4], colors="k", linewidths=0.4)
+            cb = fig.colorbar(cs, ax=ax)
+            cb.set_label(lab + " [N/T]")
+            ax.set_xlabel("load $t$ [-]")
+            ax.set_ylabel(r"shear angle $\theta$ [deg]")
+        fig.suptitle(f"Sensitivity at H = {mm(H):.3g} mm, G = {kpa(G):.3g} kPa")
+        return save(fig, path)
+
+
+def fig_parity(models, table: dict, test_mask: np.ndarray, path: str | Path) -> list[Path]:
+    """Model against data for the four responses; held-out paths in orange."""
+    names = [("B_r", "mT", 1e3), ("B_z", "mT", 1e3), ("f_r", "N/kPa", 1e3), ("f_z", "N/kPa", 1e3)]
+    with style():
+        fig, axes = plt.subplots(1, 4, figsize=(7.2, 2.1))
+        for ax, (k, unit, s) in zip(axes, names, strict=True):
+            y = table[k] * s
+            y_hat = models[k].value(table["t"], table["theta"], table["H"]) * s
+            ax.plot(y[~test_mask], y_hat[~test_mask], ".", ms=2, color="C0", label="train")
+            ax.plot(y[test_mask], y_hat[test_mask], ".", ms=2, color="C1", label="held out")
+            lo, hi = y.min(), y.max()
+            ax.plot([lo, hi], [lo, hi], "k-", lw=0.6)
+            ax.set_title(f"{k} [{unit}]")
+            ax.set_xlabel("data")
+        axes[0].set_ylabel("model")
+        axes[0].legend(frameon=False, markerscale=3)
+        return save(fig, path)

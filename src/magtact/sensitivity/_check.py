@@ -1,0 +1,63 @@
+"""Γ from finite differences of the DOE data itself: an independent check of the models' Γ."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..metamodel import ModelSet
+from ._gamma import gamma
+
+
+def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
+    """γ_r, γ_z = Γ / G [N/(T·Pa)] on the DOE grid (t, θ, H) by finite differences.
+
+    Derivatives along t and θ are second-order differences of the gridded data
+    (``numpy.gradient``, one-sided of second order at the edges). With x = (t, θ),
+    ∂F/∂B = (∂F/∂x)(∂B/∂x)⁻¹ (the map x → u cancels), which is singular at t = 0: values there
+    are NaN.
+
+    Returns
+    -------
+    gamma_r, gamma_z : numpy.ndarray
+        Shape (n_t, n_theta, n_H).
+    """
+    t_, th_ = (np.asarray(ds[k].values, dtype=float) for k in ("t", "theta"))
+    if len(t_) < 3 or len(th_) < 3:
+        raise ValueError("finite-difference Γ needs at least 3 levels of t and of theta")
+    G = np.asarray(ds["G"].values, dtype=float)
+
+    def arr(name):
+        a = ds[name].transpose("t", "theta", "H", ...).values
+        return (a / G).mean(axis=-1) if name.startswith("F") else np.asarray(a, dtype=float)
+
+    def d(a):
+        return np.stack([np.gradient(a, t_, axis=0, edge_order=2),
+                         np.gradient(a, th_, axis=1, edge_order=2)], axis=-1)
+
+    J = np.stack([d(arr("B_r")), d(arr("B_z"))], axis=-2)  # (..., B, x)
+    dF = np.stack([d(arr("F_r")), d(arr("F_z"))], axis=-2)  # (..., F, x)
+    S = np.full(J.shape, np.nan)
+    ok = np.abs(np.linalg.det(J)) > 0
+    S[ok] = dF[ok] @ np.linalg.inv(J[ok])
+    return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])
+
+
+def compare_with_data(models: ModelSet, ds, t_min: float = 0.2) -> dict[str, dict[str, float]]:
+    """Relative difference between the models' γ and the data's finite-difference γ.
+
+    Points with t < ``t_min`` are excluded (the finite differences of the data are singular at
+    t = 0). Returns, for ``gamma_r`` and ``gamma_z``, the median, 95th percentile and maximum of
+    |γ_model − γ_data| / |γ_model| and the number of points.
+    """
+    t_, th_, H_ = (np.asarray(ds[k].values, dtype=float) for k in ("t", "theta", "H"))
+    T, TH, HH = np.meshgrid(t_, th_, H_, indexing="ij")
+    data = gamma_from_data(ds)
+    model = gamma(models, T, TH, HH, 1.0)
+    keep = T >= t_min
+    out = {}
+    for name, gm, gd in zip(("gamma_r", "gamma_z"), model, data, strict=True):
+        rel = np.abs(gm - gd)[keep] / np.abs(gm)[keep]
+        rel = rel[np.isfinite(rel)]
+        out[name] = {"median": float(np.median(rel)), "p95": float(np.percentile(rel, 95)),
+                     "max": float(rel.max()), "n_points": int(rel.size), "t_min": t_min}
+    return out
