@@ -36,7 +36,7 @@ from ._pareto import (
     pareto_nsga2,
     sweep,
 )
-from ._run import Optimisation, Timings, optimise
+from ._run import Optimisation, Timings, optimise, write_optimise_outputs
 
 __all__ = [
     "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignResult",
@@ -44,5 +44,5 @@ __all__ = [
     "ParetoSet", "Reduction", "Timings", "as_responses", "batch_optimum", "box_optimum",
     "choose", "compare", "decision_index", "design_maps", "exact_reduction", "feasible_G",
     "force_constraints", "front_gap", "heights_batch", "nondominated", "optimise",
-    "pareto_nsga2", "per_design", "per_height", "sweep",
+    "pareto_nsga2", "per_design", "per_height", "sweep", "write_optimise_outputs",
 ]

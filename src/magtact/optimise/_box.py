@@ -240,7 +240,8 @@ def _ga(phi, lo, hi, population, generations, seed) -> np.ndarray:
         def _evaluate(self, x, out, *args, **kwargs):
             out["F"] = phi(x)[:, None]
 
-    res = pymoo_minimize(_P(), GA(pop_size=population), ("n_gen", generations), seed=seed,
+    res = pymoo_minimize(_P(), GA(pop_size=population, eliminate_duplicates=False),
+                         ("n_gen", generations), seed=seed,
                          verbose=False)
     return np.atleast_1d(np.asarray(res.X, float))
 

@@ -89,7 +89,7 @@ class Optimisation:
             from ..report._fig_optimise import fig_maps, fig_pareto
 
             files += fig_maps(self.maps, self.constraints, out)
-            files += fig_pareto(self, out / "pareto")
+            files += fig_pareto(self, out / "pareto_set")
         return files
 
     def _write_json(self, path: Path) -> Path:
@@ -188,3 +188,38 @@ def optimise(models: Responses | ModelSet, study: Study,
     return Optimisation(study, constraints, maps, reduction, pareto, choice, reduction_choice,
                         gap, Timings(t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4))
 
+
+
+#: Captions of the stage's figures and tables (read by the HTML report).
+CAPTIONS = {
+    "maps_objectives": "Objectives over the design space: Γ_r,max (solid) and Γ_z,max (dashed) "
+                       "[N/T], per-design extrema on the map grid.",
+    "maps_constraints": "Constraints over the design space: F_r,min (solid) and F_z,max "
+                        "(dashed) [N]; bold lines at the limits F_r,c and F_z,c.",
+    "pareto_set": "Pareto set of NSGA-II (points) and of the exact reduction (grey line) in "
+              "objective, constraint and design space; the chosen design is the star.",
+    "pareto": "NSGA-II's Pareto set (H, G, objectives, constraints).",
+    "maps": "Per-design extrema on the (H, G) map grid.",
+    "reduction": "Exact reduction: smallest feasible G*(H) and the objectives along it.",
+}
+
+
+def write_optimise_outputs(models: Responses | ModelSet, study: Study, folder: str | Path,
+                           constraints: ForceConstraints | None = None) -> Choice:
+    """Run :func:`optimise` and write its files into ``folder``; return the chosen design.
+
+    Besides :meth:`Optimisation.write`, writes ``chosen.json`` (the chosen design as flat
+    values in user units, for the report) and ``captions.json``.
+    """
+    result = optimise(models, study, constraints)
+    folder = Path(folder)
+    result.write(folder)
+    c = result.choice
+    flat = {k: v for k, v in _choice_json(c).items() if k != "active_constraints"}
+    flat["active_constraints"] = ", ".join(c.active) or "none"
+    flat["constraints"] = {"F_r_c_N": result.constraints.F_r_c,
+                           "F_z_c_N": result.constraints.F_z_c,
+                           "source": result.constraints.source}
+    (folder / "chosen.json").write_text(json.dumps(flat, indent=2) + "\n")
+    (folder / "captions.json").write_text(json.dumps(CAPTIONS, indent=2) + "\n")
+    return c

@@ -1,0 +1,131 @@
+"""`magtact optimise` (SPEC section 7) and `magtact compare` (two designs side by side)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from ..study import Study, from_si, to_si
+from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+
+ModelsOpt = Annotated[
+    Path | None,
+    typer.Option("--models", help="Folder of metamodel files (B_r.json, B_z.json, f_r.json, "
+                                  "f_z.json); default: fit them to the bundled DOE data set."),
+]
+
+
+def parse_design(text: str, what: str) -> tuple[float, float]:
+    """``"H_MM,G_KPA"`` → (H [m], G [Pa]).
+
+    Raises
+    ------
+    ValueError
+        If ``text`` is not two comma-separated positive numbers.
+    """
+    parts = text.split(",")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        H_mm, G_kPa = (float(p) for p in parts)
+    except ValueError:
+        raise ValueError(f"{what} must be 'H_MM,G_KPA' (two numbers, e.g. 3,29.4), "
+                         f"got {text!r}") from None
+    if not (H_mm > 0 and G_kPa > 0):
+        raise ValueError(f"{what}: H and G must be positive, got {text!r}")
+    return to_si(H_mm, "mm"), to_si(G_kPa, "kPa")
+
+
+def study_models(study: Study, models: Path | None):
+    """The metamodels: from ``models`` if given, else fitted to the bundled DOE data set."""
+    from ..metamodel import fit_models, load_models
+
+    if models is not None:
+        return load_models(models)
+    from ..doe import load_bundled
+
+    console.print("fitting metamodels to the bundled DOE data set (give --models DIR to reuse "
+                  "fitted ones)", highlight=False)
+    return fit_models(load_bundled(), study).model_set(study)
+
+
+@app.command("optimise")
+def optimise_command(
+    out: OutOpt,
+    study: StudyArg = None,
+    Frc: Annotated[float | None, typer.Option(
+        "--Frc", help="Shear constraint F_r,c [N]: F_r,min must be at most this.")] = None,
+    Fzc: Annotated[float | None, typer.Option(
+        "--Fzc", help="Normal constraint F_z,c [N]: F_z,max must be at least this.")] = None,
+    constraints_from: Annotated[str | None, typer.Option(
+        "--constraints-from", metavar="H_MM,G_KPA",
+        help="Take F_r,c and F_z,c from this reference design.")] = None,
+    models: ModelsOpt = None,
+) -> None:
+    """Sensitivity-optimal design: maps, Pareto set (NSGA-II + exact reduction), chosen design.
+
+    Writes OUT/design.json, pareto.csv, reduction.csv, maps.csv and the figures.
+    """
+    from ..optimise import force_constraints, optimise
+
+    s = get_study(study)
+    reference = (parse_design(constraints_from, "--constraints-from")
+                 if constraints_from is not None else None)
+    m = study_models(s, models)
+    constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
+    with console.status("optimising"):
+        result = optimise(m, s, constraints)
+    folder = out_dir(out)
+    result.write(folder)
+    print_choice(result)
+    console.print(f"written to {folder}", highlight=False)
+
+
+def print_choice(result, stdout: Console | None = None) -> None:
+    """Print the chosen design and the constraints used (rich table on standard output)."""
+    c, ch = result.constraints, result.choice
+    d = ch.design
+    table = Table(title=f"Chosen design ({result.study.name})",
+                  caption=f"constraints ({c.source}): F_r,min <= {c.F_r_c:.4g} N, "
+                          f"F_z,max >= {c.F_z_c:.4g} N; active: {', '.join(ch.active) or 'none'}")
+    table.add_column("quantity", justify="left")
+    table.add_column("NSGA-II + decision", justify="right")
+    table.add_column("exact reduction", justify="right")
+    e = result.reduction_choice.design
+    for label, a, b in (("H [mm]", from_si(d.H, "mm"), from_si(e.H, "mm")),
+                        ("G [kPa]", from_si(d.G, "kPa"), from_si(e.G, "kPa")),
+                        ("Γ_r,max [N/T]", d.Gamma_r_max, e.Gamma_r_max),
+                        ("Γ_z,max [N/T]", d.Gamma_z_max, e.Gamma_z_max),
+                        ("F_r,min [N]", d.F_r_min, e.F_r_min),
+                        ("F_z,max [N]", d.F_z_max, e.F_z_max)):
+        table.add_row(escape(label), f"{a:.5g}", f"{b:.5g}")
+    (stdout or Console()).print(table)
+
+
+@app.command("compare")
+def compare_command(
+    first: Annotated[str, typer.Argument(metavar="H1,G1", help="First design, mm,kPa.")],
+    second: Annotated[str, typer.Argument(metavar="H2,G2", help="Second design, mm,kPa.")],
+    study: Annotated[str | None, typer.Option(
+        "--study", help="Study TOML file or preset; default: the built-in MagOne study.")] = None,
+    models: ModelsOpt = None,
+) -> None:
+    """Percentage changes of Γ_r,max, Γ_z,max, F_r,min, F_z,max from design 1 to design 2."""
+    from ..optimise import compare, per_design
+
+    d1 = parse_design(first, "first design")
+    d2 = parse_design(second, "second design")
+    s = get_study(study)
+    m = study_models(s, models)
+    cmp = compare(per_design(m, *d1, s), per_design(m, *d2, s))
+    table = Table(title=f"{first} → {second} (mm,kPa)")
+    for col in ("quantity", "design 1", "design 2", "change (%)"):
+        table.add_column(col, justify="left" if col == "quantity" else "right")
+    for label, unit, v1, v2, pct in cmp.rows:
+        table.add_row(escape(f"{label} [{unit}]"), f"{v1:.5g}", f"{v2:.5g}", f"{pct:+.2f}")
+    Console().print(table)
