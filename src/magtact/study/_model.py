@@ -159,7 +159,7 @@ class Optimise:
     population: int = setting(200, integer=True, minimum=4,
                               doc="population of the per-design GA and of NSGA-II")
     seed: int = setting(0, integer=True, minimum=0, doc="random seed of every GA run")
-    ga_generations: int = setting(25, integer=True, minimum=1,
+    ga_generations: int = setting(15, integer=True, minimum=1,
                                   doc="GA generations before the trust-region refinement")
     nsga2_generations: int = setting(100, integer=True, minimum=1, doc="NSGA-II generations")
     tol: float = setting(1e-12, positive=True, doc="refinement tolerance (relative)")
