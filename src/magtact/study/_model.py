@@ -118,6 +118,20 @@ class Mechanics:
     mesh: str = setting("default", choices=("coarse", "default", "fine"),
                         doc="named mesh density of the hexahedral half body")
     scale_in_G: bool = setting(True, doc="solve at G_ref and scale forces by G/G_ref")
+    solver: str = setting("pardiso", choices=("pardiso", "superlu"),
+                          doc="sparse direct solver of the Newton systems")
+    threads: int = setting(1, integer=True, minimum=0,
+                           doc="threads of the PARDISO solver (0: library default)")
+    contact_penalty: float = setting(20.0, positive=True,
+                                     doc="contact penalty relative to the solid's nodal stiffness")
+    elastic_slip: float = setting(5e-6, "mm", positive=True,
+                                  doc="allowable elastic slip of sticking contact points")
+    dt_initial: float = setting(0.05, positive=True, doc="first load step (in units of t)")
+    dt_min: float = setting(1e-4, positive=True, doc="smallest load step before a path fails")
+    dt_max: float = setting(0.1, positive=True, doc="largest load step")
+    max_newton: int = setting(12, integer=True, minimum=2, doc="Newton iterations per step")
+    newton_tol: float = setting(1e-8, positive=True,
+                                doc="relative residual tolerance of the Newton iterations")
 
 
 @dataclass(frozen=True)

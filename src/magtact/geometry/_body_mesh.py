@@ -1,0 +1,355 @@
+"""Hexahedral mesh of the half sensor body (y ≥ 0) for the structural model (SPEC section 3).
+
+The mesh is built in two parts:
+
+1. gmsh meshes the half disc y ≥ 0 of the body's cross-section with structured (transfinite)
+   quadrilateral blocks: an O-grid of a half square core and three rings of blocks, whose block
+   edges lie on the circles r = R_m (the magnet's edge) and r = R − R_h (start of the rounded
+   top edge) and r = R, and extrudes it along z in layers (``recombine``: hexahedra).
+2. numpy then rounds the top outer edge: nodes in the corner square
+   [R − R_h, R] × [z_top − R_h, z_top] of the (r, z) plane are mapped onto the quarter disc of
+   radius R_h with the elliptical square-to-disc map, and the cells of the magnet (the cavity)
+   are removed.
+
+The cross-section polygon is scaled so that its area equals that of the circle (equal-area
+polygon), hence the cross-section area and the magnet's cross-section are exact for any number
+of segments around the half circle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..study import Study
+from ._path import magnet_span
+
+#: Named mesh densities. ``m``: cells along a quarter of the half circle (the half circle has
+#: 4 m segments); ``radial``: cells between the core and R_m, R_m and R − R_h, R − R_h and R;
+#: ``h_z``: largest cell height [m] in z; ``n_corner``: cells across the rounded edge in z.
+DENSITIES: dict[str, dict] = {
+    "coarse": {"m": 3, "radial": (2, 3, 2), "h_z": 1.2e-3, "n_corner": 2},
+    "default": {"m": 5, "radial": (3, 5, 3), "h_z": 0.75e-3, "n_corner": 3},
+    "fine": {"m": 10, "radial": (6, 10, 6), "h_z": 0.375e-3, "n_corner": 6},
+}
+
+
+@dataclass(frozen=True)
+class BodyMesh:
+    """A hexahedral mesh of the half body y ≥ 0 with its named node sets.
+
+    Attributes
+    ----------
+    points : (n_points, 3) ndarray
+        Node coordinates [m]; base at z = 0, axis x = y = 0.
+    cells : (n_cells, 8) ndarray of int
+        Hexahedra, VTK node order, positive volume.
+    base, symmetry, cavity, surface : ndarray of int
+        Node indices on the base z = 0; on the symmetry plane y = 0; on the magnet's cavity
+        surface (empty without a magnet); on the free outer surface (side, rounded edge and top
+        face, without base and cavity nodes), i.e. the nodes that can touch a plate.
+    z_top : float
+        Height of the top face [m].
+    name : str
+        Name of the mesh density.
+    """
+
+    points: np.ndarray
+    cells: np.ndarray
+    base: np.ndarray
+    symmetry: np.ndarray
+    cavity: np.ndarray
+    surface: np.ndarray
+    z_top: float
+    name: str
+
+    @property
+    def n_points(self) -> int:
+        """Number of nodes."""
+        return len(self.points)
+
+    @property
+    def n_cells(self) -> int:
+        """Number of hexahedra."""
+        return len(self.cells)
+
+    def volume(self) -> float:
+        """Volume of the half body [m³] (sum of the trilinear cell volumes)."""
+        return float(np.sum(_cell_volumes(self.points, self.cells)))
+
+
+def body_mesh(study: Study, H: float, mesh: str | None = None) -> BodyMesh:
+    """Hexahedral mesh of the half sensor body y ≥ 0 for the base height ``H`` [m].
+
+    Parameters
+    ----------
+    study : Study
+        Body and magnet dimensions (SPEC section 1).
+    H : float
+        Base height [m]; the body is a cylinder of radius R and height H + H_g.
+    mesh : {"coarse", "default", "fine"} or None
+        Mesh density; ``None`` takes ``study.mechanics.mesh``.
+
+    Returns
+    -------
+    BodyMesh
+        The mesh with the magnet's cavity removed (placement per ``study.magnet.placement``).
+    """
+    name = study.mechanics.mesh if mesh is None else mesh
+    z_low, z_high = (float(v) for v in magnet_span(study, H))
+    return half_cylinder_mesh(
+        R=study.body.R,
+        height=H + study.body.H_g,
+        R_h=study.body.R_h,
+        cavity=(study.magnet.R_m, z_low, z_high),
+        density=name,
+    )
+
+
+def half_cylinder_mesh(
+    R: float,
+    height: float,
+    *,
+    R_h: float = 0.0,
+    cavity: tuple[float, float, float] | None = None,
+    density: str = "default",
+    r_ring: float | None = None,
+) -> BodyMesh:
+    """Hexahedral mesh of a half cylinder y ≥ 0 with a rounded top edge and an optional cavity.
+
+    Parameters
+    ----------
+    R, height : float
+        Radius and height of the cylinder [m]; the base is at z = 0.
+    R_h : float
+        Radius of the rounded top outer edge [m] (0: a sharp edge).
+    cavity : (R_m, z_low, z_high) or None
+        Cylindrical cavity on the axis of radius R_m between the heights z_low and z_high [m]
+        (the magnet), or None for a plain body.
+    density : {"coarse", "default", "fine"}
+        Named mesh density (:data:`DENSITIES`).
+    r_ring : float or None
+        Radius of the inner ring of block edges [m]; defaults to the cavity radius (without a
+        cavity: R / 2).
+
+    Returns
+    -------
+    BodyMesh
+    """
+    if density not in DENSITIES:
+        raise ValueError(f"unknown mesh density {density!r}; choose one of {sorted(DENSITIES)}")
+    if not (R > 0 and height > 0):
+        raise ValueError(f"the body needs R > 0 and height > 0, got R={R}, height={height}")
+    if not 0 <= R_h < min(R, height):
+        raise ValueError(f"the edge radius R_h={R_h} must be in [0, min(R, height))")
+    dens = DENSITIES[density]
+    if cavity is not None:
+        R_m, z_low, z_high = cavity
+        if not (0 < R_m < R - R_h and 0 < z_low < z_high <= height):
+            raise ValueError(
+                f"the magnet (R_m={R_m}, z in [{z_low}, {z_high}]) must lie inside the body "
+                f"(R - R_h = {R - R_h}, height = {height}) above the base"
+            )
+        r1 = R_m
+    else:
+        r1 = R / 2 if r_ring is None else r_ring
+    radii = [r1, R - R_h, R] if R_h > 0 else [r1, R]
+    n_radial = list(dens["radial"]) if R_h > 0 else [dens["radial"][0], sum(dens["radial"][1:])]
+
+    xy, quads = _half_disc(radii, n_radial, dens["m"])
+    z_levels = _z_levels(height, R_h, cavity, dens)
+    points, cells = _extrude(xy, quads, z_levels)
+
+    # round the top outer edge: elliptical map of the corner square onto the quarter disc
+    if R_h > 0:
+        rho = np.hypot(points[:, 0], points[:, 1])
+        xi = np.clip((rho - (R - R_h)) / R_h, 0.0, 1.0)
+        eta = np.clip((points[:, 2] - (height - R_h)) / R_h, 0.0, 1.0)
+        corner = (xi > 0) & (eta > 0)
+        rho_new = R - R_h + R_h * xi * np.sqrt(1 - eta**2 / 2)
+        z_new = height - R_h + R_h * eta * np.sqrt(1 - xi**2 / 2)
+        scale = np.where(corner, rho_new / np.where(rho > 0, rho, 1.0), 1.0)
+        points[:, :2] *= scale[:, None]
+        points[corner, 2] = z_new[corner]
+
+    # equal-area polygon: the 4 m segments of each circle enclose the circle's area
+    alpha = math.pi / (4 * dens["m"])
+    points[:, :2] *= math.sqrt(alpha / math.sin(alpha))
+
+    # remove the magnet's cells
+    tol = 1e-9 * height
+    if cavity is not None:
+        centre = points[cells].mean(axis=1)
+        rho_c = np.hypot(centre[:, 0], centre[:, 1])
+        inside = (rho_c < r1) & (centre[:, 2] > z_low) & (centre[:, 2] < z_high)
+        cells = cells[~inside]
+        used = np.unique(cells)
+        renumber = np.full(len(points), -1)
+        renumber[used] = np.arange(len(used))
+        points, cells = points[used], renumber[cells]
+
+    base = np.flatnonzero(np.abs(points[:, 2]) < tol)
+    symmetry = np.flatnonzero(np.abs(points[:, 1]) < tol)
+    if cavity is not None:
+        rho = np.hypot(points[:, 0], points[:, 1])
+        r_cav = r1 * math.sqrt(alpha / math.sin(alpha))
+        z = points[:, 2]
+        cavity_nodes = np.flatnonzero((rho < r_cav * (1 + 1e-9)) & (z > z_low - tol)
+                                      & (z < z_high + tol))
+    else:
+        cavity_nodes = np.array([], dtype=int)
+    surface = _outer_surface(points, cells, tol, exclude=np.union1d(base, cavity_nodes))
+    return BodyMesh(points=points, cells=cells, base=base, symmetry=symmetry, cavity=cavity_nodes,
+                    surface=surface, z_top=float(height), name=density)
+
+
+def _half_disc(radii: list[float], n_radial: list[int], m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Quadrilateral O-grid of the half disc y ≥ 0 by gmsh transfinite blocks.
+
+    Returns the node coordinates (n, 2) [m] and the quads (n_quads, 4), counter-clockwise.
+    """
+    import gmsh
+
+    a = 0.45 * radii[0]  # half width of the core square
+    angles = (0.0, 0.25 * math.pi, 0.75 * math.pi, math.pi)
+    n_arc = (m, 2 * m, m)
+    initialised = gmsh.isInitialized()
+    if not initialised:
+        gmsh.initialize(interruptible=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("half_disc")
+    try:
+        geo = gmsh.model.geo
+        centre = geo.addPoint(0, 0, 0)
+        core = [geo.addPoint(a, 0, 0), geo.addPoint(a, a, 0), geo.addPoint(-a, a, 0),
+                geo.addPoint(-a, 0, 0)]
+        rings = [core] + [[geo.addPoint(r * math.cos(p), r * math.sin(p), 0) for p in angles]
+                          for r in radii]
+        # curves along each ring (core square edges, then circle arcs) and radial lines
+        along = []
+        for j, pts in enumerate(rings):
+            if j == 0:
+                along.append([geo.addLine(pts[q], pts[q + 1]) for q in range(3)])
+            else:
+                along.append([geo.addCircleArc(pts[q], centre, pts[q + 1]) for q in range(3)])
+            for q in range(3):
+                geo.mesh.setTransfiniteCurve(along[j][q], n_arc[q] + 1)
+        bottom = geo.addLine(core[3], core[0])
+        geo.mesh.setTransfiniteCurve(bottom, 2 * m + 1)
+        surfaces = [geo.addPlaneSurface([geo.addCurveLoop([bottom] + along[0])])]
+        geo.mesh.setTransfiniteSurface(surfaces[0], cornerTags=core)
+        for j in range(1, len(rings)):
+            radial = [geo.addLine(rings[j - 1][q], rings[j][q]) for q in range(4)]
+            for line in radial:
+                # ring 1 (core → magnet edge) graded towards the magnet edge, the others
+                # towards both ends (the magnet edge, the body corners)
+                if j == 1:
+                    geo.mesh.setTransfiniteCurve(line, n_radial[0] + 1, "Progression", 0.85)
+                else:
+                    geo.mesh.setTransfiniteCurve(line, n_radial[j - 1] + 1, "Bump", 0.5)
+            for q in range(3):
+                loop = geo.addCurveLoop([radial[q], along[j][q], -radial[q + 1], -along[j - 1][q]])
+                s = geo.addPlaneSurface([loop])
+                corners = [rings[j - 1][q], rings[j][q], rings[j][q + 1], rings[j - 1][q + 1]]
+                geo.mesh.setTransfiniteSurface(s, cornerTags=corners)
+                surfaces.append(s)
+        for s in surfaces:
+            geo.mesh.setRecombine(2, s)
+        geo.synchronize()
+        gmsh.model.mesh.generate(2)
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        _, quad_nodes = gmsh.model.mesh.getElementsByType(3)
+    finally:
+        gmsh.model.remove()
+        if not initialised:
+            gmsh.finalize()
+    index = np.full(int(tags.max()) + 1, -1)
+    index[tags.astype(int)] = np.arange(len(tags))
+    xy = coords.reshape(-1, 3)[:, :2].copy()
+    quads = index[quad_nodes.astype(int)].reshape(-1, 4)
+    used = np.unique(quads)  # drop the centre point of the arcs
+    renumber = np.full(len(xy), -1)
+    renumber[used] = np.arange(len(used))
+    xy, quads = xy[used], renumber[quads]
+    # counter-clockwise orientation (positive area) for every quad
+    p = xy[quads]
+    area = np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
+    quads[area < 0] = quads[area < 0][:, ::-1]
+    return xy, quads
+
+
+def _graded(a: float, b: float, n: int, ends: str) -> np.ndarray:
+    """n + 1 levels from a to b, refined towards ``ends`` ("both", "low", "high", "none")."""
+    s = np.linspace(0.0, 1.0, n + 1)
+    if ends == "both":
+        s = 0.5 * s + 0.5 * 0.5 * (1 - np.cos(np.pi * s))
+    elif ends == "low":
+        s = 0.5 * s + 0.5 * (1 - np.cos(0.5 * np.pi * s))
+    elif ends == "high":
+        s = 0.5 * s + 0.5 * np.sin(0.5 * np.pi * s)
+    return a + (b - a) * s
+
+
+def _z_levels(height: float, R_h: float, cavity, dens: dict) -> np.ndarray:
+    """Heights of the layers [m], graded towards the base, the magnet's faces and the top."""
+    breaks = [0.0, height]
+    if R_h > 0:
+        breaks.append(height - R_h)
+    if cavity is not None:
+        breaks += [cavity[1], cavity[2]]
+    breaks = np.unique(np.round(np.asarray(breaks) / height, 9)) * height
+    levels = [np.array([0.0])]
+    for lo, hi in zip(breaks[:-1], breaks[1:], strict=True):
+        if R_h > 0 and hi >= height - 1e-9 * height and lo >= height - R_h - 1e-9 * height:
+            n = dens["n_corner"] if math.isclose(hi - lo, R_h) else max(1, round(
+                dens["n_corner"] * (hi - lo) / R_h))
+            levels.append(_graded(lo, hi, n, "none")[1:])
+        else:
+            n = max(2, math.ceil((hi - lo) / dens["h_z"]))
+            levels.append(_graded(lo, hi, n, "both")[1:])
+    return np.concatenate(levels)
+
+
+def _extrude(xy: np.ndarray, quads: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Hexahedra from extruding the quads through the layers ``z`` (VTK node order)."""
+    n, nz = len(xy), len(z)
+    points = np.column_stack([np.tile(xy, (nz, 1)), np.repeat(z, n)])
+    layer = np.arange(nz - 1)[:, None, None] * n
+    bottom = quads[None, :, :] + layer
+    cells = np.concatenate([bottom, bottom + n], axis=2).reshape(-1, 8)
+    return points, cells
+
+
+def _cell_volumes(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Volumes of trilinear hexahedra by 2×2×2 Gauss quadrature [m³]."""
+    g = 1 / math.sqrt(3)
+    ref = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
+                    [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
+    x = points[cells]  # (c, 8, 3)
+    vol = np.zeros(len(cells))
+    for gp in ref * g:
+        dN = np.empty((8, 3))
+        for a in range(8):
+            f = 1 + ref[a] * gp
+            dN[a] = ref[a] * np.array([f[1] * f[2], f[0] * f[2], f[0] * f[1]]) / 8
+        J = np.einsum("cai,aj->cij", x, dN)
+        vol += np.linalg.det(J)
+    return vol
+
+
+_FACES = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6],
+                   [3, 0, 4, 7]])
+
+
+def _outer_surface(points: np.ndarray, cells: np.ndarray, tol: float,
+                   exclude: np.ndarray) -> np.ndarray:
+    """Nodes of the boundary faces not on the symmetry plane y = 0, without ``exclude``."""
+    faces = cells[:, _FACES].reshape(-1, 4)
+    key = np.sort(faces, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    boundary = faces[counts[inverse.ravel()] == 1]
+    on_symmetry = np.all(np.abs(points[boundary, 1]) < tol, axis=1)
+    nodes = np.unique(boundary[~on_symmetry])
+    return np.setdiff1d(nodes, exclude)
