@@ -30,6 +30,11 @@ PACKAGES = ("magtact", "numpy", "scipy", "xarray", "h5netcdf", "gmsh", "scikit-f
             "typer", "rich")
 
 
+#: Study sections that determine the DOE data set (the others may differ from the bundle's).
+DOE_SECTIONS = ("body", "magnet", "loading", "material", "design", "doe", "magnetics",
+                "mechanics")
+
+
 class StageSkipped(Exception):
     """A stage could not run because an input it needs is missing (not an error of its own)."""
 
@@ -185,8 +190,9 @@ def versions() -> dict[str, str]:
 def _stage_field(ctx: _Context, rec: StageRecord) -> str:
     from .magnetics import write_field_outputs
 
-    files = write_field_outputs(ctx.study, ctx.folder / "field")
-    return f"{len(files)} files"
+    files = write_field_outputs(ctx.study, ctx.folder / "field",
+                                progress=lambda m: ctx.log(f"      {m}"))
+    return f"{len(files)} files (solver: {ctx.study.magnetics.solver})"
 
 
 def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
@@ -202,8 +208,9 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
         ds = load_bundled()
         bundled = ds.attrs.get("study_toml")
         if bundled is not None and not _same_study(bundled, ctx.study):
-            raise StageSkipped("the bundled data set belongs to the built-in MagOne study, not "
-                               "to this one: run with --recompute")
+            raise StageSkipped("the bundled data set was computed for the built-in MagOne "
+                               "study, whose geometry, material, levels or solver settings "
+                               "differ from this study's: run with --recompute")
         ctx.doe_source = "bundled with magtact (precomputed FE DOE of the MagOne study)"
     folder.mkdir(parents=True, exist_ok=True)
     save_dataset(ds, folder / "doe.nc")
@@ -269,15 +276,16 @@ STAGES: tuple[tuple[str, str, Callable], ...] = (
 
 # ---- helpers ---------------------------------------------------------------------------------
 def _same_study(toml_text: str, study: Study) -> bool:
-    """True if a data set's study TOML describes ``study`` (compared through load_study)."""
+    """True if a data set's study TOML agrees with ``study`` in every section the DOE uses."""
+    import tomllib
+
     from .study import study_from_dict
 
     try:
-        import tomllib
-
-        return study_from_dict(tomllib.loads(toml_text)) == study
+        other = study_from_dict(tomllib.loads(toml_text))
     except Exception:
         return False
+    return all(getattr(other, name) == getattr(study, name) for name in DOE_SECTIONS)
 
 
 def _copy_evidence(folder: Path) -> None:

@@ -1,0 +1,51 @@
+"""`magtact run` end to end on the bundled DOE data set (small GP and GA budgets)."""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import replace
+
+import pytest
+from typer.testing import CliRunner
+
+from magtact.cli._app import app
+from magtact.study import load_study
+
+
+def fast_study(tmp_path):
+    """The MagOne study with small metamodel and optimiser budgets (the DOE sections unchanged,
+    so the bundled data set applies)."""
+    s = load_study(None)
+    s = replace(s, metamodel=replace(s.metamodel, generations=8, population=60, retries=0,
+                                     holdout_paths=2),
+                optimise=replace(s.optimise, population=24, ga_generations=3,
+                                 nsga2_generations=10, grid_n=4, sweep_n=101))
+    path = tmp_path / "fast.toml"
+    path.write_text(s.to_toml(), encoding="utf-8")
+    return path
+
+
+def test_run_end_to_end_on_bundled_data(tmp_path):
+    from magtact.doe import bundled_path
+
+    if not bundled_path().is_file():
+        pytest.skip("the bundled DOE data set is not built yet (python -m magtact.doe.bundle)")
+    out = tmp_path / "results"
+    result = CliRunner().invoke(app, ["run", str(fast_study(tmp_path)), "--out", str(out)])
+    manifest = json.loads((out / "run.json").read_text())
+    statuses = {s["key"]: (s["status"], s["message"]) for s in manifest["stages"]}
+    assert all(st == "ok" for st, _ in statuses.values()), statuses
+    assert result.exit_code == 0, result.output
+    html = (out / "report.html").read_text(encoding="utf-8")
+    srcs = re.findall(r'<img src="([^"]+)"', html)
+    pngs = sorted(out.glob("*/*.png"))
+    assert len(srcs) == len(pngs) >= 5
+    assert all(s.startswith("data:image/png;base64,") for s in srcs)
+    assert "No chosen design" not in html and "SYNTHETIC" in html
+    assert (out / "validation" / "validation_synthetic.csv").is_file()
+    assert (out / "optimise" / "chosen.json").is_file()
+    # the report is rebuilt from the folder alone
+    (out / "report.html").unlink()
+    assert CliRunner().invoke(app, ["report", str(out)]).exit_code == 0
+    assert len(re.findall(r"<img ", (out / "report.html").read_text())) == len(pngs)
