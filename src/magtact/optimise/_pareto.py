@@ -295,14 +295,13 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
 
     res = minimize(_Designs(), NSGA2(pop_size=o.population), ("n_gen", o.nsga2_generations),
                    seed=o.seed, verbose=False)
-    opt = res.opt
-    X = np.atleast_2d(opt.get("X"))
-    feasible = np.ravel(opt.get("CV")) <= 0
+    opt = res.opt  # None when no feasible design was found
+    feasible = np.zeros(0, bool) if opt is None else np.ravel(opt.get("CV")) <= 0
     if not feasible.any():
         exact_reduction(R, study, constraints, table)  # raises the informative error
         raise InfeasibleError("NSGA-II found no feasible design although some exist; "
                               "increase optimise.nsga2_generations or optimise.population")
-    X = X[feasible]
+    X = np.atleast_2d(opt.get("X"))[feasible]
     X = X[np.argsort(X[:, 0], kind="stable")]
     H, G, tab, _, _ = evaluate(X)
     return ParetoSet(H, G, G * tab.gamma_r_max, G * tab.gamma_z_max, G * tab.f_r_min,
