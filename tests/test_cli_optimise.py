@@ -12,7 +12,6 @@ from magtact.cli import app, main
 from magtact.metamodel import save_models
 from magtact.optimise import per_design
 from magtact.study import load_study
-
 from test_optimise import synthetic_models
 
 SMALL = """
