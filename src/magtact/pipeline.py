@@ -246,14 +246,13 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
 def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
-    from .cli._validate import design_from
     from .validation import PathModel, read_experiment, synthetic_files, validate, write_outputs
 
     files = ctx.data or synthetic_files()
     if not ctx.data:
         rec.notes.append("no data given: the shipped SYNTHETIC example data set was used")
     experiment = read_experiment(files)
-    H, G = design_from(experiment, None, None)
+    H, G = experiment.design()
     model = PathModel.from_metamodels(ctx.models, ctx.study, H, G, experiment.theta)
     result = validate(experiment, model)
     write_outputs(result, ctx.folder / "validation", sources=files)

@@ -20,24 +20,6 @@ def split_study_and_data(args: list[str]) -> tuple[str | None, list[Path]]:
     return None, [Path(a) for a in args]
 
 
-def design_from(experiment, H_mm: float | None, G_kPa: float | None) -> tuple[float, float]:
-    """The design (H, G) [m, Pa]: the options, else the data's metadata ``design_H_mm`` etc."""
-    meta = experiment.metadata
-    H_mm = H_mm if H_mm is not None else _meta_float(meta, "design_h_mm", "--H")
-    G_kPa = G_kPa if G_kPa is not None else _meta_float(meta, "design_g_kpa", "--G")
-    return H_mm * 1e-3, G_kPa * 1e3
-
-
-def _meta_float(meta: dict, key: str, option: str) -> float:
-    if key not in meta:
-        raise ValueError(f"give the design with {option} (the data has no metadata '{key}')")
-    try:
-        return float(meta[key])
-    except ValueError:
-        raise ValueError(f"metadata '{key}' is not a number: {meta[key]!r}; "
-                         f"give {option}") from None
-
-
 def path_model(study: Study, H: float, G: float, theta: float, models_file: Path | None,
                solver: str):
     """The model of the design: metamodels from ``models_file``, else a direct simulation."""
@@ -104,7 +86,8 @@ def validate_command(
         console.print("no data files given: using the shipped SYNTHETIC example "
                       f"({len(data)} files)", highlight=False)
     experiment = read_experiment(data)
-    H_m, G_pa = design_from(experiment, H, G)
+    H_m, G_pa = experiment.design(None if H is None else H * 1e-3,
+                                  None if G is None else G * 1e3)
     if solver not in ("exact", "fe"):
         raise ValueError(f"--solver must be 'exact' or 'fe', got {solver!r}")
     filt = FilterSettings(f_lo=f_lo * 1e3, f_hi=f_hi * 1e3 if f_hi > 0 else None)

@@ -102,6 +102,29 @@ class Experiment:
         """Distinct sensor labels, in order of appearance."""
         return tuple(dict.fromkeys(c.sensor for c in self.curves))
 
+    def design(self, H: float | None = None, G: float | None = None) -> tuple[float, float]:
+        """The tested design (H, G) [m, Pa]: the arguments, else metadata ``design_H_mm`` and
+        ``design_G_kPa`` of the first file.
+
+        Raises
+        ------
+        ValueError
+            If a value is neither given nor in the metadata, or the metadata is not a number.
+        """
+        return (H if H is not None else self._meta_si("design_h_mm", 1e-3, "H"),
+                G if G is not None else self._meta_si("design_g_kpa", 1e3, "G"))
+
+    def _meta_si(self, key: str, factor: float, name: str) -> float:
+        where = self.sources[0] if self.curves else "the data"
+        if key not in self.metadata:
+            raise ValueError(f"give the design's {name} (--{name}): {where} has no metadata "
+                             f"'{key}'")
+        try:
+            return float(self.metadata[key]) * factor
+        except ValueError:
+            raise ValueError(f"{where}: metadata '{key}' is not a number: "
+                             f"{self.metadata[key]!r}") from None
+
     @property
     def sources(self) -> tuple[str, ...]:
         """Distinct source files, in order of appearance."""
