@@ -32,8 +32,8 @@ def fig_doe(ds: xr.Dataset, path: str | Path, *, G: float | None = None) -> list
     g = ds.G.values[len(ds.G) // 2] if G is None else G
     forces = ds.sel(G=g, method="nearest")
     colours = plt.get_cmap(CMAP_SEQ)(np.linspace(0.0, 0.85, ds.sizes["H"]))
-    panels = [("F_z", 0, "F_z [N]", 1.0), ("F_r", -1, "F_r [N]", 1.0),
-              ("B_z", 0, "B_z [mT]", 1e3), ("B_r", -1, "B_r [mT]", 1e3)]
+    panels = [("F_z", 0, "$F_z$ [N]", 1.0), ("F_r", -1, "$F_r$ [N]", 1.0),
+              ("B_z", 0, "$B_z$ [mT]", 1e3), ("B_r", -1, "$B_r$ [mT]", 1e3)]
     with style():
         fig, axes = plt.subplots(2, 2, figsize=(6.6, 4.8), sharex=True)
         for ax, (name, i_theta, label, factor) in zip(axes.flat, panels, strict=True):
@@ -47,6 +47,6 @@ def fig_doe(ds: xr.Dataset, path: str | Path, *, G: float | None = None) -> list
             ax.set_title(title)
             ax.set_ylabel(label)
         for ax in axes[-1]:
-            ax.set_xlabel("load t [-]")
+            ax.set_xlabel("load $t$ [-]")
         axes[0, 0].legend(frameon=False)
         return save(fig, path)
