@@ -14,6 +14,7 @@ from . import _run  # noqa: F401
 from . import _report  # noqa: F401
 from . import _optimise  # noqa: F401
 from . import _fit  # noqa: F401
+from . import _simulate  # noqa: F401
 from ._app import app, console
 
 #: Errors a user can fix: printed as one message, no traceback, exit status 2.

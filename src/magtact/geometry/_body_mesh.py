@@ -275,7 +275,8 @@ def _half_disc(radii: list[float], n_radial: list[int], m: int) -> tuple[np.ndar
     xy, quads = xy[used], renumber[quads]
     # counter-clockwise orientation (positive area) for every quad
     p = xy[quads]
-    area = np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
+    d1, d2 = p[:, 2] - p[:, 0], p[:, 3] - p[:, 1]
+    area = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
     quads[area < 0] = quads[area < 0][:, ::-1]
     return xy, quads
 

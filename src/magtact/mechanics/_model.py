@@ -48,9 +48,9 @@ class Stepping:
     dt_min: float = 1e-4
     dt_max: float = 0.1
     max_iter: int = 12
-    easy_iter: int = 4
+    easy_iter: int = 5
     growth: float = 1.5
-    cutback: float = 0.25
+    cutback: float = 0.5
     tol: float = 1e-8
 
 
@@ -110,7 +110,7 @@ class HalfBodyModel:
     """
 
     def __init__(self, bmesh: BodyMesh, G: float, bulk_ratio: float, mu_f: float, *,
-                 base: str = "clamped", penalty: float = 20.0, elastic_slip: float = 5e-6,
+                 base: str = "clamped", penalty: float = 5.0, elastic_slip: float = 2e-5,
                  solver: str = "pardiso", threads: int = 1):
         if base not in ("clamped", "sliding"):
             raise ValueError(f"base must be 'clamped' or 'sliding', got {base!r}")

@@ -1,0 +1,76 @@
+"""`magtact simulate`: one structural loading path (θ, H) of the sensor body."""
+
+from __future__ import annotations
+
+import csv
+from enum import StrEnum
+from typing import Annotated
+
+import typer
+
+from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+
+
+class MeshDensity(StrEnum):
+    """Named mesh densities of the half body."""
+
+    coarse = "coarse"
+    default = "default"
+    fine = "fine"
+
+
+@app.command("simulate")
+def simulate_command(
+    out: OutOpt,
+    H: Annotated[float, typer.Option("--H", help="Base height H [mm].")],
+    theta: Annotated[float, typer.Option("--theta", help="Shear angle θ [rad].")],
+    study: StudyArg = None,
+    G: Annotated[float | None, typer.Option(
+        "--G", help="Shear modulus G [kPa]; default: the study's material.G_ref.")] = None,
+    mesh: Annotated[MeshDensity | None, typer.Option(
+        "--mesh", help="Mesh density; default: the study's mechanics.mesh.")] = None,
+) -> None:
+    """Solve one loading path; write OUT/forces.csv, the deformed mesh at t = 1 (VTU) and a
+    figure of the deformed body (PNG, SVG)."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from ..mechanics import PathFailed, simulate_path
+    from ..report._fig_mechanics import fig_deformed_body
+    from ..study import from_si, to_si
+
+    s = get_study(study)
+    H_si = to_si(H, "mm")
+    G_si = None if G is None else to_si(G, "kPa")
+    folder = out_dir(out)
+    vtu = folder / "deformed_t1.vtu"
+    t = s.t_levels
+    with Progress(TextColumn("{task.description}"), BarColumn(),
+                  TextColumn("t = {task.completed:.2f}"), TimeElapsedColumn(), console=console,
+                  transient=True) as bar:
+        task = bar.add_task(f"simulate H = {H:g} mm, θ = {theta:g} rad", total=1.0)
+        try:
+            res = simulate_path(s, H_si, theta, G=G_si, t=t, vtu=vtu,
+                                mesh=None if mesh is None else mesh.value,
+                                progress=lambda tt: bar.update(task, completed=tt))
+        except PathFailed as exc:
+            raise ValueError(str(exc)) from exc
+    with open(folder / "forces.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["t", "u_r_mm", "u_z_mm", "F_r_N", "F_z_N"])
+        for row in zip(res.t, from_si(res.u_r, "mm"), from_si(res.u_z, "mm"), res.F_r, res.F_z,
+                       strict=True):
+            w.writerow([f"{v + 0.0:.10g}" for v in row])  # + 0.0: no "-0"
+    import meshio
+
+    m = meshio.read(vtu)
+    u = m.point_data["displacement"]
+    fig_files = fig_deformed_body(
+        m.points - u, m.cells_dict["hexahedron"], u, folder / "deformed_body",
+        title=f"H = {H:g} mm, θ = {theta:.3f} rad, t = {res.t[-1]:g}: "
+              f"F_r = {res.F_r[-1]:.3g} N, F_z = {res.F_z[-1]:.3g} N "
+              f"(G = {from_si(res.G, 'kPa'):g} kPa)")
+    console.print(
+        f"simulate: {res.steps} steps, {res.newton_iterations} Newton iterations, "
+        f"{res.cutbacks} cut-backs, {res.n_dofs} DOFs ({res.mesh} mesh), "
+        f"{res.wall_time:.1f} s; wrote {folder / 'forces.csv'}, {vtu}, "
+        + ", ".join(str(f) for f in fig_files), highlight=False)

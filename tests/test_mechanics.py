@@ -1,0 +1,180 @@
+"""Structural mechanics: mesh invariants, closed-form check, G-scaling, physics sanity.
+
+All FE runs use the coarse mesh and, where the check allows, short load paths.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from magtact.geometry import body_mesh, half_cylinder_mesh, loading_path, magnet_span
+from magtact.geometry._body_mesh import _cell_volumes
+from magtact.mechanics import HalfBodyModel, PathFailed, PathResult, simulate_path
+from magtact.study import load_study
+
+
+@pytest.fixture(scope="module")
+def study():
+    return load_study(None)
+
+
+def _with(study, section: str, **changes):
+    return dataclasses.replace(study, **{section: dataclasses.replace(getattr(study, section),
+                                                                      **changes)})
+
+
+# ---- mesh -----------------------------------------------------------------------------------
+@pytest.mark.parametrize("density", ["coarse", "default"])
+def test_plain_cylinder_volume_is_exact(density):
+    """The equal-area polygon makes the volume of a plain half cylinder exact."""
+    R, h = 6e-3, 9e-3
+    m = half_cylinder_mesh(R, h, density=density)
+    assert m.volume() == pytest.approx(math.pi * R**2 * h / 2, rel=1e-12)
+    assert np.all(_cell_volumes(m.points, m.cells) > 0)
+
+
+@pytest.mark.parametrize("placement", ["covered", "flush"])
+def test_body_mesh_volume_and_node_sets(study, placement):
+    s = _with(study, "magnet", placement=placement)
+    H = 5e-3
+    m = body_mesh(s, H, "coarse")
+    R, R_h, R_m, H_m = s.body.R, s.body.R_h, s.magnet.R_m, s.magnet.H_m
+    h = H + s.body.H_g
+    # cylinder − rounded edge (Pappus: area (1 − π/4) R_h², centroid at R − R_h + R_h/(6 − 3π/2))
+    rim = (1 - math.pi / 4) * R_h**2 * 2 * math.pi * (R - R_h + R_h / (6 - 1.5 * math.pi))
+    exact = (math.pi * R**2 * h - rim - math.pi * R_m**2 * H_m) / 2
+    assert m.volume() == pytest.approx(exact, rel=2e-3)  # the arc of R_h is a polygon
+    assert np.all(_cell_volumes(m.points, m.cells) > 0)
+    z_low, z_high = magnet_span(s, H)
+    assert np.allclose(m.points[m.base, 2], 0.0)
+    assert np.allclose(m.points[m.symmetry, 1], 0.0)
+    cav = m.points[m.cavity]
+    assert cav[:, 2].min() == pytest.approx(z_low) and cav[:, 2].max() == pytest.approx(z_high)
+    assert np.hypot(cav[:, 0], cav[:, 1]).max() == pytest.approx(R_m, rel=0.01)
+    assert not np.intersect1d(m.surface, np.union1d(m.base, m.cavity)).size
+    # the top face is in the contact set (outside the magnet when flush)
+    top = np.flatnonzero(np.isclose(m.points[:, 2], h))
+    assert np.all(np.isin(np.setdiff1d(top, m.cavity), m.surface))
+    if placement == "flush":
+        assert z_high == pytest.approx(h)
+
+
+def test_mesh_bad_inputs(study):
+    with pytest.raises(ValueError, match="unknown mesh density 'medium'"):
+        body_mesh(study, 3e-3, "medium")
+    with pytest.raises(ValueError, match="must lie inside the body"):
+        half_cylinder_mesh(6e-3, 5e-3, R_h=1e-3, cavity=(5.5e-3, 1e-3, 2e-3))
+    with pytest.raises(ValueError, match="edge radius"):
+        half_cylinder_mesh(6e-3, 5e-3, R_h=6e-3)
+
+
+# ---- closed form ----------------------------------------------------------------------------
+def test_uniaxial_compression_matches_closed_form():
+    """Plain cylinder between frictionless plates, 30 % compression: F = G A0 (λ⁻² − λ)."""
+    R, h, G, lam = 6e-3, 6e-3, 10e3, 0.7
+    model = HalfBodyModel(half_cylinder_mesh(R, h, density="coarse"), G, 5000.0, 0.0,
+                          base="sliding")
+    out = model.solve_path(lambda t: (0.0, -(1 - lam) * h * t), [0.5, 1.0])
+    F_z = 2 * out["lower"][-1, 2]
+    assert F_z == pytest.approx(G * math.pi * R**2 * (lam**-2 - lam), rel=0.01)
+    # the upper plate carries the same force downwards
+    assert 2 * out["upper"][-1, 2] == pytest.approx(-F_z, rel=1e-6)
+
+
+# ---- G-scaling ------------------------------------------------------------------------------
+def test_forces_scale_with_G(study):
+    s = _with(study, "mechanics", scale_in_G=False, mesh="coarse")
+    t = [0.0, 0.1, 0.2]
+    theta = study.loading.theta_max
+    a = simulate_path(s, 3e-3, theta, G=20e3, t=t)
+    b = simulate_path(s, 3e-3, theta, G=40e3, t=t)
+    assert a.G == 20e3 and b.G == 40e3
+    np.testing.assert_allclose(b.F_z[1:] / a.F_z[1:], 2.0, rtol=1e-6)
+    np.testing.assert_allclose(b.F_r[1:] / a.F_r[1:], 2.0, rtol=1e-6)
+    c = a.scaled(40e3)
+    np.testing.assert_allclose(c.F_z, b.F_z, rtol=1e-6)
+    assert c.G == 40e3 and c.newton_iterations == a.newton_iterations
+
+
+def test_scaled_rejects_bad_G():
+    r = PathResult(t=np.zeros(1), u_r=np.zeros(1), u_z=np.zeros(1), F_r=np.zeros(1),
+                   F_z=np.zeros(1), G=1.0, H=1.0, theta=0.0, newton_iterations=0, cutbacks=0,
+                   steps=0, wall_time=0.0, n_dofs=0, n_cells=0, mesh="coarse")
+    with pytest.raises(ValueError, match="G must be positive"):
+        r.scaled(-1.0)
+
+
+# ---- physics sanity -------------------------------------------------------------------------
+def test_no_shear_force_without_shear(study):
+    """θ = 0: the mesh and the load are symmetric about x = 0, so F_r vanishes."""
+    r = simulate_path(study, 4e-3, 0.0, mesh="coarse", t=[0.0, 0.1, 0.2])
+    assert np.all(r.F_z[1:] > 0)
+    assert np.all(np.abs(r.F_r) <= 1e-6 * r.F_z[-1])
+    np.testing.assert_array_equal(r.u_r, 0.0)
+
+
+@pytest.fixture(scope="module")
+def path_theta_max(study):
+    s = _with(study, "doe", n_t=11)
+    return simulate_path(s, 3e-3, study.loading.theta_max, mesh="coarse")
+
+
+def test_path_at_theta_max(study, path_theta_max):
+    r = path_theta_max
+    theta = study.loading.theta_max
+    assert r.t[-1] == 1.0 and len(r.t) == 11
+    u_r, u_z = loading_path(study, r.t, theta, 3e-3)
+    np.testing.assert_allclose(r.u_r, u_r)
+    np.testing.assert_allclose(r.u_z, u_z)
+    assert r.F_z[0] == 0 and r.F_r[0] == 0
+    assert np.all(np.diff(r.F_z) > 0), "F_z must increase monotonically with t"
+    assert np.all(r.F_r[1:] < 0), "shear pushed along +x: the support holds the body back"
+    i = int(np.argmin(r.F_r))
+    assert i > 0  # the minimum lies in (0, 1]
+    assert r.newton_iterations >= r.steps > 0 and r.n_dofs > 0 and r.mesh == "coarse"
+
+
+def test_equilibrium_of_the_half_body(study):
+    """Support + upper plate + magnet forces on the body sum to zero in x and z."""
+    from magtact.mechanics import build_model
+
+    H, theta = 3e-3, 0.3
+    model = build_model(study, H, mesh="coarse")
+
+    def path(t):
+        u_r, u_z = loading_path(study, t, theta, H)
+        return float(u_r), float(u_z)
+
+    out = model.solve_path(path, [0.1, 0.2])
+    total = out["lower"][-1] + out["upper"][-1] + out["magnet"][-1]
+    scale = np.abs(out["lower"][-1]).max()
+    assert abs(total[0]) < 1e-6 * scale and abs(total[2]) < 1e-6 * scale
+
+
+# ---- failures and bad inputs ----------------------------------------------------------------
+def test_path_failed_names_t_theta_H(study):
+    s = _with(study, "mechanics", mesh="coarse", max_newton=2, dt_min=0.04)
+    with pytest.raises(PathFailed) as info:
+        simulate_path(s, 3e-3, 0.2, t=[0.0, 0.05])
+    msg = str(info.value)
+    assert "t = 0.05" in msg and "theta = 0.2000 rad" in msg and "H = 3 mm" in msg
+    assert "last converged t = 0" in msg
+    assert info.value.t_converged == 0.0 and info.value.H == 3e-3
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"H": -1e-3}, "H must be positive"),
+    ({"theta": -0.1}, "theta must be in"),
+    ({"G": 0.0}, "G must be positive"),
+    ({"t": [0.0, 0.5, 0.2]}, "t must be increasing"),
+    ({"t": [0.5, 1.5]}, "t must be increasing values in"),
+])
+def test_simulate_path_bad_inputs(study, kwargs, message):
+    args = {"H": 3e-3, "theta": 0.1} | kwargs
+    H, theta = args.pop("H"), args.pop("theta")
+    with pytest.raises(ValueError, match=message):
+        simulate_path(study, H, theta, mesh="coarse", **args)
