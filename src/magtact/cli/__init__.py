@@ -14,6 +14,7 @@ from . import _run  # noqa: F401
 from . import _report  # noqa: F401
 from . import _optimise  # noqa: F401
 from . import _fit  # noqa: F401
+from . import _field  # noqa: F401
 from . import _simulate  # noqa: F401
 from ._app import app, console
 

@@ -115,7 +115,7 @@ def field_mesh(R_m: float, H_m: float, *, h_magnet: float, growth_near: float, n
         fld = gmsh.model.mesh.field
         dist = fld.add("Distance")
         fld.setNumbers(dist, "CurvesList", surface_curves)
-        fld.setNumber(dist, "Sampling", 400)
+        fld.setNumber(dist, "Sampling", 100)
         size = fld.add("MathEval")
         h0, dn = h_magnet / s, near / s
         hn = h0 + growth_near * dn

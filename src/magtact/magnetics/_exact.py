@@ -156,8 +156,6 @@ def cylinder_field(r, z, R_m: float, H_m: float, M_z: float) -> tuple[np.ndarray
         B_r += sign * (a / den) * cel(kc, 1.0, 1.0, -1.0)
         B_z += sign * (zs / den) * cel(kc, gamma * gamma, 1.0, gamma)
     B0 = MU0 * M_z / np.pi
-    B_r = B0 * B_r
-    B_z = B0 * a / (a + r) * B_z
-    B_r[rim] = np.nan
-    B_z[rim] = np.nan
+    B_r = np.where(rim, np.nan, B0 * B_r)
+    B_z = np.where(rim, np.nan, B0 * a / (a + r) * B_z)
     return B_r, B_z

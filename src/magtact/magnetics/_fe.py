@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
 from ..geometry import FieldMesh, field_mesh
-from ..study import MU0, Study
+from ..study import MU0, Study, StudyError, from_si
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,6 +45,12 @@ class FieldSolution:
         """Number of P2 degrees of freedom."""
         return self.V.size
 
+    @cached_property
+    def _finder(self):
+        from matplotlib.tri import Triangulation
+
+        return Triangulation(*self.mesh.points, self.mesh.triangles.T).get_trifinder()
+
     def B(self, r, z) -> tuple[np.ndarray, np.ndarray]:
         """Flux density (B_r, B_z) [T] at points (r, z) [m] relative to the magnet's centre.
 
@@ -74,18 +80,21 @@ class FieldSolution:
             raise ValueError(
                 f"FieldSolution.B: points outside the far box r <= {self.mesh.r_far:g} m, "
                 f"|z| <= {self.mesh.z_far:g} m")
-        Gr, Gz = _gradient_probes(self._basis, np.vstack([r, z]))
+        cells = self._finder(r, z)  # the triangle holding each point
+        if np.any(cells < 0):  # pragma: no cover - the box check above excludes this
+            raise ValueError("FieldSolution.B: points outside the mesh")
+        Gr, Gz = _gradient_probes(self._basis, np.vstack([r, z]), cells)
         inside = (r < self.R_m) & (np.abs(z) < 0.5 * self.H_m)
         B_r = -MU0 * (Gr @ self.V)
         B_z = MU0 * (np.where(inside, self.M_z, 0.0) - Gz @ self.V)
         return B_r.reshape(shape), B_z.reshape(shape)
 
 
-def _gradient_probes(basis, x: np.ndarray):
-    """Sparse matrices mapping DOF values to ∂/∂r and ∂/∂z at points ``x`` (shape (2, n))."""
+def _gradient_probes(basis, x: np.ndarray, cells: np.ndarray):
+    """Sparse matrices mapping DOF values to ∂/∂r and ∂/∂z at points ``x`` (shape (2, n)),
+    which lie in the triangles ``cells`` (shape (n,))."""
     from scipy.sparse import coo_matrix
 
-    cells = basis.mesh.element_finder(mapping=basis.mapping)(*x)
     local = basis.mapping.invF(x[:, :, np.newaxis], tind=cells)
     grads = np.array([basis.elem.gbasis(basis.mapping, local, k, tind=cells)[0].grad[:, :, 0]
                       for k in range(basis.Nbfun)])  # (Nbfun, 2, n)
@@ -128,9 +137,11 @@ def solve_field(mesh: FieldMesh, R_m: float, H_m: float, M_z: float) -> FieldSol
 
     The axis r = 0 needs no condition (the weight r makes it
     natural). V is defined up to a constant: one degree of freedom (a far corner) is pinned
-    to 0. Elements: P2 Lagrange triangles (``skfem.ElementTriP2``).
+    to 0. Elements: P2 Lagrange triangles (``skfem.ElementTriP2``); the symmetric positive
+    definite system is solved by SuperLU with a minimum-degree ordering of A + Aᵀ.
     """
-    from skfem import Basis, BilinearForm, ElementTriP2, LinearForm, MeshTri, condense, solve
+    from scipy.sparse.linalg import splu
+    from skfem import Basis, BilinearForm, ElementTriP2, LinearForm, MeshTri
     from skfem.helpers import dot, grad
 
     t0 = time.perf_counter()
@@ -150,7 +161,12 @@ def solve_field(mesh: FieldMesh, R_m: float, H_m: float, M_z: float) -> FieldSol
     b = source.assemble(magnet_basis)
     corner = int(np.argmax(mesh.points[0] + mesh.points[1]))  # node at (r_far, z_far)
     pinned = basis.nodal_dofs[0, corner]
-    V = solve(*condense(A, b, D=np.array([pinned])))
+    free = np.setdiff1d(np.arange(basis.N), [pinned])
+    # symmetric positive definite: symmetric fill-reducing ordering, no pivoting
+    lu = splu(A[free][:, free].tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+              options={"SymmetricMode": True})
+    V = np.zeros(basis.N)
+    V[free] = lu.solve(b[free])
     return FieldSolution(mesh=mesh, V=V, M_z=M_z, R_m=R_m, H_m=H_m, mesh_time=0.0,
                          solve_time=time.perf_counter() - t0, _basis=basis)
 
@@ -169,8 +185,27 @@ def solve_fe(study: Study) -> FieldSolution:
     FieldSolution
         The solution in the magnet's frame (centre at the origin). Repeated calls with the same
         magnet and mesh settings return the same object without meshing or solving again.
+
+    Raises
+    ------
+    StudyError
+        If the mesh settings are inconsistent (``growth_near`` ≥ ``growth``, a far box that
+        does not enclose the magnet and its near zone).
     """
     m, f = study.magnet, study.magnetics
+    if f.growth_near >= f.growth:
+        raise StudyError("magnetics.growth_near", f"must be smaller than magnetics.growth "
+                                                  f"({f.growth:g}), got {f.growth_near:g}")
+    if f.far_r * m.R_m <= m.R_m + f.near:
+        raise StudyError("magnetics.far_r", f"the far boundary r = far_r·R_m must lie beyond "
+                                            f"the near zone (R_m + near = "
+                                            f"{from_si(m.R_m + f.near, 'mm'):g} mm), got far_r = "
+                                            f"{f.far_r:g}")
+    if f.far_z * m.H_m <= 0.5 * m.H_m + f.near:
+        raise StudyError("magnetics.far_z", f"the far boundary z = ±far_z·H_m must lie beyond "
+                                            f"the near zone (H_m/2 + near = "
+                                            f"{from_si(0.5 * m.H_m + f.near, 'mm'):g} mm), got "
+                                            f"far_z = {f.far_z:g}")
     return _solve_cached(m.R_m, m.H_m, m.M_z, f.h_magnet, f.growth_near, f.near, f.growth,
                          f.far_r, f.far_z)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..geometry import hall_from_magnet_centre, loading_path
-from ..study import Study
+from ..study import Study, StudyError, from_si
 from ._exact import cylinder_field
 from ._fe import solve_fe
 
@@ -40,6 +40,9 @@ def hall_field(study: Study, t, theta, H, solver: str | None = None
     ------
     ValueError
         For an unknown solver.
+    StudyError
+        With the FE solver, if a Hall point lies farther from the magnet than the finely meshed
+        zone (``magnetics.near``).
 
     Notes
     -----
@@ -60,12 +63,42 @@ def hall_field(study: Study, t, theta, H, solver: str | None = None
     θ = 0.
     ``B_z`` is the upward component; below an axially magnetised (+z) magnet it is positive.
     """
-    solver = study.magnetics.solver if solver is None else solver
-    if solver not in SOLVERS:
-        raise ValueError(f"hall_field: solver must be one of {SOLVERS}, got {solver!r}")
     u_r, u_z = loading_path(study, t, theta, H)
     x, z = hall_from_magnet_centre(study, u_r, u_z, H)
-    x, z = np.broadcast_arrays(x, z)
+    if (study.magnetics.solver if solver is None else solver) == "fe":
+        m = study.magnet
+        gap = np.hypot(np.maximum(np.abs(x) - m.R_m, 0.0), np.maximum(np.abs(z) - m.H_m / 2, 0.0))
+        if np.size(gap) and gap.max() > study.magnetics.near:
+            raise StudyError("magnetics.near_mm",
+                             f"the Hall point reaches {from_si(gap.max(), 'mm'):.4g} mm from the "
+                             f"magnet, beyond the finely meshed zone near_mm = "
+                             f"{from_si(study.magnetics.near, 'mm'):g}; increase near_mm")
+    return magnet_field(study, x, z, solver)
+
+
+def magnet_field(study: Study, x, z, solver: str | None = None
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Flux density (B_x, B_z) [T] in the plane y = 0 of the magnet's frame.
+
+    Parameters
+    ----------
+    study : Study
+        Magnet and field solver settings.
+    x, z : array_like
+        Broadcastable coordinates [m] relative to the magnet's centre (x along the shear
+        direction, z along the magnet's axis, up).
+    solver : {"fe", "exact"}, optional
+        As in :func:`hall_field`.
+
+    Returns
+    -------
+    B_x, B_z : numpy.ndarray
+        Each of the broadcast shape; B_x = sign(x) B_ρ(|x|, z) by axial symmetry.
+    """
+    solver = study.magnetics.solver if solver is None else solver
+    if solver not in SOLVERS:
+        raise ValueError(f"field solver must be one of {SOLVERS}, got {solver!r}")
+    x, z = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(z, dtype=float))
     rho = np.abs(x)
     if solver == "exact":
         m = study.magnet
