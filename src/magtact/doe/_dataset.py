@@ -194,5 +194,5 @@ def write_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         writer = csv.writer(fh)
         writer.writerow(CSV_COLUMNS)
         for row in zip(*(full[name].tolist() for name in CSV_COLUMNS), strict=True):
-            writer.writerow([repr(x) for x in row])
+            writer.writerow([repr(x + 0.0) for x in row])  # + 0.0: no '-0.0'
     return path

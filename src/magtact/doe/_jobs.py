@@ -44,6 +44,9 @@ PATH_SCALARS = ("G", "newton_iterations", "cutbacks", "wall_time", "n_dofs", "n_
 #: Libraries whose version is part of a path (resp. field) job's key.
 PATH_LIBS = ("numpy", "scipy", "felupe", "gmsh", "pypardiso")
 FIELD_LIBS = ("numpy", "scipy", "scikit-fem", "gmsh", "magpylib")
+#: magtact sub-packages whose source code is part of a path (resp. field) job's key.
+PATH_PACKAGES = ("mechanics", "geometry")
+FIELD_PACKAGES = ("magnetics", "geometry")
 _ROOT = Path(__file__).resolve().parents[1]  # the magtact package folder
 
 
@@ -180,7 +183,7 @@ def plan(study: Study, path_solver, field_solver) -> tuple[FieldJob, list[PathJo
     t = tuple(float(x) for x in study.t_levels)
     thetas = tuple(float(x) for x in study.theta_levels)
     Hs = tuple(float(x) for x in study.H_levels)
-    p_inputs = path_key_inputs(study, solver_identity(path_solver, ("mechanics", "geometry")))
+    p_inputs = path_key_inputs(study, solver_identity(path_solver, PATH_PACKAGES))
     Gs: tuple[float | None, ...] = (
         (None,) if study.mechanics.scale_in_G else tuple(float(x) for x in study.G_levels))
     paths = []
@@ -190,7 +193,7 @@ def plan(study: Study, path_solver, field_solver) -> tuple[FieldJob, list[PathJo
                 key = digest({**p_inputs, "theta": theta, "H": H, "G": G, "t": t})
                 paths.append(PathJob(study, theta, H, G, t, key))
     solver = study.magnetics.solver
-    f_inputs = field_key_inputs(study, solver_identity(field_solver, ("magnetics", "geometry")))
+    f_inputs = field_key_inputs(study, solver_identity(field_solver, FIELD_PACKAGES))
     fkey = digest({**f_inputs, "solver_name": solver, "t": t, "theta": thetas, "H": Hs})
     return FieldJob(study, t, thetas, Hs, solver, fkey), paths
 

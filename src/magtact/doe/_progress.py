@@ -55,6 +55,8 @@ class Display:
     def __exit__(self, *exc) -> None:
         if self.live is not None:
             self.live.__exit__(*exc)
+            if not self.console.is_terminal:  # the final frame ends without a line break
+                self.console.line()
 
     def cached(self, job) -> None:
         """``job`` was found in the cache."""

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import os
+import subprocess
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import xarray as xr
 from rich.console import Console
@@ -13,7 +15,7 @@ from ..study import Study
 from ._cache import JobCache
 from ._dataset import assemble
 from ._executor import Task, default_workers, execute
-from ._jobs import plan, run_field, run_path
+from ._jobs import FIELD_PACKAGES, PATH_PACKAGES, plan, run_field, run_path, solver_identity
 from ._progress import Display
 
 
@@ -141,6 +143,7 @@ def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: in
         "run_cache_corrupt": stats.cache_corrupt,
         "run_wall_time_s": time.perf_counter() - start,
         "run_executor": _executor_name(workers, scheduler),
+        **_code_attrs(path_solver, field_solver),
     }
     ds = assemble(study, field_job, field_entry, path_jobs, results, attrs)
     if stats.failures:
@@ -154,3 +157,18 @@ def _executor_name(workers: int | None, scheduler: str | None) -> str:
     if workers == 0:
         return "in process"
     return f"{workers or default_workers()} local worker processes"
+
+
+def _code_attrs(path_solver, field_solver) -> dict:
+    """Solver names, the source hashes that enter the cache keys, and the source revision."""
+    path = solver_identity(path_solver, PATH_PACKAGES)
+    field = solver_identity(field_solver, FIELD_PACKAGES)
+    try:
+        rev = subprocess.run(["git", "describe", "--always", "--dirty", "--abbrev=12"],
+                             cwd=Path(__file__).parent, capture_output=True, text=True,
+                             timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        rev = ""
+    return {"path_solver_function": path["name"], "path_solver_code_sha256": path["code"],
+            "field_solver_function": field["name"], "field_solver_code_sha256": field["code"],
+            "source_revision": rev or "unknown (not a git checkout)"}
