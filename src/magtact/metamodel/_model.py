@@ -7,6 +7,7 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
+import symengine as se
 import sympy as sp
 
 from ._symbols import PQ_TO_TTH, PQH, SYMBOLS, TTH, TTH_TO_PQ, p, q
@@ -35,23 +36,40 @@ def _canonical(expr) -> sp.Expr:
     return expr.xreplace({s: SYMBOLS[s.name] for s in expr.free_symbols})
 
 
-def _compile(exprs, symbols):
-    """Compile a nested list of expressions to one vectorised NumPy function (with CSE)."""
-    return sp.lambdify(symbols, exprs, modules="numpy", cse=True)
+def _derivative_tensors(expr, symbols, order: int) -> list:
+    """Flattened derivative tensors of ``expr`` w.r.t. ``symbols`` of orders 0..``order``.
+
+    Differentiation runs in SymEngine (fast, no expression printing); entry k of order n is
+    the derivative along the multi-index ``numpy.unravel_index(k, (len(symbols),) * n)``.
+    """
+    levels = [[se.sympify(expr)]]
+    syms = [se.sympify(s) for s in symbols]
+    for _ in range(order):
+        levels.append([d.diff(s) for d in levels[-1] for s in syms])
+    return [e for level in levels for e in level]
 
 
-def _broadcast_eval(fn, shape_tail, *args):
-    """Evaluate a compiled nested-list function and stack to (broadcast shape, *shape_tail)."""
+def _lambdify(exprs: list, symbols):
+    """Compile expressions to one vectorised function (LLVM if available) with CSE."""
+    args = [se.sympify(s) for s in symbols]
+    try:
+        return se.Lambdify(args, exprs, cse=True, backend="llvm")
+    except (RuntimeError, ValueError, TypeError):  # SymEngine built without LLVM
+        return se.Lambdify(args, exprs, cse=True, backend="lambda")
+
+
+def _evaluate(fn, n_sym: int, order: int, *args) -> list[np.ndarray]:
+    """Evaluate a compiled derivative stack: [value, d1, ..., d_order], each (..., n, ..., n)."""
     args = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in args))
     shape = args[0].shape
-    out = fn(*args)
-    flat = [out]
-    for _ in shape_tail:
-        flat = [v for row in flat for v in row]
-    arr = np.empty(shape + shape_tail)
-    for k, v in enumerate(flat):
-        arr[(...,) + np.unravel_index(k, shape_tail)] = np.broadcast_to(v, shape)
-    return arr
+    out = np.asarray(fn(np.stack(args, axis=-1).reshape(-1, len(args))), dtype=float)
+    out = out.reshape(int(np.prod(shape, dtype=int)), -1)
+    res, k = [], 0
+    for n in range(order + 1):
+        size = n_sym**n
+        res.append(out[:, k:k + size].reshape(shape + (n_sym,) * n))
+        k += size
+    return res
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,41 +125,32 @@ class Metamodel:
         return cls(name=name, expr=expr, units=units, expr_pq=expr_pq, info=dict(info or {}))
 
     @cached_property
-    def _grad_exprs(self):
-        return [sp.diff(self.expr, s) for s in TTH]
+    def _compiled(self) -> dict:
+        return {}
 
-    @cached_property
-    def _f_value(self):
-        return _compile(self.expr, TTH)
-
-    @cached_property
-    def _f_grad(self):
-        return _compile(self._grad_exprs, TTH)
-
-    @cached_property
-    def _f_hess(self):
-        return _compile([[sp.diff(g, s) for s in TTH] for g in self._grad_exprs], TTH)
-
-    @cached_property
-    def _f_jet(self):
-        e = self.expr_pq
-        d1 = [sp.diff(e, s) for s in (p, q)]
-        d2 = [[sp.diff(a, s) for s in (p, q)] for a in d1]
-        d3 = [[[sp.diff(b, s) for s in (p, q)] for b in row] for row in d2]
-        return [_compile(e, PQH), _compile(d1, PQH), _compile(d2, PQH), _compile(d3, PQH)]
+    def _fn(self, form: str, order: int):
+        """Compiled stack of derivatives up to ``order``: form "tth" (t, θ, H) or "pq"."""
+        key = (form, order)
+        if key not in self._compiled:
+            if form == "tth":
+                exprs = _derivative_tensors(self.expr, TTH, order)
+            else:
+                exprs = _derivative_tensors(self.expr_pq, (p, q), order)
+            self._compiled[key] = _lambdify(exprs, TTH if form == "tth" else PQH)
+        return self._compiled[key]
 
     # ---- evaluation ----------------------------------------------------------------------
     def value(self, t, theta, H) -> np.ndarray:
         """Model value at (t, θ, H) (broadcast), in ``units``."""
-        return _broadcast_eval(self._f_value, (), t, theta, H)
+        return _evaluate(self._fn("tth", 0), 3, 0, t, theta, H)[0]
 
     def grad(self, t, theta, H) -> np.ndarray:
         """Gradient w.r.t. (t, θ, H), shape (..., 3)."""
-        return _broadcast_eval(self._f_grad, (3,), t, theta, H)
+        return _evaluate(self._fn("tth", 1), 3, 1, t, theta, H)[1]
 
     def hess(self, t, theta, H) -> np.ndarray:
         """Hessian w.r.t. (t, θ, H), shape (..., 3, 3)."""
-        return _broadcast_eval(self._f_hess, (3, 3), t, theta, H)
+        return _evaluate(self._fn("tth", 2), 3, 2, t, theta, H)[2]
 
     def jet(self, t, theta, H, order: int = 1) -> list[np.ndarray]:
         """Value and derivatives w.r.t. the features (p, q) at fixed H, up to ``order`` (≤ 3).
@@ -156,8 +165,8 @@ class Metamodel:
             raise ValueError(f"jet order must be 0..3, got {order}")
         t = np.asarray(t, dtype=float)
         pv, qv = t, t * np.tan(np.asarray(theta, dtype=float))
-        tails = [(), (2,), (2, 2), (2, 2, 2)]
-        return [_broadcast_eval(self._f_jet[k], tails[k], pv, qv, H) for k in range(order + 1)]
+        # two derivative directions (p, q); H enters as a parameter
+        return _evaluate(self._fn("pq", order), 2, order, pv, qv, H)
 
     def __repr__(self) -> str:
         return f"Metamodel({self.name!r}, {self.expr}, units={self.units!r})"
