@@ -226,14 +226,12 @@ def test_bad_worker_count_is_refused():
 def test_cli_doe_writes_netcdf_and_csv(tmp_path, monkeypatch):
     from typer.testing import CliRunner
 
-    import magtact.doe._run as doe_run
     from magtact.cli import app
 
     def fake_run(study, **kw):
         return run_doe(study, cache=kw["cache"], workers=0, path_solver=fake_path,
                        field_solver=fake_field)
 
-    monkeypatch.setattr(doe_run, "run_doe", fake_run)
     monkeypatch.setattr("magtact.doe.run_doe", fake_run)
     study = tmp_path / "tiny.toml"
     study.write_text("[doe]\nn_t = 3\nn_theta = 1\nn_H = 1\nn_G = 2\n")
@@ -252,3 +250,33 @@ def test_doe_figure_is_written(tmp_path):
     files = fig_doe(run(tiny()), tmp_path / "doe")
     assert [f.suffix for f in files] == [".png", ".svg"]
     assert all(f.stat().st_size > 1000 for f in files)
+
+
+def test_unreachable_scheduler_is_a_user_error(monkeypatch):
+    monkeypatch.setattr("magtact.doe._executor.CONNECT_TIMEOUT", "1s")
+    with pytest.raises(ValueError, match="cannot use the dask scheduler 'tcp://127.0.0.1:9'"):
+        run(tiny(), scheduler="tcp://127.0.0.1:9")
+
+
+def test_cli_doe_reports_failed_jobs(tmp_path, monkeypatch):
+    import json
+
+    from typer.testing import CliRunner
+
+    from magtact.cli import app
+
+    def fake_run(study, **kw):
+        return run_doe(study, cache=kw["cache"], workers=0, path_solver=fake_path,
+                       field_solver=fake_field)
+
+    monkeypatch.setattr("magtact.doe.run_doe", fake_run)
+    monkeypatch.setenv("MAGTACT_TEST_FAIL", "1")
+    study = tmp_path / "tiny.toml"
+    study.write_text("[doe]\nn_t = 3\nn_theta = 2\nn_H = 2\nn_G = 2\n")
+    res = CliRunner().invoke(app, ["doe", str(study), "--out", str(tmp_path / "o"),
+                                   "--no-cache"])
+    assert res.exit_code == 1
+    assert "1 job(s) failed" in res.output and "no convergence at theta=0.423" in res.output
+    (fail,) = json.loads((tmp_path / "o" / "doe_failures.json").read_text())
+    assert "H=7 mm" in fail["job"] and "RuntimeError" in fail["traceback"]
+    assert not (tmp_path / "o" / "doe.nc").exists()

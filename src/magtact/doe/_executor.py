@@ -22,6 +22,8 @@ from ._jobs import Outcome
 
 #: Environment variables that bound the threads of BLAS / MKL (PARDISO) in each worker.
 THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+#: How long to try to reach a dask scheduler.
+CONNECT_TIMEOUT = "10s"
 
 
 @dataclass(frozen=True)
@@ -134,7 +136,11 @@ def _dask(tasks: list[Task], scheduler: str) -> Iterator[tuple[object, Outcome]]
     from distributed import Client
 
     done: queue.Queue = queue.Queue()
-    with Client(scheduler) as client:
+    try:
+        client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+    except (OSError, ValueError, TypeError) as exc:
+        raise ValueError(f"cannot use the dask scheduler {scheduler!r}: {exc}") from None
+    with client:
         futures = {}
         for task in tasks:
             fut = client.submit(task.func, task.job, *task.args, pure=False)
