@@ -5,6 +5,7 @@ Coordinates (r, z) with the magnet's centre at the origin (SPEC section 2). SI u
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, replace
 from functools import cached_property, lru_cache
@@ -206,8 +207,12 @@ def solve_fe(study: Study) -> FieldSolution:
                                             f"the near zone (H_m/2 + near = "
                                             f"{from_si(0.5 * m.H_m + f.near, 'mm'):g} mm), got "
                                             f"far_z = {f.far_z:g}")
-    return _solve_cached(m.R_m, m.H_m, m.M_z, f.h_magnet, f.growth_near, f.near, f.growth,
-                         f.far_r, f.far_z)
+    with _LOCK:  # gmsh is not thread-safe; one solve per magnet and mesh in a process
+        return _solve_cached(m.R_m, m.H_m, m.M_z, f.h_magnet, f.growth_near, f.near, f.growth,
+                             f.far_r, f.far_z)
+
+
+_LOCK = threading.Lock()
 
 
 @lru_cache(maxsize=8)
