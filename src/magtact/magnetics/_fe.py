@@ -126,20 +126,21 @@ def solve_field(mesh: FieldMesh, R_m: float, H_m: float, M_z: float) -> FieldSol
     Notes
     -----
     The body and the air have μr = 1 (SPEC section 2). With H = −∇V, B = μ0 H outside and
-    B = μ0 (H + M) inside the magnet, ∇·B = 0 and
-    n·B = 0 on the far boundary (natural), the weak form over the meridian half-plane with the
-    axisymmetric measure r dr dz is
+    B = μ0 (H + M) inside the magnet, ∇·B = 0 in the domain and n·B = 0 on the far boundary
+    (natural), the weak form over the meridian half-plane with the axisymmetric measure
+    r dr dz (the 2π factor cancels) is
 
     .. math::
 
         \\int_\\Omega \\nabla V \\cdot \\nabla v \\; r \\, dr\\, dz
         = \\int_{\\text{magnet}} M_z \\frac{\\partial v}{\\partial z} \\; r \\, dr\\, dz
-        \\quad \\forall v,
+        \\quad \\forall v.
 
-    The axis r = 0 needs no condition (the weight r makes it
-    natural). V is defined up to a constant: one degree of freedom (a far corner) is pinned
-    to 0. Elements: P2 Lagrange triangles (``skfem.ElementTriP2``); the symmetric positive
-    definite system is solved by SuperLU with a minimum-degree ordering of A + Aᵀ.
+    The magnet's surface charge n·M enters through the right-hand side; the axis r = 0 needs
+    no condition (the weight r makes it natural). V is defined up to a constant: one degree of
+    freedom (the far corner r = r_far, z = z_far) is pinned to 0. Elements: P2 Lagrange
+    triangles (``skfem.ElementTriP2``); the symmetric positive definite system is solved by
+    SuperLU with a minimum-degree ordering of A + Aᵀ and no pivoting.
     """
     from scipy.sparse.linalg import splu
     from skfem import Basis, BilinearForm, ElementTriP2, LinearForm, MeshTri
