@@ -10,6 +10,9 @@ import numpy as np
 from ..study import kpa, mm
 from ._style import save, style
 
+GR, GZ = r"$\Gamma_{r,\max}$", r"$\Gamma_{z,\max}$"
+FR, FZ = r"$F_{r,\min}$", r"$F_{z,\max}$"
+
 
 def _contours(ax, X, Y, Z, color, ls, label):
     cs = ax.contour(X, Y, Z, levels=8, colors=color, linestyles=ls, linewidths=1.0)
@@ -29,15 +32,15 @@ def fig_maps(maps, constraints, out_dir: str | Path) -> list[Path]:
     files = []
     with style():
         fig, ax = plt.subplots(figsize=(3.4, 2.8))
-        _contours(ax, X, Y, maps.Gamma_r_max, "C0", "solid", "Γ_r,max [N/T]")
-        _contours(ax, X, Y, maps.Gamma_z_max, "C3", "dashed", "Γ_z,max [N/T]")
+        _contours(ax, X, Y, maps.Gamma_r_max, "C0", "solid", GR + " [N/T]")
+        _contours(ax, X, Y, maps.Gamma_z_max, "C3", "dashed", GZ + " [N/T]")
         ax.set(xlabel="H [mm]", ylabel="G [kPa]")
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, frameon=False)
         files += save(fig, out_dir / "maps_objectives")
 
         fig, ax = plt.subplots(figsize=(3.4, 2.8))
-        _contours(ax, X, Y, maps.F_r_min, "C0", "solid", "F_r,min [N]")
-        _contours(ax, X, Y, maps.F_z_max, "C3", "dashed", "F_z,max [N]")
+        _contours(ax, X, Y, maps.F_r_min, "C0", "solid", FR + " [N]")
+        _contours(ax, X, Y, maps.F_z_max, "C3", "dashed", FZ + " [N]")
         for Z, level, color, ls in ((maps.F_r_min, constraints.F_r_c, "C0", "solid"),
                                     (maps.F_z_max, constraints.F_z_c, "C3", "dashed")):
             if Z.min() < level < Z.max():
@@ -65,20 +68,21 @@ def fig_pareto(opt, path: str | Path) -> list[Path]:
                 label="exact reduction")
         ax.plot(p.Gamma_r_max, p.Gamma_z_max, ".", color="C0", ms=3, label="NSGA-II")
         ax.plot(chosen.Gamma_r_max, chosen.Gamma_z_max, "*", color="C3", ms=10, label="chosen")
-        ax.set(xlabel="Γ_r,max [N/T]", ylabel="Γ_z,max [N/T]", title="Objective space")
+        ax.set(xlabel=GR + " [N/T]", ylabel=GZ + " [N/T]", title="Objective space")
         ax.legend(loc="upper right")
 
         ax = axs[1]
         ax.plot(p.F_r_min, p.F_z_max, ".", color="C0", ms=3)
         ax.plot(chosen.F_r_min, chosen.F_z_max, "*", color="C3", ms=10)
-        ax.axvline(c.F_r_c, color="k", lw=0.8, ls="--")
+        ax.axvline(c.F_r_c, color="k", lw=0.8, ls="--", label="limits")
         ax.axhline(c.F_z_c, color="k", lw=0.8, ls="--")
-        ax.set(xlabel="F_r,min [N]", ylabel="F_z,max [N]", title="Constraint space")
+        ax.legend(loc="upper left")
+        ax.set(xlabel=FR + " [N]", ylabel=FZ + " [N]", title="Constraint space")
 
         ax = axs[2]
         feas = r.feasible
         ax.plot(mm(r.H[feas]), kpa(r.G_star[feas]), "-", color="0.6", lw=1.0,
-                label="G*(H)")
+                label=r"$G^*(H)$")
         ax.plot(mm(r.H[front]), kpa(r.G_star[front]), "-", color="0.4", lw=2.5, alpha=0.6)
         ax.plot(mm(p.H), kpa(p.G), ".", color="C0", ms=3)
         ax.plot(mm(chosen.H), kpa(chosen.G), "*", color="C3", ms=10)
