@@ -53,10 +53,14 @@ def write_markdown(result: FitResult, path: str | Path, *, title: str = "Metamod
         lines += ["## Sensitivity check", "",
                   "Γ of the models against Γ from finite differences of the DOE data "
                   f"(t ≥ {next(iter(gamma_check.values()))['t_min']}); relative difference:", "",
-                  "| | median | 95th percentile | max | points |", "|---|---|---|---|---|"]
+                  "| | points | median | 95th percentile | max | points |",
+                  "|---|---|---|---|---|---|"]
         for k, v in gamma_check.items():
-            lines.append(f"| {k} | {v['median']:.3g} | {v['p95']:.3g} | {v['max']:.3g} | "
-                         f"{v['n_points']} |")
+            for sfx, label in (("", "all"), ("_interior", "central differences only")):
+                if "median" + sfx in v:
+                    lines.append(f"| {k} | {label} | {v['median' + sfx]:.3g} | "
+                                 f"{v['p95' + sfx]:.3g} | {v['max' + sfx]:.3g} | "
+                                 f"{v['n_points' + sfx]} |")
         lines += ["", "The data's finite differences along θ use the DOE's coarse θ levels, so "
                   "part of this difference is the error of the finite differences.", ""]
     lines += ["## Expressions", ""]
