@@ -37,7 +37,7 @@ def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
     J = np.stack([d(arr("B_r")), d(arr("B_z"))], axis=-2)  # (..., B, x)
     dF = np.stack([d(arr("F_r")), d(arr("F_z"))], axis=-2)  # (..., F, x)
     S = np.full(J.shape, np.nan)
-    ok = np.abs(np.linalg.det(J)) > 0
+    ok = (np.abs(np.linalg.det(J)) > 0) & (t_ > 0)[:, None, None]
     S[ok] = dF[ok] @ np.linalg.inv(J[ok])
     return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])
 
