@@ -16,7 +16,7 @@ import numpy as np
 from ..metamodel import ModelSet
 from ..sensitivity import Responses, ResponsesAtH
 from ..study import Study, from_si
-from ._box import BoxOptimum, batch_optimum, box_optimum
+from ._box import BatchOptimum, BoxOptimum, batch_optimum, box_optimum
 
 #: Stage-2 responses, maximised over [0, t_m] × [0, θ_m].
 MAXIMISED: tuple[str, ...] = ("f_z", "gamma_r", "gamma_z")
@@ -214,27 +214,27 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
     """Per-unit-G extrema at many heights at once (vectorised over H).
 
     The same two steps as :func:`per_height`, each solved for all heights together by
-    :func:`batch_optimum` (best point of a ``start_t × start_theta`` grid on each box, then
-    projected Newton with the exact gradient and Hessian, tolerance ``tol``). Used by NSGA-II and
-    the exact reduction, where thousands of heights are needed; it agrees with
-    :func:`per_height` wherever the start grid resolves the basin of the global optimum.
+    :func:`batch_optimum` (projected Newton with the exact gradient and Hessian, tolerance
+    ``tol``). Used by NSGA-II and the exact reduction, where thousands of heights are needed;
+    the tests check it against :func:`per_height`.
 
     Parameters
     ----------
     H : array_like, shape (n,)
         Heights [m].
     warm : HeightTable, optional
-        Solved heights (a dense sweep): each problem starts from the optimum at the nearest
-        height of ``warm`` instead of the start grid (NSGA-II's inner loop). Near a height
-        where a maximum jumps between two basins this may return the other basin's value,
-        which there differs from the global one by O(ΔH) of the table's spacing.
+        Solved heights. Without it every problem starts from the best point of a
+        ``start_t × start_theta`` grid on its box. With it, each problem is solved from three
+        starts and the best result kept: the optima at the two heights of ``warm`` that bracket
+        H, and the best point of a coarse 6 × 4 grid. An optimum that jumps between basins
+        somewhere between two table heights is thereby still found on both sides of the jump.
     """
     H = np.atleast_1d(np.asarray(H, dtype=float))
     R = as_responses(models)
     o = study.optimise
     n = H.size
 
-    def funcs(name):
+    def solve(name, lo, hi, maximise, starts):
         def fun(r, t, th):
             return _at(R, _rows(H, r, t)).value(name, t, th)
 
@@ -244,32 +244,54 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
         def hess(r, t, th):
             return _at(R, _rows(H, r, t)).hess(name, t, th)
 
-        return fun, jac, hess
+        if starts is None:
+            return batch_optimum(fun, jac, hess, lo, hi, maximise=maximise,
+                                 grid=(o.start_t, o.start_theta), tol=o.tol)
+        runs = [batch_optimum(fun, jac, hess, lo, hi, maximise=maximise, grid=(6, 4), tol=o.tol)]
+        runs += [batch_optimum(fun, jac, hess, lo, hi, maximise=maximise, grid=(6, 4),
+                               tol=o.tol, start=s) for s in starts]
+        return _best(runs, maximise)
 
-    kw = {"grid": (o.start_t, o.start_theta), "tol": o.tol}
     lo = np.zeros((n, 2))
     hi = np.tile([1.0, study.loading.theta_max], (n, 1))
     starts = [None] * 4
     if warm is not None:
-        k = _nearest(warm.H, H)
-        starts = [np.stack([warm.t_m[k], warm.theta_m[k]], axis=1), warm.loc_f_z[k],
-                  warm.loc_gamma_r[k], warm.loc_gamma_z[k]]
-    fr = batch_optimum(*funcs("f_r"), lo, hi, maximise=False, start=starts[0], **kw)
+        sides = _bracket(warm.H, H)
+        starts = [[np.stack([warm.t_m[k], warm.theta_m[k]], axis=1) for k in sides],
+                  [warm.loc_f_z[k] for k in sides], [warm.loc_gamma_r[k] for k in sides],
+                  [warm.loc_gamma_z[k] for k in sides]]
+    fr = solve("f_r", lo, hi, False, starts[0])
     box = np.stack([fr.t, fr.theta], axis=1)
-    res = [batch_optimum(*funcs(name), lo, box, maximise=True, start=s, **kw)
-           for name, s in zip(MAXIMISED, starts[1:], strict=True)]
+    res = [solve(name, lo, box, True, s) for name, s in zip(MAXIMISED, starts[1:], strict=True)]
     conv = fr.converged & np.logical_and.reduce([r.converged for r in res])
     locs = [np.stack([r.t, r.theta], axis=1) for r in res]
     return HeightTable(H, fr.t, fr.theta, fr.value, res[0].value, res[1].value, res[2].value,
                        *locs, conv)
 
 
-def _nearest(grid: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Index of the nearest element of the sorted array ``grid`` for each ``x``."""
+def _best(runs: list[BatchOptimum], maximise: bool) -> BatchOptimum:
+    """Row-wise best of several solutions of the same problems."""
+    V = np.stack([r.value for r in runs])
+    V = np.where(np.isfinite(V), V, -np.inf if maximise else np.inf)
+    k = np.argmax(V, axis=0) if maximise else np.argmin(V, axis=0)
+    rows = np.arange(V.shape[1])
+
+    def pick(attr):
+        return np.stack([getattr(r, attr) for r in runs])[k, rows]
+
+    # ties within round-off: converged if any of the tied runs converged
+    tied = np.abs(V - V[k, rows]) <= 1e-12 * np.abs(V[k, rows])
+    converged = np.any(tied & np.stack([r.converged for r in runs]), axis=0)
+    return BatchOptimum(pick("t"), pick("theta"), pick("value"), pick("kkt"), converged)
+
+
+def _bracket(grid: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the elements of the sorted ``grid`` just below and above each ``x``."""
     if grid.size == 1:
-        return np.zeros(np.shape(x), int)
+        z = np.zeros(np.shape(x), int)
+        return z, z
     k = np.clip(np.searchsorted(grid, x), 1, grid.size - 1)
-    return np.where(np.abs(x - grid[k - 1]) <= np.abs(grid[k] - x), k - 1, k)
+    return k - 1, k
 
 
 def _rows(H: np.ndarray, r, t) -> np.ndarray:

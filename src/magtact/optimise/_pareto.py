@@ -177,8 +177,14 @@ class Reduction:
 
 
 def sweep(models: Responses | ModelSet, study: Study) -> HeightTable:
-    """Per-unit-G extrema on ``sweep_n`` equally spaced heights over the H bounds."""
-    return heights_batch(models, np.linspace(*study.design.H, study.optimise.sweep_n), study)
+    """Per-unit-G extrema on ``sweep_n`` equally spaced heights over the H bounds.
+
+    ``sweep_coarse`` heights are solved from full start grids; the others start from the
+    bracketing coarse heights' optima (and a coarse grid) (see :func:`heights_batch`).
+    """
+    o = study.optimise
+    coarse = heights_batch(models, np.linspace(*study.design.H, o.sweep_coarse), study)
+    return heights_batch(models, np.linspace(*study.design.H, o.sweep_n), study, warm=coarse)
 
 
 def exact_reduction(models: Responses | ModelSet, study: Study, constraints: ForceConstraints,

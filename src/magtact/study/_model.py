@@ -180,6 +180,8 @@ class Optimise:
     grid_n: int = setting(10, integer=True, minimum=2, doc="map levels along H and along G")
     sweep_n: int = setting(1001, integer=True, minimum=3,
                            doc="heights of the exact reduction's 1D sweep")
+    sweep_coarse: int = setting(41, integer=True, minimum=2,
+                                doc="heights of the sweep solved from full start grids")
     start_t: int = setting(41, integer=True, minimum=2,
                            doc="start grid along t of the batched per-height solver")
     start_theta: int = setting(21, integer=True, minimum=2,
