@@ -47,7 +47,8 @@ class PathResult:
     H, theta : float
         Base height [m] and shear angle [rad].
     newton_iterations, cutbacks, steps : int
-        Total Newton iterations, step cut-backs and converged steps of the solve.
+        Newton iterations of the solve (linear solves, failed steps included), step cut-backs
+        and converged steps.
     wall_time : float
         Wall-clock time of the solve [s].
     n_dofs, n_cells : int
@@ -55,7 +56,10 @@ class PathResult:
     mesh : str
         Name of the mesh density.
     timings : dict
-        Seconds spent in assembly of the solid, contact, and linear solves (factorisation).
+        Seconds spent assembling the solid (``solid``) and the contacts (``contact``), in the
+        sparse factorisations (``factorization``) and the triangular solves (``solve``).
+    jacobians : int
+        Tangent matrices assembled and factorised.
     """
 
     t: np.ndarray
@@ -74,6 +78,7 @@ class PathResult:
     n_cells: int
     mesh: str
     timings: dict = field(default_factory=dict)
+    jacobians: int = 0
 
     def scaled(self, G: float) -> PathResult:
         """The same path for shear modulus ``G`` [Pa]: every force × G / self.G (exact)."""

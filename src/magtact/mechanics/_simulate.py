@@ -117,5 +117,6 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
         theta=float(theta), newton_iterations=out["iterations"], cutbacks=out["cutbacks"],
         steps=out["steps"], wall_time=time.perf_counter() - t0, n_dofs=model.n_dofs,
         n_cells=model.bmesh.n_cells, mesh=model.bmesh.name, timings=dict(model.timings),
+        jacobians=out["jacobians"],
     )
     return result if G_solve == G_out else result.scaled(G_out)

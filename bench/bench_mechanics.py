@@ -1,0 +1,154 @@
+"""Benchmark of the structural stage (issue 3): mesh convergence, the 25 DOE paths, solvers.
+
+Writes ``bench/results/mechanics_<part>.json`` (after every path, so a long run can be inspected
+while it runs; ``"complete": true`` once the part has finished). The parts can run in parallel.
+
+    nice -n 10 python bench/bench_mechanics.py                # all parts
+    nice -n 10 python bench/bench_mechanics.py --part grid    # one part
+
+Parts:
+- ``solver``: time to factorise the tangent of the default mesh (H = 7 mm, t = 0) with PARDISO
+  and SuperLU, and the accuracy of both solutions.
+- ``convergence``: θ = θ_max, H = 3 and 7 mm on the default and the fine mesh (twice the cells
+  per direction): F_z(t = 1) and min F_r and their relative change (target < 2 %).
+- ``grid``: every (θ, H) of the default DOE grid on the default mesh: completion, wall time,
+  Newton iterations, Jacobians, cut-backs, and where the time goes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from magtact.mechanics import PathFailed, build_model, simulate_path
+from magtact.study import load_study
+
+RESULTS = Path(__file__).parent / "results"
+
+
+def _path_record(r) -> dict:
+    i = int(np.argmin(r.F_r))
+    return {
+        "H_mm": r.H * 1e3, "theta_rad": r.theta, "mesh": r.mesh, "n_dofs": r.n_dofs,
+        "n_cells": r.n_cells, "completed": True, "wall_time_s": round(r.wall_time, 2),
+        "newton_iterations": r.newton_iterations, "jacobians": r.jacobians,
+        "cutbacks": r.cutbacks, "steps": r.steps,
+        "timings_s": {k: round(v, 2) for k, v in r.timings.items()},
+        "F_z_t1_N": float(r.F_z[-1]), "F_r_t1_N": float(r.F_r[-1]),
+        "F_r_min_N": float(r.F_r[i]), "t_at_F_r_min": float(r.t[i]),
+        "F_z_N": r.F_z.tolist(), "F_r_N": r.F_r.tolist(),
+    }
+
+
+def _save(data: dict) -> None:
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    target = RESULTS / f"mechanics_{data['part']}.json"
+    tmp = target.with_suffix(".tmp")
+    tmp.write_text(json.dumps(data, indent=1))
+    os.replace(tmp, target)
+
+
+def _header(study, part: str) -> dict:
+    import felupe as fem
+
+    return {
+        "part": part, "complete": False,
+        "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
+                    "load_average_at_start": os.getloadavg(), "felupe": fem.__version__,
+                    "note": "2 cores shared by several concurrent jobs; run under nice"},
+        "settings": {k: getattr(study.mechanics, k) for k in study.mechanics.__dataclass_fields__},
+    }
+
+
+def part_solver(study) -> None:
+    data = _header(study, "solver")
+    model = build_model(study, 7e-3, mesh="default")
+    K = model.items[0].assemble.matrix()
+    for c in model.contacts:
+        K = K + c.assemble.matrix()
+    A = K.tocsr()[model.dof1][:, model.dof1].tocsr()
+    b = np.random.default_rng(0).normal(size=A.shape[0])
+    out = {"n": int(A.shape[0]), "nnz": int(A.nnz)}
+    from magtact.mechanics._model import _linear_solver
+
+    for name in ("pardiso", "superlu"):
+        solver = _linear_solver(name, study.mechanics.threads)
+        times = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            solver.factorize(A)
+            times.append(time.perf_counter() - t0)
+        x = solver.solve(b)
+        out[name] = {"factorize_s": [round(t, 3) for t in times],
+                     "relative_residual": float(np.linalg.norm(A @ x - b) / np.linalg.norm(b))}
+        solver.free()
+    data |= out
+    data["complete"] = True
+    _save(data)
+
+
+def part_convergence(study) -> None:
+    theta = study.loading.theta_max
+    data = _header(study, "convergence") | {"cases": []}
+    for H in (3e-3, 7e-3):
+        case = {"H_mm": H * 1e3, "theta_rad": theta}
+        for mesh in ("default", "fine"):
+            r = simulate_path(study, H, theta, mesh=mesh)
+            case[mesh] = _path_record(r)
+            data["cases"] = [c for c in data["cases"] if c["H_mm"] != case["H_mm"]] + [case]
+            _save(data)
+        d, f = case["default"], case["fine"]
+        case["change_F_z_t1"] = abs(d["F_z_t1_N"] / f["F_z_t1_N"] - 1)
+        case["change_F_r_min"] = abs(d["F_r_min_N"] / f["F_r_min_N"] - 1)
+        case["below_2_percent"] = bool(max(case["change_F_z_t1"], case["change_F_r_min"]) < 0.02)
+        _save(data)
+    data["complete"] = True
+    _save(data)
+
+
+def part_grid(study) -> None:
+    data = _header(study, "grid") | {"paths": []}
+    for H in study.H_levels:
+        for theta in study.theta_levels:
+            try:
+                rec = _path_record(simulate_path(study, float(H), float(theta)))
+            except PathFailed as exc:
+                rec = {"H_mm": float(H) * 1e3, "theta_rad": float(theta), "completed": False,
+                       "error": str(exc), "mesh": study.mechanics.mesh}
+            data["paths"].append(rec)
+            print(f"H = {H * 1e3:.0f} mm, theta = {theta:.3f}: "
+                  f"{rec.get('wall_time_s', 'failed')} s", flush=True)
+            _save(data)
+    ok = [p for p in data["paths"] if p["completed"]]
+    walls = [p["wall_time_s"] for p in ok]
+    data["summary"] = {
+        "completed": len(ok), "total": len(data["paths"]),
+        "wall_time_s": {"mean": float(np.mean(walls)), "max": float(np.max(walls))} if ok else None,
+        "newton_iterations_mean": (float(np.mean([p["newton_iterations"] for p in ok]))
+                                   if ok else None),
+        "cutbacks_total": int(sum(p["cutbacks"] for p in ok)),
+        "time_share": {k: float(sum(p["timings_s"][k] for p in ok) / sum(walls))
+                       for k in ok[0]["timings_s"]} if ok else None,
+    }
+    data["complete"] = True
+    _save(data)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--part", choices=("all", "solver", "convergence", "grid"), default="all")
+    args = ap.parse_args()
+    study = load_study(None)
+    parts = ("solver", "convergence", "grid") if args.part == "all" else (args.part,)
+    for part in parts:
+        {"solver": part_solver, "convergence": part_convergence, "grid": part_grid}[part](study)
+
+
+if __name__ == "__main__":
+    main()
