@@ -21,7 +21,7 @@ def split_study_and_data(args: list[str]) -> tuple[str | None, list[Path]]:
 
 
 def path_model(study: Study, H: float, G: float, theta: float, models_file: Path | None,
-               solver: str):
+               solver: str, mesh: str | None = None):
     """The model of the design: metamodels from ``models_file``, else a direct simulation."""
     from ..validation import PathModel
 
@@ -29,7 +29,7 @@ def path_model(study: Study, H: float, G: float, theta: float, models_file: Path
         from ..metamodel import load_models
 
         return PathModel.from_metamodels(load_models(models_file), study, H, G, theta)
-    return PathModel.from_simulation(study, H, G, theta, solver=solver)
+    return PathModel.from_simulation(study, H, G, theta, solver=solver, mesh=mesh)
 
 
 def print_table(validation) -> None:
@@ -62,6 +62,9 @@ def validate_command(
                          "directly (one structural path).")] = None,
     solver: Annotated[str, typer.Option(help="Field solver of the direct simulation: exact|fe.")]
     = "exact",
+    mesh: Annotated[str | None, typer.Option(
+        help="Structural mesh of the direct simulation: coarse|default|fine; default: the "
+             "study's.")] = None,
     f_lo: Annotated[float, typer.Option("--f-lo", help="Low cut-off (cycles per mm of u_z).")]
     = 0.0,
     f_hi: Annotated[float, typer.Option("--f-hi", help="High cut-off (cycles per mm of u_z); 0: no "
@@ -91,7 +94,7 @@ def validate_command(
     if solver not in ("exact", "fe"):
         raise ValueError(f"--solver must be 'exact' or 'fe', got {solver!r}")
     filt = FilterSettings(f_lo=f_lo * 1e3, f_hi=f_hi * 1e3 if f_hi > 0 else None)
-    model = path_model(study, H_m, G_pa, experiment.theta, models, solver)
+    model = path_model(study, H_m, G_pa, experiment.theta, models, solver, mesh)
     result = validate(experiment, model, filter=filt, n_grid=n_grid, floor=floor)
     written = write_outputs(result, out_dir(out), sources=data)
     print_table(result)
