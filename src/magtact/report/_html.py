@@ -97,6 +97,10 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
         parts.append('<div class="banner"><b>SYNTHETIC validation data.</b> The validation '
                      "section compares the model with a generated example data set (model plus "
                      "noise, drift and scatter), not with measurements.</div>")
+    toc = " · ".join(f'<a href="#{k}">{_e(t)}</a>' for k, t, _ in STAGES)
+    parts.append(f'<p><a href="#summary">Summary</a> · <a href="#chosen">Chosen design</a> · '
+                 f'{toc} · <a href="#evidence">Evidence</a> · <a href="#settings">Settings</a>'
+                 "</p>")
     parts.append(_summary(manifest, stages, folder))
     parts.append(_chosen(folder / "optimise"))
     for key, title, what in STAGES:
@@ -128,7 +132,7 @@ def _summary(manifest: dict, stages: dict, folder: Path) -> str:
         rows.append(f'<tr><td class="l">{_e(title)}</td><td class="l {_e(status)}">'
                     f'{_e(status)}</td><td>{wall}</td><td class="l">{_e(msg)}</td></tr>')
     total = manifest.get("wall_time_s")
-    head = "<h2>Run summary</h2>"
+    head = '<h2 id="summary">Run summary</h2>'
     if manifest:
         head += (f"<p>Command <code>{_e(manifest.get('command', ''))}</code>; started "
                  f"{_e(manifest.get('started', '?'))}, total wall time {_fmt_time(total)}; "
@@ -140,14 +144,15 @@ def _summary(manifest: dict, stages: dict, folder: Path) -> str:
 def _chosen(folder: Path) -> str:
     data = _load_json(folder / "chosen.json")
     if not data:
-        return ('<h2>Chosen design</h2><div class="missing">No chosen design in this folder '
-                "(the optimisation stage did not produce <code>optimise/chosen.json</code>)."
-                "</div>")
+        return ('<h2 id="chosen">Chosen design</h2><div class="missing">No chosen design in '
+                "this folder (the optimisation stage did not produce "
+                "<code>optimise/chosen.json</code>).</div>")
     rows = "".join(f'<tr><td class="l">{_e(k)}</td><td>{_fmt(v)}</td></tr>'
                    for k, v in data.items() if not isinstance(v, (dict, list)))
     extra = "".join(f"<h3>{_e(k)}</h3>{_dict_table(v)}" for k, v in data.items()
                     if isinstance(v, dict))
-    return f'<h2>Chosen design</h2><div class="design"><table>{rows}</table>{extra}</div>'
+    return (f'<h2 id="chosen">Chosen design</h2><div class="design"><table>{rows}</table>'
+            f"{extra}</div>")
 
 
 def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> str:
@@ -191,7 +196,7 @@ def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> 
 
 def _evidence(folders: list[Path]) -> str:
     files = sorted({p.name: p for f in folders if f.is_dir() for p in f.glob("*.json")}.values())
-    out = ["<h2>Accuracy and convergence evidence</h2>"]
+    out = ['<h2 id="evidence">Accuracy and convergence evidence</h2>']
     if not files:
         out.append('<div class="missing">No benchmark results (<code>bench/results/*.json</code>)'
                    " were available to this run.</div>")
@@ -205,9 +210,10 @@ def _evidence(folders: list[Path]) -> str:
 
 def _settings(path: Path) -> str:
     if not path.is_file():
-        return '<h2>Study settings</h2><div class="missing">No study.toml in this folder.</div>'
-    return (f"<h2>Study settings</h2><p>The full study (user units), as loaded and validated."
-            f"</p><pre>{_e(path.read_text(encoding='utf-8'))}</pre>")
+        return ('<h2 id="settings">Study settings</h2><div class="missing">No study.toml in this '
+                "folder.</div>")
+    return ('<h2 id="settings">Study settings</h2><p>The full study (user units), as loaded and '
+            f"validated.</p><pre>{_e(path.read_text(encoding='utf-8'))}</pre>")
 
 
 def _versions(manifest: dict) -> str:
