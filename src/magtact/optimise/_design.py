@@ -210,7 +210,7 @@ class HeightTable:
 
 
 def heights_batch(models: Responses | ModelSet, H, study: Study,
-                  warm: HeightTable | None = None) -> HeightTable:
+                  warm: HeightTable | None = None, coarse_start: bool = True) -> HeightTable:
     """Per-unit-G extrema at many heights at once (vectorised over H).
 
     The same two steps as :func:`per_height`, each solved for all heights together by
@@ -228,6 +228,9 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
         starts and the best result kept: the optima at the two heights of ``warm`` that bracket
         H, and the best point of a coarse 6 × 4 grid. An optimum that jumps between basins
         somewhere between two table heights is thereby still found on both sides of the jump.
+    coarse_start : bool
+        With ``warm``: also start from the coarse grid. NSGA-II, which warm-starts from the
+        dense sweep, leaves it out.
     """
     H = np.atleast_1d(np.asarray(H, dtype=float))
     R = as_responses(models)
@@ -247,7 +250,8 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
         if starts is None:
             return batch_optimum(fun, jac, hess, lo, hi, maximise=maximise,
                                  grid=(o.start_t, o.start_theta), tol=o.tol)
-        runs = [batch_optimum(fun, jac, hess, lo, hi, maximise=maximise, grid=(6, 4), tol=o.tol)]
+        runs = [batch_optimum(fun, jac, hess, lo, hi, maximise=maximise, grid=(6, 4), tol=o.tol)
+                ] if coarse_start else []
         runs += [batch_optimum(fun, jac, hess, lo, hi, maximise=maximise, grid=(6, 4),
                                tol=o.tol, start=s) for s in starts]
         return _best(runs, maximise)

@@ -286,7 +286,7 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
 
     def evaluate(x):
         H, G = designs(x)
-        tab = heights_batch(R, H, study, warm=table)
+        tab = heights_batch(R, H, study, warm=table, coarse_start=False)
         g_r, g_z = constraints.margins(G * tab.f_r_min, G * tab.f_z_max)
         return H, G, tab, g_r, g_z
 
