@@ -47,7 +47,7 @@ margin-top:2em}h3{font-size:1.05em;margin-top:1.4em}
 table{border-collapse:collapse;font-size:.85em;margin:.5em 0}
 th,td{border:1px solid #ccc;padding:.2em .5em;text-align:right}th{background:#f3f3f3}
 td.l,th.l{text-align:left}
-figure{margin:1em 0;text-align:center}figure img{max-width:100%;border:1px solid #eee}
+figure{margin:1em 0;text-align:center}figure img{max-width:min(100%,900px);border:1px solid #eee}
 figcaption{font-size:.85em;color:#555}
 pre{background:#f7f7f7;padding:.7em;overflow-x:auto;font-size:.8em}
 .ok{color:#176b2c;font-weight:bold}.failed{color:#b00020;font-weight:bold}
@@ -247,11 +247,14 @@ def _csv_table(path: Path, caption: str | None) -> str:
         title += " (SYNTHETIC data)"
     html_rows = "".join("<tr>" + "".join(f"<td>{_e(_num(c))}</td>" for c in r) + "</tr>"
                         for r in body[:MAX_ROWS])
-    more = (f"<p><small>{len(body) - MAX_ROWS} more rows in {_e(path.name)}</small></p>"
-            if len(body) > MAX_ROWS else "")
-    return (f"<h3>{_e(title)}</h3><p><small>{_e(path.name)}</small></p><div style=\"overflow-x:"
-            "auto\"><table><tr>" + "".join(f"<th>{_e(h)}</th>" for h in head) + "</tr>"
-            + html_rows + "</table></div>" + more)
+    table = ("<div style=\"overflow-x:auto\"><table><tr>"
+             + "".join(f"<th>{_e(h)}</th>" for h in head) + "</tr>" + html_rows + "</table></div>")
+    if len(body) <= MAX_ROWS:
+        return f"<h3>{_e(title)}</h3><p><small>{_e(path.name)}</small></p>{table}"
+    # long data tables: collapsed, first rows only (the file has them all)
+    return (f"<details><summary><b>{_e(title)}</b> — {_e(path.name)}, {len(body):,} rows (first "
+            f"{MAX_ROWS} shown; {len(body) - MAX_ROWS} more rows in {_e(path.name)})</summary>"
+            f"{table}</details>")
 
 
 def _json_summary(path: Path, level: int = 3) -> str:
