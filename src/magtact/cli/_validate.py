@@ -26,9 +26,12 @@ def path_model(study: Study, H: float, G: float, theta: float, models_file: Path
     from ..validation import PathModel
 
     if models_file is not None:
-        from ..metamodel import load_models
+        from ..metamodel import ExactField, load_models
 
-        return PathModel.from_metamodels(load_models(models_file), study, H, G, theta)
+        exact = (ExactField(study, "B_r"), ExactField(study, "B_z"))
+        models = load_models(models_file,
+                             B_model=exact if study.metamodel.b_model == "exact" else None)
+        return PathModel.from_metamodels(models, study, H, G, theta)
     return PathModel.from_simulation(study, H, G, theta, solver=solver, mesh=mesh)
 
 
@@ -58,8 +61,8 @@ def validate_command(
     G: Annotated[float | None, typer.Option("--G", help="Shear modulus G of the tested design "
                                             "(kPa); default: the data's metadata.")] = None,
     models: Annotated[Path | None, typer.Option(
-        "--models", help="Metamodels JSON (from 'magtact fit'); default: simulate the design "
-                         "directly (one structural path).")] = None,
+        "--models", help="Folder of metamodel JSON files (from 'magtact fit'); default: "
+                         "simulate the design directly (one structural path).")] = None,
     solver: Annotated[str, typer.Option(help="Field solver of the direct simulation: exact|fe.")]
     = "exact",
     mesh: Annotated[str | None, typer.Option(
