@@ -355,3 +355,26 @@ def test_exact_field_matches_hall_field_and_its_derivatives():
             assert np.allclose(h[:, i, :], hfd, rtol=1e-5, atol=1e-7 * np.abs(h).max())
     with pytest.raises(ValueError, match="must be 'B_r' or 'B_z'"):
         ExactField(STUDY, "f_r")
+
+
+def test_no_kinks_from_assumptions():
+    """sqrt(x**2) must stay smooth-looking (not |x|) in both model and regressor symbols."""
+    assert not parse_expression("sqrt(t**2) + sqrt((p - q)**2)").has(sp.Abs)
+    assert not parse_expression("sqrt(X**2)", {"X": sp.Symbol("X")}).has(sp.Abs)
+
+
+def test_seed_search_keeps_best_training_fit(monkeypatch):
+    import magtact.metamodel._fit as fitmod
+
+    monkeypatch.setitem(fitmod.TRAIN_TARGET, "f_z", 0.0)  # unreachable: every seed is tried
+    ds = synthetic_doe(STUDY, n_t=6)
+    cfg = replace(STUDY.metamodel, generations=2, population=20, retries=2, operators="rational")
+    rep = fit_models(ds, STUDY, settings=cfg, names=("f_z",)).reports["f_z"]
+    assert rep.tries == 3
+    errs = []
+    for seed in range(3):
+        one = replace(cfg, seed=seed, retries=0)
+        errs.append(fit_models(ds, STUDY, settings=one, names=("f_z",))
+                    .reports["f_z"].train.max_abs_err_over_range)
+    assert rep.seed == int(np.argmin(errs))
+    assert rep.train.max_abs_err_over_range == min(errs)

@@ -2,6 +2,7 @@
 
 from ._exact_field import ExactField
 from ._fit import (
+    TRAIN_TARGET,
     TRANSFORMS,
     Accuracy,
     FitReport,
@@ -20,9 +21,9 @@ from ._regressor import OPERATOR_SETS, SymbolicRegressor
 from ._symbols import H, p, q, t, theta
 
 __all__ = [
-    "OPERATOR_SETS", "RESPONSES", "TRANSFORMS", "Accuracy", "ExactField", "FitReport",
-    "FitResult", "H", "Metamodel", "ModelSet", "SymbolicRegressor", "accuracy", "data_hash",
-    "fit_models", "fit_response", "format_expression", "hall_features", "holdout_paths",
-    "load_model", "load_models", "model_from_dict", "model_to_dict", "p", "parse_expression", "q",
-    "save_model", "save_models", "t", "theta",
+    "OPERATOR_SETS", "RESPONSES", "TRAIN_TARGET", "TRANSFORMS", "Accuracy", "ExactField",
+    "FitReport", "FitResult", "H", "Metamodel", "ModelSet", "SymbolicRegressor", "accuracy",
+    "data_hash", "fit_models", "fit_response", "format_expression", "hall_features",
+    "holdout_paths", "load_model", "load_models", "model_from_dict", "model_to_dict", "p",
+    "parse_expression", "q", "save_model", "save_models", "t", "theta",
 ]

@@ -101,7 +101,8 @@ class SymbolicRegressor(RegressorMixin, BaseEstimator):
         # Operon's own names are X1..Xd; ours are mapped through the restricted parser.
         gp_names = [f"gpvar{i}" for i in range(X.shape[1])]
         text = gp.get_model_string(gp.model_, _DIGITS, names=gp_names)
-        symbols = tuple(sp.Symbol(n, real=True) for n in names)
+        # no assumptions: with real symbols SymPy would turn sqrt(x**2) into the kink |x|
+        symbols = tuple(sp.Symbol(n) for n in names)
         expr = parse_expression(text, dict(zip(gp_names, symbols, strict=True)))
         expr = sp.Float(mu) + sp.Float(sd) * expr
         # Canonical form: the expression equals the one read back from its own text.

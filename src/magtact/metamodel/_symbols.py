@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import sympy as sp
 
-#: Non-dimensional load t [-], shear angle θ [rad], base height H [m].
-t, theta, H = sp.symbols("t theta H", real=True)
+#: Non-dimensional load t [-], shear angle θ [rad], base height H [m]. No assumptions on
+#: purpose: with real symbols SymPy rewrites sqrt(x**2) as the kink |x|.
+t, theta, H = sp.symbols("t theta H")
 #: Features p = t [-] and q = t tan θ [-].
-p, q = sp.symbols("p q", real=True)
+p, q = sp.symbols("p q")
 
 #: Symbols of the (t, θ, H) form, in the order of gradients and Hessians.
 TTH = (t, theta, H)
