@@ -131,6 +131,21 @@ def test_responses_derivatives_match_finite_differences(make):
     assert np.allclose(at.value("f_r", t, th), models.f_r.value(t, th, 4.5e-3), rtol=1e-15)
 
 
+def test_responses_broadcast_over_heights():
+    models = analytic_set()
+    H = np.array([3e-3, 5e-3, 7e-3])[:, None]
+    t, th = np.array([0.0, 0.3, 0.9]), np.array([0.1, 0.2, 0.4])
+    many = Responses(models).at(H)
+    for name in ("f_z", "gamma_r"):
+        v, g, h = many.value(name, t, th), many.grad(name, t, th), many.hess(name, t, th)
+        assert v.shape == (3, 3) and g.shape == (3, 3, 2) and h.shape == (3, 3, 2, 2)
+        for i, Hi in enumerate(H[:, 0]):
+            one = Responses(models).at(Hi)
+            assert np.allclose(v[i], one.value(name, t, th), rtol=1e-14)
+            assert np.allclose(g[i], one.grad(name, t, th), rtol=1e-13)
+            assert np.allclose(h[i], one.hess(name, t, th), rtol=1e-12)
+
+
 def test_responses_unknown_name():
     with pytest.raises(ValueError, match="unknown response 'F_r'"):
         Responses(analytic_set()).at(4e-3).value("F_r", 0.1, 0.1)

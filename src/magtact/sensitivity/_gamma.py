@@ -109,16 +109,18 @@ class Responses:
     def __init__(self, models: ModelSet):
         self.models = models
 
-    def at(self, H: float) -> ResponsesAtH:
-        """The responses at design height ``H`` [m]."""
-        return ResponsesAtH(self.models, float(H))
+    def at(self, H) -> ResponsesAtH:
+        """The responses at design height ``H`` [m] (a float, or an array that broadcasts
+        against the ``t, theta`` arrays of the calls, for many designs at once)."""
+        return ResponsesAtH(self.models, H)
 
 
 class ResponsesAtH:
-    """Responses at one design height H; see :class:`Responses`."""
+    """Responses at design height(s) H [m]; see :class:`Responses`."""
 
-    def __init__(self, models: ModelSet, H: float):
-        self.models, self.H = models, H
+    def __init__(self, models: ModelSet, H):
+        self.models = models
+        self.H = float(H) if np.ndim(H) == 0 else np.asarray(H, dtype=float)
 
     def _check(self, name):
         if name not in NAMES:
