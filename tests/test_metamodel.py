@@ -82,6 +82,7 @@ def test_forces_scale_with_G():
 @pytest.mark.parametrize("expr, msg", [
     (sp.Symbol("x") + ts, "unknown symbols ['x']"),
     (ts + ps, "mixes (t, theta) and the features (p, q)"),
+    (sp.Abs(ts - 0.5), "name 'Abs' is not allowed"),
 ])
 def test_from_expr_rejects_bad_symbols(expr, msg):
     with pytest.raises(ValueError, match=msg.replace("(", r"\(").replace(")", r"\)")
@@ -190,6 +191,9 @@ def test_bad_json_and_wrong_response(tmp_path):
         load_models(tmp_path)
     with pytest.raises(FileNotFoundError):
         load_model(tmp_path / "missing.json")
+    (tmp_path / "f_r.json").unlink()
+    with pytest.raises(FileNotFoundError, match="metamodel file not found: .*f_r.json"):
+        load_models(tmp_path)
 
 
 # ---- regressor ---------------------------------------------------------------------------
@@ -288,13 +292,18 @@ def test_fit_pipeline_small(tmp_path):
     assert load_models(tmp_path).B_z.expr == ms.B_z.expr
 
 
-def test_fit_with_exact_field(monkeypatch):
+def test_fit_with_exact_field(tmp_path):
     ds = synthetic_doe(STUDY, n_t=6)
     cfg = replace(STUDY.metamodel, generations=3, population=30, b_model="exact")
     res = fit_models(ds, STUDY, settings=cfg)
     assert set(res.models) == {"f_r", "f_z"}
     ms = res.model_set(STUDY)
     assert isinstance(ms.B_r, ExactField)
+    save_models(ms, tmp_path)
+    back = load_models(tmp_path)
+    assert isinstance(back.B_z, ExactField) and back.f_r.expr == ms.f_r.expr
+    x = (np.array([0.0, 0.5]), np.array([0.1, 0.4]), np.array([3e-3, 6e-3]))
+    assert np.array_equal(back.B_z.value(*x), ms.B_z.value(*x))
     with pytest.raises(ValueError, match="pass the study for the exact field"):
         res.model_set()
 

@@ -9,7 +9,8 @@ File layout (``format = "magtact-metamodel/1"``)::
      "info": {"transform": ..., "accuracy": {...}, "settings": {...}, "data_hash": ..., ...}}
 
 Both expressions are read by :func:`magtact.metamodel.parse_expression` (a whitelist grammar) and
-checked to agree with each other where t > 0.
+checked to agree with each other where t > 0. The exact field as B model is written as
+``{"format": "magtact-exact-field/1", "name", "units", "study_toml", "info"}`` (TOML read as data).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from ._parse import format_expression, parse_expression
 from ._symbols import PQ_TO_TTH, TTH
 
 FORMAT = "magtact-metamodel/1"
+EXACT_FORMAT = "magtact-exact-field/1"
 VARIABLES = {
     "t": "non-dimensional load [-]",
     "theta": "shear angle [rad]",
@@ -113,30 +115,65 @@ def load_model(path: str | Path) -> Metamodel:
 
 
 def save_models(models: ModelSet, folder: str | Path) -> list[Path]:
-    """Write ``<folder>/<name>.json`` for each fitted response; return the paths.
+    """Write ``<folder>/<name>.json`` for each response; return the paths.
 
-    Responses that are not closed-form :class:`Metamodel` objects (the exact field) are skipped.
-    """
-    return [save_model(m, Path(folder) / f"{k}.json") for k, m in models.items()
-            if isinstance(m, Metamodel)]
-
-
-def load_models(folder: str | Path, B_model=None) -> ModelSet:
-    """Read ``B_r, B_z, f_r, f_z`` from ``<folder>/<name>.json``.
-
-    Parameters
-    ----------
-    folder : path
-    B_model : tuple, optional
-        ``(B_r, B_z)`` models to use instead of files (e.g. the exact field).
+    A closed-form :class:`Metamodel` is written as a model file; the exact field
+    (:class:`magtact.metamodel.ExactField`) as ``format = "magtact-exact-field/1"`` with the
+    study (TOML text) that defines its geometry.
     """
     folder = Path(folder)
-    names = ["f_r", "f_z"] if B_model is not None else list(RESPONSES)
-    models = {k: load_model(folder / f"{k}.json") for k in names}
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
     for k, m in models.items():
+        path = folder / f"{k}.json"
+        if isinstance(m, Metamodel):
+            save_model(m, path)
+        else:
+            path.write_text(json.dumps({"format": EXACT_FORMAT, "name": k, "units": "T",
+                                        "study_toml": m.study.to_toml(), "info": m.info},
+                                       indent=2) + "\n")
+        paths.append(path)
+    return paths
+
+
+def _load_any(path: Path, name: str):
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    if isinstance(data, dict) and data.get("format") == EXACT_FORMAT and name in ("B_r", "B_z"):
+        import tomllib
+
+        from ..study import study_from_dict
+        from ._exact_field import ExactField
+
+        try:
+            study = study_from_dict(tomllib.loads(data["study_toml"]), str(path))
+        except (KeyError, TypeError, tomllib.TOMLDecodeError) as exc:
+            raise ValueError(f"{path}: exact-field file without a valid study ({exc})") from None
+        return ExactField(study, name)
+    return model_from_dict(data, str(path))
+
+
+def load_models(folder: str | Path) -> ModelSet:
+    """Read ``B_r, B_z, f_r, f_z`` from ``<folder>/<name>.json`` (see :func:`save_models`).
+
+    Raises
+    ------
+    FileNotFoundError
+        If a file is missing.
+    ValueError
+        If a file is not a valid model file or holds another response.
+    """
+    folder = Path(folder)
+    models = {}
+    for k in RESPONSES:
+        path = folder / f"{k}.json"
+        if not path.is_file():
+            raise FileNotFoundError(f"metamodel file not found: {path}")
+        m = _load_any(path, k)
         if m.name != k or m.units != RESPONSES[k]:
-            raise ValueError(f"{folder / (k + '.json')}: holds {m.name!r} [{m.units}], "
+            raise ValueError(f"{path}: holds {m.name!r} [{m.units}], "
                              f"expected {k!r} [{RESPONSES[k]}]")
-    if B_model is not None:
-        models["B_r"], models["B_z"] = B_model
+        models[k] = m
     return ModelSet(**models)

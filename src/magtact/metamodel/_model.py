@@ -112,16 +112,25 @@ class Metamodel:
         unless it is a function of (t, t tan θ, H) (a smooth function of u), the feature form
         keeps 1/p terms and its sensitivity is undefined at t = 0, as it physically is.
 
+        The expressions are stored in the form a model file reads back (constants as doubles,
+        SymPy's evaluated form), so a saved model loads exactly.
+
         Raises
         ------
         ValueError
-            For symbols other than t, theta, H, p, q, or a mix of both forms.
+            For symbols other than t, theta, H, p, q, a mix of both forms, or functions outside
+            the whitelist of :func:`magtact.metamodel.parse_expression`.
         """
+        from ._parse import format_expression, parse_expression
+
         expr = _canonical(expr)
         if {s.name for s in expr.free_symbols} & {"p", "q"}:
             expr_pq, expr = expr, expr.subs(PQ_TO_TTH)
         else:
             expr_pq = expr.subs(TTH_TO_PQ)
+        # The form a model file reads back (whitelisted functions, constants as doubles), so
+        # that saving and loading is exact.
+        expr, expr_pq = (parse_expression(format_expression(e)) for e in (expr, expr_pq))
         return cls(name=name, expr=expr, units=units, expr_pq=expr_pq, info=dict(info or {}))
 
     @cached_property
