@@ -302,6 +302,10 @@ def test_fit_with_exact_field(tmp_path):
     save_models(ms, tmp_path)
     back = load_models(tmp_path)
     assert isinstance(back.B_z, ExactField) and back.f_r.expr == ms.f_r.expr
+    for k in ("B_r", "B_z"):
+        (tmp_path / f"{k}.json").unlink()
+    given = load_models(tmp_path, B_model=(ms.B_r, ms.B_z))
+    assert given.B_r is ms.B_r and given.f_z.expr == ms.f_z.expr
     x = (np.array([0.0, 0.5]), np.array([0.1, 0.4]), np.array([3e-3, 6e-3]))
     assert np.array_equal(back.B_z.value(*x), ms.B_z.value(*x))
     with pytest.raises(ValueError, match="pass the study for the exact field"):

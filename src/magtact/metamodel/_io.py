@@ -155,8 +155,15 @@ def _load_any(path: Path, name: str):
     return model_from_dict(data, str(path))
 
 
-def load_models(folder: str | Path) -> ModelSet:
+def load_models(folder: str | Path, B_model=None) -> ModelSet:
     """Read ``B_r, B_z, f_r, f_z`` from ``<folder>/<name>.json`` (see :func:`save_models`).
+
+    Parameters
+    ----------
+    folder : path
+    B_model : tuple, optional
+        ``(B_r, B_z)`` models to use instead of the folder's field files (e.g. the exact field);
+        then only ``f_r.json`` and ``f_z.json`` are read.
 
     Raises
     ------
@@ -167,7 +174,11 @@ def load_models(folder: str | Path) -> ModelSet:
     """
     folder = Path(folder)
     models = {}
+    if B_model is not None:
+        models["B_r"], models["B_z"] = B_model
     for k in RESPONSES:
+        if k in models:
+            continue
         path = folder / f"{k}.json"
         if not path.is_file():
             raise FileNotFoundError(f"metamodel file not found: {path}")
