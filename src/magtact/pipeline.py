@@ -228,10 +228,16 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
 def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
     if ctx.dataset is None:
         raise StageSkipped("needs the DOE data set, which is missing")
-    from .metamodel import write_fit_outputs
+    from .cli._fit import fit as fit_command
+    from .metamodel import load_models
 
-    ctx.models = write_fit_outputs(ctx.dataset, ctx.study, ctx.folder / "metamodel")
-    return "models of B_r, B_z, f_r, f_z fitted"
+    folder = ctx.folder / "metamodel"
+    # the fit stage's own writer (models, metamodels.md, figures), fed the run's files
+    fit_command(study=str(ctx.folder / "study.toml"), out=folder, data=ctx.folder / "doe" /
+                "doe.nc", generations=None, H_mm=None, G_kpa=None)
+    ctx.models = load_models(folder)
+    return (f"models of B_r, B_z, f_r, f_z ({ctx.study.metamodel.generations} GP generations, "
+            f"B model: {ctx.study.metamodel.b_model})")
 
 
 def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
