@@ -274,6 +274,8 @@ def test_fit_pipeline_small(tmp_path):
     res = fit_models(ds, STUDY, settings=cfg)
     ms = res.model_set()
     assert set(res.reports) == {"B_r", "B_z", "f_r", "f_z"}
+    assert {k: r.transform for k, r in res.reports.items()} == {
+        "B_r": "odd_log", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
     for k, rep in res.reports.items():
         assert rep.test.n_points == 4 * ds.sizes["t"]
         assert rep.test.r2 > 0.99, (k, rep.test)
@@ -391,3 +393,16 @@ def test_seed_search_keeps_best_training_fit(monkeypatch):
                     .reports["f_z"].train.max_abs_err_over_range)
     assert rep.seed == int(np.argmin(errs))
     assert rep.train.max_abs_err_over_range == min(errs)
+
+
+def test_transform_fallbacks_when_signs_change():
+    ds = synthetic_doe(STUDY, n_t=6)
+    ds["B_r"] = ds["B_r"] * (ds["t"] - 0.5)  # B_r / X changes sign: no odd-log
+    ds["B_z"] = ds["B_z"] - ds["B_z"].mean()  # B_z changes sign: no log
+    cfg = replace(STUDY.metamodel, generations=2, population=20, operators="rational")
+    res = fit_models(ds, STUDY, settings=cfg, names=("B_r", "B_z"))
+    assert res.reports["B_r"].transform == "anchor_x"
+    assert res.reports["B_z"].transform == "identity"
+    t = np.linspace(0, 1, 5)
+    assert np.all(np.abs(res.models["B_r"].value(t, 0.0, 5e-3)) <= 1e-12 * float(
+        np.abs(ds["B_r"]).max()))

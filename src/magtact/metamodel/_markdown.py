@@ -11,6 +11,7 @@ from ._parse import format_expression
 
 _UNITS = {"B_r": "T", "B_z": "T", "f_r": "N/Pa", "f_z": "N/Pa"}
 _WHY = {
+    "odd_log": "s X exp(g(X, Z)): odd in X, zero on the axis, relative errors",
     "anchor_x": "g(X, Z) − g(0, Z): zero on the axis (symmetry)",
     "log": "exp(g(X, Z)): positive, relative errors",
     "identity": "g",
@@ -53,7 +54,7 @@ def write_markdown(result: FitResult, path: str | Path, *, title: str = "Metamod
         lines += ["## Sensitivity check", "",
                   "Γ of the models against Γ from finite differences of the DOE data "
                   f"(t ≥ {next(iter(gamma_check.values()))['t_min']}); relative difference:", "",
-                  "| | points | median | 95th percentile | max | points |",
+                  "| | where | median | 95th percentile | max | points |",
                   "|---|---|---|---|---|---|"]
         for k, v in gamma_check.items():
             for sfx, label in (("", "all"), ("_interior", "central differences only")):
