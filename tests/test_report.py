@@ -110,3 +110,14 @@ def test_run_records_ok_failed_and_skipped_stages(tmp_path, monkeypatch):
     text = result.report.read_text(encoding="utf-8")
     assert "solver diverged at t = 0.4" in text and "needs the metamodels" in text
     assert text.count("<img ") == 1
+
+
+def test_markdown_headings_tables_code_and_math():
+    from magtact.report._html import _markdown
+
+    html = _markdown("# Title\n\nsome `x<1` text\ncontinued\n\n| a | b |\n|---|---|\n| 1 | 2 |\n"
+                     "\n$$\nB = t^2\n$$\n```\ncode & more\n```\n")
+    assert "<h3>Title</h3>" in html
+    assert "<p>some <code>x&lt;1</code> text continued</p>" in html
+    assert "<table><tr><th>a</th><th>b</th></tr><tr><td>1</td><td>2</td></tr></table>" in html
+    assert "<pre>B = t^2</pre>" in html and "<pre>code &amp; more</pre>" in html

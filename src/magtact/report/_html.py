@@ -36,6 +36,8 @@ STAGES: tuple[tuple[str, str, str], ...] = (
     ("validation", "Validation against experiments",
      "Mean ± standard deviation of repeat indentation tests against the model; c_v and ε."),
 )
+#: JSON files of a stage folder that are not shown as data.
+SKIP_JSON = ("captions.json", "chosen.json")
 #: Rows of a CSV table shown in the report (the file has them all).
 MAX_ROWS = 30
 
@@ -173,22 +175,29 @@ def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> 
                    "with noise, drift and sensor-to-sensor scatter; not a measurement.</div>")
     captions = _load_json(folder / "captions.json") or {}
     files = sorted(p for p in folder.iterdir() if p.is_file())
-    for p in files:
-        if p.suffix == ".json" and p.name not in ("captions.json", "chosen.json"):
+    summaries = [p for p in files if p.suffix == ".json" and p.name not in SKIP_JSON]
+    for p in summaries:  # a stage's summary (a JSON with a title) comes first
+        if isinstance(_load_json(p), dict) and "title" in _load_json(p):
             out.append(_json_summary(p))
     for p in files:
         if p.suffix == ".png":
             out.append(_figure(p, captions.get(p.stem)))
     for p in files:
+        if p.suffix == ".md":
+            out.append(_markdown(p.read_text(encoding="utf-8", errors="replace")))
+    for p in files:
         if p.suffix == ".csv":
             out.append(_csv_table(p, captions.get(p.stem)))
     for p in files:
-        if p.suffix in (".txt", ".tex", ".md"):
+        if p.suffix in (".txt", ".tex"):
             text = p.read_text(encoding="utf-8", errors="replace")
-            out.append(f"<details open><summary>{_e(p.name)}</summary><pre>{_e(text)}</pre>"
+            out.append(f"<details><summary>{_e(p.name)}</summary><pre>{_e(text)}</pre>"
                        "</details>")
+    for p in summaries:  # other JSON files (model files, ...): collapsed
+        if not (isinstance(_load_json(p), dict) and "title" in _load_json(p)):
+            out.append(f"<details><summary>{_e(p.name)}</summary>{_json_summary(p)}</details>")
     others = [p.name for p in files if p.suffix not in (".png", ".csv", ".txt", ".tex", ".md",
-                                                        ".json")]
+                                                        ".json", ".svg")]
     if others:
         out.append(f"<p>Other files: {_e(', '.join(others))}.</p>")
     return "\n".join(out)
@@ -231,6 +240,50 @@ def _figure(path: Path, caption: str | None) -> str:
     cap = caption or path.stem.replace("_", " ")
     return (f'<figure><img src="data:image/png;base64,{data}" alt="{_e(cap)}">'
             f"<figcaption>{_e(cap)} <small>({_e(path.name)})</small></figcaption></figure>")
+
+
+def _markdown(text: str) -> str:
+    """Minimal Markdown → HTML: headings, pipe tables, fenced code, $$ blocks, paragraphs."""
+    out, lines, k = [], text.splitlines(), 0
+    while k < len(lines):
+        line = lines[k]
+        if line.startswith("```") or line.strip() == "$$":
+            end = "```" if line.startswith("```") else "$$"
+            j = k + 1
+            while j < len(lines) and not lines[j].startswith(end):
+                j += 1
+            out.append(f"<pre>{_e(chr(10).join(lines[k + 1:j]))}</pre>")
+            k = j + 1
+        elif line.startswith("#"):
+            level = min(len(line) - len(line.lstrip("#")) + 2, 6)
+            out.append(f"<h{level}>{_inline(line.lstrip('#').strip())}</h{level}>")
+            k += 1
+        elif line.startswith("|"):
+            rows = []
+            while k < len(lines) and lines[k].startswith("|"):
+                cells = [c.strip() for c in lines[k].strip().strip("|").split("|")]
+                if not all(set(c) <= set("-: ") for c in cells):
+                    tag = "th" if not rows else "td"
+                    rows.append("<tr>" + "".join(f"<{tag}>{_inline(c)}</{tag}>" for c in cells)
+                                + "</tr>")
+                k += 1
+            out.append("<table>" + "".join(rows) + "</table>")
+        elif line.strip():
+            j = k
+            while j < len(lines) and lines[j].strip() and not lines[j].startswith(
+                    ("#", "|", "```", "$$")):
+                j += 1
+            out.append(f"<p>{_inline(' '.join(lines[k:j]))}</p>")
+            k = j
+        else:
+            k += 1
+    return "\n".join(out)
+
+
+def _inline(text: str) -> str:
+    """Escape, then turn `code` spans into <code>."""
+    parts = _e(text).split("`")
+    return "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
 
 
 def _csv_table(path: Path, caption: str | None) -> str:
