@@ -27,31 +27,17 @@ def fit(
 ) -> None:
     """Fit B_r, B_z, F_r/G, F_z/G; write model JSON files, metamodels.md and figures."""
     from ..doe import load_bundled, load_dataset
-    from ..metamodel import fit_models, save_models
-    from ..metamodel._fit import _table, holdout_mask
-    from ..metamodel._markdown import write_markdown
-    from ..report._fig_metamodel import fig_force_map, fig_gamma, fig_parity
-    from ..sensitivity import compare_with_data
+    from ..metamodel import write_fit_outputs
     from ..study import to_si
 
     s = get_study(study)
     if generations is not None:
         s = replace(s, metamodel=replace(s.metamodel, generations=generations))
-    H = to_si(H_mm, "mm") if H_mm is not None else s.design.H_original
-    G = to_si(G_kpa, "kPa") if G_kpa is not None else s.design.G_original
+    H = to_si(H_mm, "mm") if H_mm is not None else None
+    G = to_si(G_kpa, "kPa") if G_kpa is not None else None
     ds = load_dataset(data) if data is not None else load_bundled()
-    folder = out_dir(out)
-    result = fit_models(ds, s, log=lambda msg: console.print(msg, highlight=False))
-    models = result.model_set(s)
-    files = save_models(models, folder)
-    check = compare_with_data(models, ds)
-    write_markdown(result, folder / "metamodels.md", title=f"Metamodels: {s.name}",
-                   gamma_check=check, exact_B=s.metamodel.b_model == "exact")
-    table, _, _ = _table(ds)
-    test = holdout_mask(table, result.holdout)
-    figs = fig_force_map(models, s, H, G, folder / "force_map")
-    figs += fig_gamma(models, s, H, G, folder / "gamma")
-    figs += fig_parity(models, table, test, folder / "parity")
+    result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
+                                      log=lambda msg: console.print(msg, highlight=False))
     tab = Table(title="held-out accuracy")
     for col in ("model", "R²", "max err / range", "max rel err", "time [s]"):
         tab.add_column(col)
@@ -60,5 +46,4 @@ def fit(
         tab.add_row(k, *(f"{v:.4g}" for v in (te.r2, te.max_abs_err_over_range, te.max_rel_err))
                     if te else ("–",) * 3, f"{r.fit_time_s:.1f}")
     console.print(tab)
-    console.print(f"wrote {len(files)} model files, metamodels.md and {len(figs)} figure files "
-                  f"to {folder}")
+    console.print(f"wrote {len(files)} files (models, metamodels.md, figures) to {out}")

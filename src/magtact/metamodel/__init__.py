@@ -16,6 +16,7 @@ from ._fit import (
 )
 from ._io import load_model, load_models, model_from_dict, model_to_dict, save_model, save_models
 from ._model import RESPONSES, Metamodel, ModelSet
+from ._outputs import write_fit_outputs
 from ._parse import format_expression, parse_expression
 from ._regressor import OPERATOR_SETS, SymbolicRegressor
 from ._symbols import H, p, q, t, theta
@@ -25,5 +26,5 @@ __all__ = [
     "FitReport", "FitResult", "H", "Metamodel", "ModelSet", "SymbolicRegressor", "accuracy",
     "data_hash", "fit_models", "fit_response", "format_expression", "hall_features",
     "holdout_paths", "load_model", "load_models", "model_from_dict", "model_to_dict", "p",
-    "parse_expression", "q", "save_model", "save_models", "t", "theta",
+    "parse_expression", "q", "save_model", "save_models", "t", "theta", "write_fit_outputs",
 ]
