@@ -103,7 +103,19 @@ class Responses:
     - ``hess(name, t, theta)`` → shape S + (2, 2),
 
     for ``name`` in ``"f_r", "f_z"`` [N/Pa] and ``"gamma_r", "gamma_z"`` [N/(T·Pa)]. Multiply by
-    G [Pa] for F [N] and Γ [N/T]; G does not change where the extrema are.
+    G [Pa] for F [N] and Γ [N/T]; G does not change where the extrema are. ``H`` may also be an
+    array broadcasting against ``t`` and ``theta`` (many designs in one call).
+
+    Derivatives are exact: those of f come from the symbolic models; those of γ from the
+    symbolic first to third derivatives of f and B w.r.t. the features (p, q) by the chain rule
+    (see the module notes), so they are finite at t = 0. γ = |∂f/∂B| is not differentiable
+    where both components of ∂f/∂B vanish (γ = 0), as any norm.
+
+    Examples
+    --------
+    >>> r = Responses(models).at(4e-3)                       # doctest: +SKIP
+    >>> Gamma_r = 20e3 * r.value("gamma_r", t, theta)         # doctest: +SKIP
+    >>> g, h = r.grad("f_r", t, theta), r.hess("f_r", t, theta)  # doctest: +SKIP
     """
 
     def __init__(self, models: ModelSet):
