@@ -41,12 +41,10 @@ GRID = (2001, 401)
 
 
 def load_models(folder: str | None, study):
-    from magtact.metamodel import ExactField, fit_models, load_models
+    from magtact.metamodel import fit_models, load_models
 
     if folder:
-        B = ((ExactField(study, "B_r"), ExactField(study, "B_z"))
-             if study.metamodel.b_model == "exact" else None)
-        return load_models(folder, B_model=B), f"metamodel files in {folder}"
+        return load_models(folder), f"metamodel files in {folder}"
     from magtact.doe import load_bundled
 
     return fit_models(load_bundled(), study).model_set(study), "fitted to the bundled DOE"

@@ -42,14 +42,12 @@ def parse_design(text: str, what: str) -> tuple[float, float]:
 
 
 def study_models(study: Study, models: Path | None):
-    """The metamodels: from ``models`` if given (B from the exact field when the study says
-    ``b_model = "exact"``), else fitted to the bundled DOE data set."""
-    from ..metamodel import ExactField, fit_models, load_models
+    """The metamodels: from ``models`` (a ``magtact fit`` output folder) if given, else fitted
+    to the bundled DOE data set."""
+    from ..metamodel import fit_models, load_models
 
     if models is not None:
-        exact = study.metamodel.b_model == "exact"
-        return load_models(models, B_model=(ExactField(study, "B_r"), ExactField(study, "B_z"))
-                           if exact else None)
+        return load_models(models)
     from ..doe import load_bundled
 
     console.print("fitting metamodels to the bundled DOE data set (give --models DIR to reuse "

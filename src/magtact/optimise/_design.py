@@ -33,7 +33,7 @@ def as_responses(models: Responses | ModelSet) -> Responses:
 
 def _at(responses: Responses, H) -> ResponsesAtH:
     """Responses at height(s) H; an array H broadcasts against (t, θ)."""
-    return ResponsesAtH(responses.models, H)
+    return responses.at(H)
 
 
 @dataclass(frozen=True)
