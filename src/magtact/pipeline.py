@@ -228,16 +228,15 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
 def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
     if ctx.dataset is None:
         raise StageSkipped("needs the DOE data set, which is missing")
-    from .cli._fit import fit as fit_command
-    from .metamodel import load_models
+    from .metamodel import write_fit_outputs
 
-    folder = ctx.folder / "metamodel"
-    # the fit stage's own writer (models, metamodels.md, figures), fed the run's files
-    fit_command(study=str(ctx.folder / "study.toml"), out=folder, data=ctx.folder / "doe" /
-                "doe.nc", generations=None, H_mm=None, G_kpa=None)
-    ctx.models = load_models(folder)
-    return (f"models of B_r, B_z, f_r, f_z ({ctx.study.metamodel.generations} GP generations, "
-            f"B model: {ctx.study.metamodel.b_model})")
+    result, files = write_fit_outputs(ctx.study, ctx.dataset, ctx.folder / "metamodel",
+                                      log=lambda m: ctx.log(f"      {m}"))
+    ctx.models = result.model_set(ctx.study)
+    worst = max((r.test.max_rel_err for r in result.reports.values() if r.test is not None),
+                default=float("nan"))
+    return (f"B_r, B_z, f_r, f_z ({ctx.study.metamodel.generations} GP generations, B model: "
+            f"{ctx.study.metamodel.b_model}); largest held-out relative error {worst:.3g}")
 
 
 def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
