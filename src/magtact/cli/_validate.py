@@ -32,7 +32,14 @@ def path_model(study: Study, H: float, G: float, theta: float, models_file: Path
         models = load_models(models_file,
                              B_model=exact if study.metamodel.b_model == "exact" else None)
         return PathModel.from_metamodels(models, study, H, G, theta)
-    return PathModel.from_simulation(study, H, G, theta, solver=solver, mesh=mesh)
+    from ..mechanics import PathFailed
+
+    try:
+        return PathModel.from_simulation(study, H, G, theta, solver=solver, mesh=mesh)
+    except PathFailed as exc:  # a user-fixable situation: say what to try
+        raise ValueError(f"the direct simulation of the design failed ({exc}); try another "
+                         "mesh (--mesh) or validate against fitted metamodels (--models DIR)"
+                         ) from None
 
 
 def print_table(validation) -> None:
