@@ -290,3 +290,15 @@ def test_validate_command_without_design_names_the_option(tmp_path):
     result = CliRunner().invoke(app, ["validate", *map(str, paths), "--out", str(tmp_path)])
     assert result.exit_code != 0
     assert "--H" in str(result.exception)
+
+
+def test_study_and_data_arguments_are_told_apart():
+    from pathlib import Path
+
+    from magtact.cli._validate import split_study_and_data
+
+    assert split_study_and_data(["magone", "a.csv"]) == ("magone", [Path("a.csv")])
+    assert split_study_and_data(["my.TOML", "a.csv", "b.csv"]) == ("my.TOML", [Path("a.csv"),
+                                                                             Path("b.csv")])
+    assert split_study_and_data(["a.csv"]) == (None, [Path("a.csv")])
+    assert split_study_and_data([]) == (None, [])
