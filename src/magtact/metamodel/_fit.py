@@ -47,6 +47,9 @@ TRANSFORMS = {"B_r": "odd_log", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_
 #: Max |error| / range on the training points that ends the seed search (40 % of the
 #: acceptance limits of issue 5 on held-out points: 1 % for B, 2 % for F).
 TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.008, "f_z": 0.008}
+#: Points with |B_r| below this fraction of max |B_r| are left out of the "odd_log" fit: next to
+#: the axis B_r / X is the ratio of two small numbers and carries the field solver's noise.
+ODD_LOG_FLOOR = 0.002
 #: Fraction of max |y| below which relative errors are not reported.
 REL_FLOOR = 0.05
 
@@ -298,7 +301,7 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     sign = 1.0
     if transform == "odd_log":
         # B_r / X keeps one sign (B_r is odd in X and vanishes only on the axis)
-        nz = cols[:, 0] != 0
+        nz = (cols[:, 0] != 0) & (np.abs(y) > ODD_LOG_FLOOR * np.max(np.abs(y)))
         ratio = y[nz] / cols[nz, 0]
         sign = float(np.sign(np.median(ratio)))
         if sign != 0 and np.all(sign * ratio > 0):
