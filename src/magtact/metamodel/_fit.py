@@ -297,7 +297,7 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     else:
         feats = {"p": p, "q": q, "h": H * 1000}
         cols = np.column_stack([pv, qv, table["H"] * 1000])
-    train = ~test_mask
+    train = fit_on = ~test_mask  # accuracy on all training points; the GP sees fit_on
     sign = 1.0
     if transform == "odd_log":
         # B_r / X keeps one sign (B_r is odd in X and vanishes only on the axis)
@@ -307,7 +307,7 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
         if sign != 0 and np.all(sign * ratio > 0):
             target = np.zeros_like(y)
             target[nz] = np.log(sign * ratio)
-            train = train & nz
+            fit_on = train & nz
         else:
             transform = "anchor_x"
     if transform != "odd_log":
@@ -321,7 +321,7 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
             max_length=cfg.max_length, operators=cfg.operators,
             local_iterations=cfg.local_iterations, n_threads=cfg.threads, random_state=seed,
             feature_names=list(feats),
-        ).fit(cols[train], target[train])
+        ).fit(cols[fit_on], target[fit_on])
         expr = _model_expr(name, reg.expression_, reg.symbols_, feats, transform, sign)
         model = Metamodel.from_expr(name, expr, RESPONSES[name])
         reason = _guard(model, study, float(np.max(np.abs(y))))
@@ -345,7 +345,7 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     _, seed, model, y_hat = best
     report = FitReport(
         name=name, transform=transform, features=tuple(feats), seed=seed, tries=k + 1,
-        fit_time_s=elapsed, n_train=int(train.sum()),
+        fit_time_s=elapsed, n_train=int(fit_on.sum()),
         train=accuracy(y[train], y_hat[train]),
         test=accuracy(y[test_mask], y_hat[test_mask]) if test_mask.any() else None,
         rejected=tuple(rejected),
