@@ -406,3 +406,33 @@ def test_transform_fallbacks_when_signs_change():
     t = np.linspace(0, 1, 5)
     assert np.all(np.abs(res.models["B_r"].value(t, 0.0, 5e-3)) <= 1e-12 * float(
         np.abs(ds["B_r"]).max()))
+
+
+def test_more_bad_inputs(tmp_path):
+    import magtact.metamodel._fit as fitmod
+
+    with pytest.raises(ValueError, match="must be a string"):
+        parse_expression(3.0)
+    with pytest.raises(ValueError, match="longer than 200000 characters"):
+        parse_expression("t+" * 100_001 + "t")
+    with pytest.raises(ValueError, match="cannot write a non-finite constant"):
+        format_expression(sp.Float("inf") * ts)
+    with pytest.raises(ValueError, match="jet order must be 0..3"):
+        ExactField(STUDY, "B_r").jet(0.1, 0.1, 4e-3, 4)
+    with pytest.raises(ValueError, match="not affine in H"):
+        fitmod._affine_in_H(lambda h: h**2, STUDY)
+    with pytest.raises(ValueError, match="leaves no training path"):
+        holdout_paths([0.0, 0.1], [3e-3, 4e-3], 4)
+    res = fitmod.FitResult(models={"B_r": known_set().B_r}, reports={}, data_hash="",
+                           holdout=())
+    with pytest.raises(ValueError, match=r"pass the study"):
+        res.model_set()
+    with pytest.raises(ValueError, match=r"no model for \['f_r', 'f_z'\]"):
+        fitmod.FitResult(models={}, reports={}, data_hash="", holdout=()).model_set(STUDY)
+    save_models(ModelSet(B_r=ExactField(STUDY, "B_r"), B_z=ExactField(STUDY, "B_z"),
+                         f_r=known_set().f_r, f_z=known_set().f_z), tmp_path)
+    data = json.loads((tmp_path / "B_r.json").read_text())
+    data["study_toml"] = "[magnet\nR_m_mm = "
+    (tmp_path / "B_r.json").write_text(json.dumps(data))
+    with pytest.raises(ValueError, match="exact-field file without a valid study"):
+        load_models(tmp_path)

@@ -14,7 +14,6 @@ reads back to the same double, so ``parse_expression(format_expression(e)) == e`
 from __future__ import annotations
 
 import io
-import math
 import token
 import tokenize
 
@@ -115,12 +114,17 @@ class _ExactPrinter(StrPrinter):
     """String printer writing each Float as the shortest decimal of its double (exact)."""
 
     def _print_Float(self, expr):
-        value = float(expr)
-        if not math.isfinite(value):
-            raise ValueError(f"cannot write a non-finite constant {value}")
-        return repr(value)
+        return repr(float(expr))
 
 
 def format_expression(expr: sp.Expr) -> str:
-    """Text of ``expr`` that :func:`parse_expression` reads back exactly."""
+    """Text of ``expr`` that :func:`parse_expression` reads back exactly.
+
+    Raises
+    ------
+    ValueError
+        If ``expr`` contains an infinite or undefined constant.
+    """
+    if expr.has(sp.oo, -sp.oo, sp.zoo, sp.nan):
+        raise ValueError(f"cannot write a non-finite constant in {expr}")
     return _ExactPrinter(dict(order=None)).doprint(expr)
