@@ -28,11 +28,15 @@ from ._path import magnet_span
 
 #: Named mesh densities. ``m``: cells along a quarter of the half circle (the half circle has
 #: 4 m segments); ``radial``: cells between the core and R_m, R_m and R − R_h, R − R_h and R;
-#: ``h_z``: largest cell height [m] in z; ``n_corner``: cells across the rounded edge in z.
+#: ``h_z``: mean cell height [m] in z; ``n_corner``: cells across the rounded edge in z.
+#: Grading: ``progression`` (gmsh) of the cells from the core to the magnet's edge, ``bump``
+#: (gmsh, < 1 refines both ends) from the magnet's edge to the body's side, ``z_grading`` ∈ [0, 1]
+#: towards the base, the magnet's faces and the top (:func:`_graded`).
+_GRADING = {"progression": 0.9, "bump": 0.6, "z_grading": 0.3}
 DENSITIES: dict[str, dict] = {
-    "coarse": {"m": 3, "radial": (2, 3, 2), "h_z": 1.2e-3, "n_corner": 2},
-    "default": {"m": 5, "radial": (3, 5, 3), "h_z": 0.75e-3, "n_corner": 3},
-    "fine": {"m": 10, "radial": (6, 10, 6), "h_z": 0.375e-3, "n_corner": 6},
+    "coarse": {"m": 3, "radial": (2, 3, 2), "h_z": 1.2e-3, "n_corner": 2} | _GRADING,
+    "default": {"m": 5, "radial": (3, 5, 3), "h_z": 0.75e-3, "n_corner": 3} | _GRADING,
+    "fine": {"m": 10, "radial": (6, 10, 6), "h_z": 0.375e-3, "n_corner": 6} | _GRADING,
 }
 
 
@@ -158,7 +162,7 @@ def half_cylinder_mesh(
     radii = [r1, R - R_h, R] if R_h > 0 else [r1, R]
     n_radial = list(dens["radial"]) if R_h > 0 else [dens["radial"][0], sum(dens["radial"][1:])]
 
-    xy, quads = _half_disc(radii, n_radial, dens["m"])
+    xy, quads = _half_disc(radii, n_radial, dens)
     z_levels = _z_levels(height, R_h, cavity, dens)
     points, cells = _extrude(xy, quads, z_levels)
 
@@ -205,13 +209,15 @@ def half_cylinder_mesh(
                     surface=surface, z_top=float(height), name=density)
 
 
-def _half_disc(radii: list[float], n_radial: list[int], m: int) -> tuple[np.ndarray, np.ndarray]:
+def _half_disc(radii: list[float], n_radial: list[int],
+               dens: dict) -> tuple[np.ndarray, np.ndarray]:
     """Quadrilateral O-grid of the half disc y ≥ 0 by gmsh transfinite blocks.
 
     Returns the node coordinates (n, 2) [m] and the quads (n_quads, 4), counter-clockwise.
     """
     import gmsh
 
+    m = dens["m"]
     a = 0.45 * radii[0]  # half width of the core square
     angles = (0.0, 0.25 * math.pi, 0.75 * math.pi, math.pi)
     n_arc = (m, 2 * m, m)
@@ -246,9 +252,11 @@ def _half_disc(radii: list[float], n_radial: list[int], m: int) -> tuple[np.ndar
                 # ring 1 (core → magnet edge) graded towards the magnet edge, the others
                 # towards both ends (the magnet edge, the body corners)
                 if j == 1:
-                    geo.mesh.setTransfiniteCurve(line, n_radial[0] + 1, "Progression", 0.85)
+                    geo.mesh.setTransfiniteCurve(line, n_radial[0] + 1, "Progression",
+                                                 dens["progression"])
                 else:
-                    geo.mesh.setTransfiniteCurve(line, n_radial[j - 1] + 1, "Bump", 0.5)
+                    geo.mesh.setTransfiniteCurve(line, n_radial[j - 1] + 1, "Bump",
+                                                 dens["bump"])
             for q in range(3):
                 loop = geo.addCurveLoop([radial[q], along[j][q], -radial[q + 1], -along[j - 1][q]])
                 s = geo.addPlaneSurface([loop])
@@ -281,15 +289,11 @@ def _half_disc(radii: list[float], n_radial: list[int], m: int) -> tuple[np.ndar
     return xy, quads
 
 
-def _graded(a: float, b: float, n: int, ends: str) -> np.ndarray:
-    """n + 1 levels from a to b, refined towards ``ends`` ("both", "low", "high", "none")."""
+def _graded(a: float, b: float, n: int, weight: float) -> np.ndarray:
+    """n + 1 levels from a to b, refined towards both ends: a blend with weight ``weight`` ∈ [0, 1]
+    of uniform and cosine (Chebyshev) spacing."""
     s = np.linspace(0.0, 1.0, n + 1)
-    if ends == "both":
-        s = 0.5 * s + 0.5 * 0.5 * (1 - np.cos(np.pi * s))
-    elif ends == "low":
-        s = 0.5 * s + 0.5 * (1 - np.cos(0.5 * np.pi * s))
-    elif ends == "high":
-        s = 0.5 * s + 0.5 * np.sin(0.5 * np.pi * s)
+    s = (1 - weight) * s + weight * 0.5 * (1 - np.cos(np.pi * s))
     return a + (b - a) * s
 
 
@@ -306,10 +310,10 @@ def _z_levels(height: float, R_h: float, cavity, dens: dict) -> np.ndarray:
         if R_h > 0 and hi >= height - 1e-9 * height and lo >= height - R_h - 1e-9 * height:
             n = dens["n_corner"] if math.isclose(hi - lo, R_h) else max(1, round(
                 dens["n_corner"] * (hi - lo) / R_h))
-            levels.append(_graded(lo, hi, n, "none")[1:])
+            levels.append(_graded(lo, hi, n, 0.0)[1:])
         else:
             n = max(2, math.ceil((hi - lo) / dens["h_z"]))
-            levels.append(_graded(lo, hi, n, "both")[1:])
+            levels.append(_graded(lo, hi, n, dens["z_grading"])[1:])
     return np.concatenate(levels)
 
 

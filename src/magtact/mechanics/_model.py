@@ -106,8 +106,9 @@ class Stepping:
     iterations do not lower the best residual. ``refresh``: a new Jacobian is assembled and
     factorised when an iteration reduces the residual norm by less than this factor, else the
     last factorisation is reused; 0 (default) assembles one in every iteration (full Newton,
-    the fastest for frictional contact here). ``tol``: ‖r_free‖ / ‖r_prescribed‖ at
-    convergence.
+    the fastest for frictional contact here). ``line_search``: halvings of a Newton update whose
+    residual is not finite. ``tol``: ‖r_free‖ / ‖r_prescribed‖
+    at convergence.
     """
 
     dt_initial: float = 0.05
@@ -119,6 +120,7 @@ class Stepping:
     cutback: float = 0.5
     tol: float = 1e-8
     refresh: float = 0.0
+    line_search: int = 4
 
 
 class _Timed:
@@ -177,7 +179,7 @@ class HalfBodyModel:
     """
 
     def __init__(self, bmesh: BodyMesh, G: float, bulk_ratio: float, mu_f: float, *,
-                 base: str = "clamped", penalty: float = 5.0, elastic_slip: float = 2e-5,
+                 base: str = "clamped", penalty: float = 5.0, elastic_slip: float = 5e-5,
                  solver: str = "pardiso", threads: int = 1):
         if base not in ("clamped", "sliding"):
             raise ValueError(f"base must be 'clamped' or 'sliding', got {base!r}")
@@ -287,6 +289,35 @@ class HalfBodyModel:
         """Contact flags of the last evaluation, both plates, shape (2 n_surface,)."""
         return np.concatenate([c.results.active for c in self.contacts])
 
+    def _norm(self, f: np.ndarray) -> float:
+        """Convergence measure ‖r_free‖ / (‖r_prescribed‖ + ε), ε ∝ G: G-invariant."""
+        return float(np.linalg.norm(f[self.dof1]) / (np.linalg.norm(f[self.dof0]) + self._eps))
+
+    def _line_search(self, u: np.ndarray, du: np.ndarray,
+                     halvings: int) -> tuple[np.ndarray, float]:
+        """Residual after the update u += du (already applied), backtracking u ← u − α du with
+        α = 1/2, 1/4, … while the residual is not finite (cells turned inside out). A larger
+        residual is accepted: with contact it may grow before Newton's method converges.
+
+        Raises
+        ------
+        NewtonFailed
+            If the residual is still not finite after ``halvings`` halvings.
+        """
+        f = self._residual()
+        fnorm = self._norm(f)
+        alpha = 1.0
+        for _ in range(halvings):
+            if np.isfinite(fnorm):
+                break
+            alpha /= 2
+            u -= alpha * du
+            f = self._residual()
+            fnorm = self._norm(f)
+        if not np.isfinite(fnorm):
+            raise NewtonFailed("non-finite residual (inverted cells?)")
+        return f, fnorm
+
     def _newton(self, u_r: float, u_z: float, st: Stepping) -> int:
         """One load step to the magnet displacement (u_r, u_z) [m]; returns its Jacobians.
 
@@ -316,11 +347,8 @@ class HalfBodyModel:
             du[self.dof1] = self._linear.solve(-f[self.dof1] - self._K10 @ du[self.dof0])
             self.timings["solve"] += time.perf_counter() - t0
             u += du
-            f = self._residual()
+            f, fnorm = self._line_search(u, du, st.line_search)
             self.iterations += 1
-            fnorm = np.linalg.norm(f[self.dof1]) / (np.linalg.norm(f[self.dof0]) + self._eps)
-            if not np.isfinite(fnorm):
-                raise NewtonFailed("non-finite residual (inverted cells?)")
             if fnorm < st.tol:
                 for item in self.items:
                     item.results.update_statevars()

@@ -124,7 +124,7 @@ class Mechanics:
                            doc="threads of the PARDISO solver (0: library default)")
     contact_penalty: float = setting(5.0, positive=True,
                                      doc="contact penalty relative to the solid's nodal stiffness")
-    elastic_slip: float = setting(2e-5, "mm", positive=True,
+    elastic_slip: float = setting(5e-5, "mm", positive=True,
                                   doc="allowable elastic slip of sticking contact points")
     dt_initial: float = setting(0.05, positive=True, doc="first load step (in units of t)")
     dt_min: float = setting(1e-4, positive=True, doc="smallest load step before a path fails")
