@@ -178,3 +178,33 @@ def test_simulate_path_bad_inputs(study, kwargs, message):
     H, theta = args.pop("H"), args.pop("theta")
     with pytest.raises(ValueError, match=message):
         simulate_path(study, H, theta, mesh="coarse", **args)
+
+
+def test_model_bad_inputs(study, tmp_path):
+    from magtact.mechanics import write_vtu
+
+    mesh = body_mesh(study, 3e-3, "coarse")
+    with pytest.raises(ValueError, match="base must be 'clamped' or 'sliding'"):
+        HalfBodyModel(mesh, 1e4, 5000.0, 0.45, base="glued")
+    with pytest.raises(ValueError, match="unknown linear solver 'mumps'"):
+        HalfBodyModel(mesh, 1e4, 5000.0, 0.45, solver="mumps")
+    model = HalfBodyModel(mesh, 1e4, 5000.0, 0.45)
+    with pytest.raises(ValueError, match="t levels must be increasing"):
+        model.solve_path(lambda t: (0.0, 0.0), [0.5, 0.2])
+    with pytest.raises(ValueError, match="displacement must have shape"):
+        write_vtu(tmp_path / "x.vtu", mesh, np.zeros((3, 3)))
+
+
+def test_vtu_round_trip(study, tmp_path):
+    import meshio
+
+    from magtact.mechanics import write_vtu
+
+    mesh = body_mesh(study, 3e-3, "coarse")
+    u = np.zeros_like(mesh.points)
+    u[:, 0] = 1e-4
+    path = write_vtu(tmp_path / "sub" / "body.vtu", mesh, u)
+    back = meshio.read(path)
+    np.testing.assert_allclose(back.points, mesh.points + u)
+    np.testing.assert_allclose(back.point_data["displacement_magnitude"], 1e-4)
+    np.testing.assert_array_equal(back.cells_dict["hexahedron"], mesh.cells)
