@@ -81,8 +81,24 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
 
     Notes
     -----
-    The half model carries the forces of y ≥ 0; by symmetry about y = 0 the full body's
-    F_r, F_z are twice those, and its F_y vanishes.
+    Model (:class:`~magtact.mechanics.HalfBodyModel`): hexahedral half body y ≥ 0
+    (:func:`~magtact.geometry.body_mesh`), nearly incompressible neo-Hookean solid
+    W = G/2 (J^(-2/3) I_1 − 3) + K/2 (J̄ − 1)², K = bulk_ratio · G (FElupe Q1/P0); base fixed;
+    magnet cavity prescribed to (u_r, 0, u_z); u_y = 0 on y = 0; upper plate moving by
+    (u_r, 0, u_z) and lower plate z = 0 in penalty contact with every free surface node,
+    Coulomb friction μ_f with an elastic slip of ``mechanics.elastic_slip``.
+
+    Forces: the half model carries the forces of y ≥ 0; by symmetry about y = 0 the full
+    body's F_r, F_z are twice those, and its F_y vanishes. The reaction is read from the
+    residual of the converged step at the base DOFs plus the lower plate's centre point.
+
+    Solver: Newton's method with adaptive load steps (``mechanics.dt_*``), sparse direct
+    solves with PARDISO (``mechanics.solver = "pardiso"``: about 10× faster than SciPy's
+    SuperLU on the default mesh, see ``bench/results/mechanics_solver.json``).
+
+    G-scaling: the material, the penalty multipliers (relative to the solid's stiffness) and
+    the friction (elastic slip: tangential penalty ∝ normal force) are all proportional to G
+    and the loading is displacement-controlled, so every force is proportional to G.
     """
     G_out = study.material.G_ref if G is None else float(G)
     if not G_out > 0:
