@@ -13,26 +13,22 @@ from magtact.cli._app import app
 from magtact.study import load_study
 
 
-def fast_study(tmp_path):
+def fast_study(tmp_path, **sections):
     """The MagOne study with small metamodel and optimiser budgets (the DOE sections unchanged,
     so the bundled data set applies)."""
     s = load_study(None)
-    s = replace(s, metamodel=replace(s.metamodel, generations=8, population=60, retries=0,
-                                     holdout_paths=2),
+    s = replace(s, metamodel=replace(s.metamodel, generations=5, retries=0, holdout_paths=2),
                 optimise=replace(s.optimise, population=24, ga_generations=3,
-                                 nsga2_generations=10, grid_n=4, sweep_n=101))
+                                 nsga2_generations=10, grid_n=4, sweep_n=101), **sections)
     path = tmp_path / "fast.toml"
     path.write_text(s.to_toml(), encoding="utf-8")
     return path
 
 
-def test_run_end_to_end_on_bundled_data(tmp_path):
-    from magtact.doe import bundled_path
-
-    if not bundled_path().is_file():
-        pytest.skip("the bundled DOE data set is not built yet (python -m magtact.doe.bundle)")
+def check_run(tmp_path, study_file):
+    """Run the study; every stage ok, every figure embedded, report rebuilt from the folder."""
     out = tmp_path / "results"
-    result = CliRunner().invoke(app, ["run", str(fast_study(tmp_path)), "--out", str(out)])
+    result = CliRunner().invoke(app, ["run", str(study_file), "--out", str(out)])
     manifest = json.loads((out / "run.json").read_text())
     statuses = {s["key"]: (s["status"], s["message"]) for s in manifest["stages"]}
     assert all(st == "ok" for st, _ in statuses.values()), statuses
@@ -49,3 +45,24 @@ def test_run_end_to_end_on_bundled_data(tmp_path):
     (out / "report.html").unlink()
     assert CliRunner().invoke(app, ["report", str(out)]).exit_code == 0
     assert len(re.findall(r"<img ", (out / "report.html").read_text())) == len(pngs)
+
+
+def test_run_end_to_end_on_bundled_data(tmp_path):
+    from magtact.doe import bundled_path
+
+    if not bundled_path().is_file():
+        pytest.skip("the bundled DOE data set is not built yet (python -m magtact.doe.bundle)")
+    check_run(tmp_path, fast_study(tmp_path))
+
+
+def test_run_end_to_end_with_stand_in_doe(tmp_path, monkeypatch):
+    """Every stage after the DOE on an analytic stand-in data set (the chain, not the numbers):
+    its constraints are set so that the stand-in's forces can meet them."""
+    import magtact.doe
+    from magtact.study import Constraints
+    from test_metamodel_data import synthetic_doe
+
+    study_file = fast_study(tmp_path, constraints=Constraints(F_r_c=-0.05, F_z_c=1.0))
+    ds = synthetic_doe(load_study(study_file), n_t=6)
+    monkeypatch.setattr(magtact.doe, "load_bundled", lambda: ds)
+    check_run(tmp_path, study_file)
