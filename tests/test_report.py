@@ -121,3 +121,16 @@ def test_markdown_headings_tables_code_and_math():
     assert "<p>some <code>x&lt;1</code> text continued</p>" in html
     assert "<table><tr><th>a</th><th>b</th></tr><tr><td>1</td><td>2</td></tr></table>" in html
     assert "<pre>B = t^2</pre>" in html and "<pre>code &amp; more</pre>" in html
+
+
+def test_evidence_json_with_a_convergence_study_becomes_a_table(tmp_path):
+    folder = results_folder(tmp_path)
+    bench = tmp_path / "bench"
+    bench.mkdir()
+    (bench / "conv.json").write_text(json.dumps({
+        "study": "MagOne", "target": 0.02,
+        "refinement": [{"h_mm": 0.5, "err": 0.1}, {"h_mm": 0.25, "err": 0.03, "rate": 1.7}]}))
+    text = build_report(folder, evidence=bench).read_text(encoding="utf-8")
+    assert "No benchmark results" not in text
+    assert ("<tr><th>h_mm</th><th>err</th><th>rate</th></tr><tr><td>0.5</td><td>0.1</td>"
+            "<td></td></tr><tr><td>0.25</td><td>0.03</td><td>1.7</td></tr>") in text

@@ -316,6 +316,8 @@ def _json_summary(path: Path, level: int = 3) -> str:
         return f"<p>{_e(path.name)}: unreadable JSON</p>"
     title = data.get("title", path.stem) if isinstance(data, dict) else path.stem
     body = _dict_table(data) if isinstance(data, dict) else ""
+    if isinstance(data, dict):
+        body += "".join(_records_table(k, v) for k, v in _record_lists(data))
     raw = json.dumps(data, indent=1, ensure_ascii=False)
     if len(raw) > 20000:
         raw = raw[:20000] + "\n… (truncated; see the file)"
@@ -342,6 +344,28 @@ def _flatten(data: dict, prefix: str, depth: int):
                 yield name, f"[{len(v)} items]"
         elif not isinstance(v, dict):
             yield name, v
+
+
+def _record_lists(data: dict, prefix: str = "", depth: int = 0):
+    """(name, list) of every list of flat dicts (e.g. a convergence study) in ``data``."""
+    for k, v in data.items():
+        if isinstance(v, list) and v and all(
+                isinstance(x, dict) and all(not isinstance(y, (dict, list)) for y in x.values())
+                for x in v):
+            yield f"{prefix}{k}", v
+        elif isinstance(v, dict) and depth < 2:
+            yield from _record_lists(v, f"{prefix}{k}.", depth + 1)
+
+
+def _records_table(name: str, records: list[dict]) -> str:
+    """A list of flat dicts as one table (rows = records, columns = the union of keys)."""
+    keys = list(dict.fromkeys(k for r in records for k in r))
+    rows = "".join("<tr>" + "".join(f"<td>{_fmt(r.get(k, ''))}</td>" for k in keys) + "</tr>"
+                   for r in records[:MAX_ROWS])
+    more = f"<p><small>{len(records) - MAX_ROWS} more rows</small></p>" if len(
+        records) > MAX_ROWS else ""
+    return (f"<p><b>{_e(name)}</b></p><div style=\"overflow-x:auto\"><table><tr>"
+            + "".join(f"<th>{_e(k)}</th>" for k in keys) + f"</tr>{rows}</table></div>{more}")
 
 
 def _is_synthetic(folder: Path) -> bool:
