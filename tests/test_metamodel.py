@@ -275,7 +275,7 @@ def test_fit_pipeline_small(tmp_path):
     ms = res.model_set()
     assert set(res.reports) == {"B_r", "B_z", "f_r", "f_z"}
     assert {k: r.transform for k, r in res.reports.items()} == {
-        "B_r": "odd_log", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
+        "B_r": "odd_log", "B_z": "log", "f_r": "odd_q", "f_z": "anchor_0"}
     for k, rep in res.reports.items():
         assert rep.test.n_points == 4 * ds.sizes["t"]
         assert rep.test.r2 > 0.99, (k, rep.test)

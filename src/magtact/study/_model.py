@@ -148,16 +148,16 @@ class Constraints:
 class Metamodel:
     """Genetic-programming metamodels (SPEC section 5); fixed generations and seed: reproducible."""
 
-    generations: int = setting(60, integer=True, minimum=1, doc="GP generations per fit")
-    population: int = setting(400, integer=True, minimum=10, doc="GP population size")
-    max_length: int = setting(40, integer=True, minimum=3, doc="largest expression (tree nodes)")
+    generations: int = setting(100, integer=True, minimum=1, doc="GP generations per fit")
+    population: int = setting(600, integer=True, minimum=10, doc="GP population size")
+    max_length: int = setting(60, integer=True, minimum=3, doc="largest expression (tree nodes)")
     local_iterations: int = setting(5, integer=True, minimum=0,
                                     doc="Levenberg-Marquardt steps on the constants per evaluation")
     operators: str = setting("smooth", choices=("smooth", "rational"),
                              doc="'smooth': add, sub, mul, div, exp, log, sqrt, tanh; "
                                  "'rational': add, sub, mul, div")
     seed: int = setting(0, integer=True, minimum=0, doc="random seed of the first fit")
-    retries: int = setting(3, integer=True, minimum=0,
+    retries: int = setting(2, integer=True, minimum=0,
                            doc="refits with the next seeds when a model fails the guard rails")
     holdout_paths: int = setting(4, integer=True, minimum=0,
                                  doc="interior (theta, H) paths held out to measure accuracy")
