@@ -436,3 +436,22 @@ def test_more_bad_inputs(tmp_path):
     (tmp_path / "B_r.json").write_text(json.dumps(data))
     with pytest.raises(ValueError, match="exact-field file without a valid study"):
         load_models(tmp_path)
+
+
+def test_fallback_transform_when_odd_fits_fail_the_guard_rails(monkeypatch):
+    import magtact.metamodel._fit as fitmod
+
+    ds = synthetic_doe(STUDY, n_t=6)
+    real = fitmod.SymbolicRegressor.fit
+
+    def fake_fit(self, X, y):
+        real(self, X, y)
+        if np.all(X[:, 1] != 0):  # only the odd_q fit leaves out q = 0: give it a pole
+            self.expression_ = self.expression_ / (self.symbols_[0] - 0.5)
+        return self
+
+    monkeypatch.setattr(fitmod.SymbolicRegressor, "fit", fake_fit)
+    cfg = replace(STUDY.metamodel, generations=2, population=20, retries=1, operators="rational")
+    rep = fit_models(ds, STUDY, settings=cfg, names=("f_r",)).reports["f_r"]
+    assert rep.transform == "anchor_q" and rep.tries == 4  # 2 rejected + 2 below target
+    assert rep.rejected[0].startswith("odd_q, seed 0:") and len(rep.rejected) == 2

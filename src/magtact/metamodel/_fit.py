@@ -20,6 +20,11 @@ smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel.
 - **f_r = F_r / G** is odd in u_r (mirror symmetry), so f_r = q g(p, q, h), h = H in mm, with g
   fitted to f_r / q off θ = 0 ("odd_q"). F_r is nearly proportional to tan θ at fixed t, so g
   varies little with q and the fit is close to two-dimensional; it is exactly zero at θ = 0.
+
+The odd transforms are fitted off the axis, so nothing stops g from being singular on it; the
+guard rails catch that, and if no seed passes them the fit falls back to an anchored transform
+fitted on all points (``FALLBACK``): g(X, Z) − g(0, Z) for B_r, g(p, q, h) − g(p, 0, h) for f_r,
+both exactly zero on the axis. The transform used is recorded with each model.
 - **f_z = F_z / G** vanishes in the unloaded state: g(p, q, h) − g(0, 0, h).
 
 F is exactly proportional to G (SPEC section 3), so f is the mean of F / G over the G levels;
@@ -46,6 +51,9 @@ from ._symbols import H, p, q
 
 #: Transform of each response (see the module notes).
 TRANSFORMS = {"B_r": "odd_log", "B_z": "log", "f_r": "odd_q", "f_z": "anchor_0"}
+#: Transform used when the data do not suit the first one, or when none of its fits passes
+#: the guard rails (the odd transforms are fitted off the axis, where g may turn singular).
+FALLBACK = {"odd_log": "anchor_x", "odd_q": "anchor_q", "log": "identity"}
 #: Max |error| / range on the training points that ends the seed search (40 % of the
 #: acceptance limits of issue 5 on held-out points: 1 % for B, 2 % for F).
 TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.008, "f_z": 0.008}
@@ -206,6 +214,31 @@ def holdout_paths(theta_levels, H_levels, n: int, seed: int = 0) -> list[tuple[f
     return [(float(theta_levels[pairs[k][0]]), float(H_levels[pairs[k][1]])) for k in sorted(pick)]
 
 
+def _prepare(transform: str, y, cols, train):
+    """(target, points the GP sees, sign) for ``transform``; None if the data do not suit it."""
+    if transform == "odd_log":
+        # B_r / X keeps one sign (B_r is odd in X and vanishes only on the axis)
+        nz = (cols[:, 0] != 0) & (np.abs(y) > ODD_LOG_FLOOR * np.max(np.abs(y)))
+        ratio = y[nz] / cols[nz, 0]
+        sign = float(np.sign(np.median(ratio))) if ratio.size else 0.0
+        if sign == 0 or not np.all(sign * ratio > 0):
+            return None
+        target = np.zeros_like(y)
+        target[nz] = np.log(sign * ratio)
+        return target, train & nz, sign
+    if transform == "odd_q":
+        # f_r / q: F_r is odd in u_r, so f_r = q g(p, q, h) with g smooth (fitted off θ = 0)
+        nz = cols[:, 1] != 0
+        if not nz.any():
+            return None
+        target = np.zeros_like(y)
+        target[nz] = y[nz] / cols[nz, 1]
+        return target, train & nz, 1.0
+    if transform == "log":
+        return (np.log(y), train, 1.0) if np.all(y > 0) else None
+    return y, train, 1.0
+
+
 def holdout_mask(table: dict, holdout) -> np.ndarray:
     """Boolean mask of the table's points on the held-out (θ, H) paths."""
     test = np.zeros(np.shape(table["t"]), dtype=bool)
@@ -229,6 +262,8 @@ def _model_expr(name: str, g: sp.Expr, gsyms, feats: dict[str, sp.Expr], transfo
         return G_
     if transform == "anchor_x":
         return G_ - g.xreplace(sub | {gsyms[0]: sp.Integer(0)})
+    if transform == "anchor_q":
+        return G_ - G_.xreplace({q: sp.Integer(0)})
     if transform == "anchor_0":
         return G_ - G_.xreplace({q: sp.Integer(0), p: sp.Integer(0)})
     raise ValueError(f"unknown transform {transform!r} for {name}")
@@ -277,19 +312,19 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     Raises
     ------
     RuntimeError
-        If every try (seed, seed + 1, ...) fails the guard rails.
+        If every try (seed, seed + 1, ...) fails the guard rails, also with the fallback
+        transform.
 
     Notes
     -----
     Tries seeds ``seed, seed + 1, ...`` (at most ``retries + 1``) until a model passes the guard
     rails and reaches ``TRAIN_TARGET`` (max |error| / range on the *training* points; the held-out
-    points never steer the choice); keeps the best model that passed the guard rails.
+    points never steer the choice); keeps the best model that passed the guard rails. If none
+    passes, the same search runs with the transform's ``FALLBACK``.
     """
     cfg = settings or study.metamodel
     y = table[name]
     transform = TRANSFORMS[name]
-    if transform == "log" and not np.all(y > 0):
-        transform = "identity"
     pv, qv = table["t"], table["t"] * np.tan(table["theta"])
     if name.startswith("B"):
         X_, Z_ = hall_features(study)
@@ -299,61 +334,53 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     else:
         feats = {"p": p, "q": q, "h": H * 1000}
         cols = np.column_stack([pv, qv, table["H"] * 1000])
-    train = fit_on = ~test_mask  # accuracy on all training points; the GP sees fit_on
-    sign = 1.0
-    if transform == "odd_log":
-        # B_r / X keeps one sign (B_r is odd in X and vanishes only on the axis)
-        nz = (cols[:, 0] != 0) & (np.abs(y) > ODD_LOG_FLOOR * np.max(np.abs(y)))
-        ratio = y[nz] / cols[nz, 0]
-        sign = float(np.sign(np.median(ratio)))
-        if sign != 0 and np.all(sign * ratio > 0):
-            target = np.zeros_like(y)
-            target[nz] = np.log(sign * ratio)
-            fit_on = train & nz
-        else:
-            transform = "anchor_x"
-    if transform == "odd_q":
-        # f_r / q: F_r is odd in u_r, so f_r = q g(p, q, h) with g smooth (fitted off θ = 0)
-        nz = cols[:, 1] != 0
-        target = np.zeros_like(y)
-        target[nz] = y[nz] / cols[nz, 1]
-        fit_on = train & nz
-    elif transform != "odd_log":
-        target = np.log(y) if transform == "log" else y
-    rejected, best = [], None
+    train = ~test_mask  # accuracy on all training points; the GP sees ``fit_on`` ⊆ train
+    rejected, best, tries = [], None, 0
     t0 = time.perf_counter()
-    for k in range(cfg.retries + 1):
-        seed = cfg.seed + k
-        reg = SymbolicRegressor(
-            generations=cfg.generations, population_size=cfg.population,
-            max_length=cfg.max_length, operators=cfg.operators,
-            local_iterations=cfg.local_iterations, n_threads=cfg.threads, random_state=seed,
-            feature_names=list(feats),
-        ).fit(cols[fit_on], target[fit_on])
-        expr = _model_expr(name, reg.expression_, reg.symbols_, feats, transform, sign)
-        model = Metamodel.from_expr(name, expr, RESPONSES[name])
-        reason = _guard(model, study, float(np.max(np.abs(y))))
-        if reason:
-            rejected.append(f"seed {seed}: {reason}")
-            if log:
-                log(f"{name}: rejected seed {seed} ({reason}); refitting")
+    while best is None:
+        prep = _prepare(transform, y, cols, train)
+        if prep is None:  # the data do not have the sign pattern the transform needs
+            transform = FALLBACK[transform]
             continue
-        y_hat = model.value(table["t"], table["theta"], table["H"])
-        err = accuracy(y[train], y_hat[train]).max_abs_err_over_range
-        if best is None or err < best[0]:
-            best = (err, seed, model, y_hat)
-        if err <= TRAIN_TARGET[name]:
-            break
-        if log and k < cfg.retries:
-            log(f"{name}: seed {seed} reaches max error / range {err:.3g} on the training data "
-                f"(target {TRAIN_TARGET[name]}); trying seed {seed + 1}")
-    if best is None:
-        raise RuntimeError(f"{name}: every fit failed the guard rails: {rejected}")
+        target, fit_on, sign = prep
+        for k in range(cfg.retries + 1):
+            seed = cfg.seed + k
+            tries += 1
+            reg = SymbolicRegressor(
+                generations=cfg.generations, population_size=cfg.population,
+                max_length=cfg.max_length, operators=cfg.operators,
+                local_iterations=cfg.local_iterations, n_threads=cfg.threads, random_state=seed,
+                feature_names=list(feats),
+            ).fit(cols[fit_on], target[fit_on])
+            expr = _model_expr(name, reg.expression_, reg.symbols_, feats, transform, sign)
+            model = Metamodel.from_expr(name, expr, RESPONSES[name])
+            reason = _guard(model, study, float(np.max(np.abs(y))))
+            if reason:
+                rejected.append(f"{transform}, seed {seed}: {reason}")
+                if log:
+                    log(f"{name}: rejected seed {seed} ({reason})")
+                continue
+            y_hat = model.value(table["t"], table["theta"], table["H"])
+            err = accuracy(y[train], y_hat[train]).max_abs_err_over_range
+            if best is None or err < best[0]:
+                best = (err, seed, model, y_hat, int(fit_on.sum()))
+            if err <= TRAIN_TARGET[name]:
+                break
+            if log and k < cfg.retries:
+                log(f"{name}: seed {seed} reaches max error / range {err:.3g} on the training "
+                    f"data (target {TRAIN_TARGET[name]}); trying seed {seed + 1}")
+        if best is None:
+            if transform not in FALLBACK:
+                raise RuntimeError(f"{name}: every fit failed the guard rails: {rejected}")
+            if log:
+                log(f"{name}: no {transform} fit passed the guard rails; "
+                    f"falling back to {FALLBACK[transform]}")
+            transform = FALLBACK[transform]
     elapsed = time.perf_counter() - t0
-    _, seed, model, y_hat = best
+    _, seed, model, y_hat, n_fit = best
     report = FitReport(
-        name=name, transform=transform, features=tuple(feats), seed=seed, tries=k + 1,
-        fit_time_s=elapsed, n_train=int(fit_on.sum()),
+        name=name, transform=transform, features=tuple(feats), seed=seed, tries=tries,
+        fit_time_s=elapsed, n_train=n_fit,
         train=accuracy(y[train], y_hat[train]),
         test=accuracy(y[test_mask], y_hat[test_mask]) if test_mask.any() else None,
         rejected=tuple(rejected),
