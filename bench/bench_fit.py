@@ -63,6 +63,7 @@ def main() -> None:
     for k, rep in res.reports.items():
         rows[k] = {
             "fit_time_s": rep.fit_time_s, "tries": rep.tries, "seed": rep.seed,
+            "transform": rep.transform, "rejected": list(rep.rejected),
             "test": asdict(rep.test), "train": asdict(rep.train),
             "limit_max_abs_err_over_range": LIMITS[k],
             "pass_accuracy": rep.test.max_abs_err_over_range <= LIMITS[k],
