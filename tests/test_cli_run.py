@@ -17,7 +17,8 @@ def fast_study(tmp_path, **sections):
     """The MagOne study with small metamodel and optimiser budgets (the DOE sections unchanged,
     so the bundled data set applies)."""
     s = load_study(None)
-    s = replace(s, metamodel=replace(s.metamodel, generations=5, retries=0, holdout_paths=2),
+    s = replace(s, metamodel=replace(s.metamodel, generations=5, population=400, max_length=40,
+                                     retries=0, holdout_paths=2),
                 optimise=replace(s.optimise, population=24, ga_generations=3,
                                  nsga2_generations=10, grid_n=4, sweep_n=101), **sections)
     path = tmp_path / "fast.toml"
