@@ -208,3 +208,24 @@ def test_vtu_round_trip(study, tmp_path):
     np.testing.assert_allclose(back.points, mesh.points + u)
     np.testing.assert_allclose(back.point_data["displacement_magnitude"], 1e-4)
     np.testing.assert_array_equal(back.cells_dict["hexahedron"], mesh.cells)
+
+
+def test_magnet_edge_is_rounded(study):
+    s = _with(study, "mechanics", magnet_edge_radius=0.3e-3)
+    H = 4e-3
+    m = body_mesh(s, H, "default")
+    sharp = body_mesh(_with(study, "mechanics", magnet_edge_radius=0.0), H, "default")
+    z_low = float(magnet_span(s, H)[0])
+    p = m.points[m.cavity]
+    rho = np.hypot(p[:, 0], p[:, 1])
+    r_cav = np.hypot(sharp.points[sharp.cavity, 0], sharp.points[sharp.cavity, 1]).max()
+    c_r, c_z = r_cav - 0.3e-3, z_low + 0.3e-3
+    near = (rho > c_r + 1e-12) & (p[:, 2] < c_z - 1e-12)
+    assert near.sum() > 0
+    np.testing.assert_allclose(np.hypot(rho[near] - c_r, p[near, 2] - c_z), 0.3e-3)
+    # only those nodes moved, and the body gained the rounded corner's volume
+    moved = np.any(m.points != sharp.points, axis=1)
+    assert np.array_equal(np.flatnonzero(moved), np.sort(m.cavity[near]))
+    assert m.volume() > sharp.volume()
+    with pytest.raises(ValueError, match="edge radius"):
+        body_mesh(_with(study, "mechanics", magnet_edge_radius=3e-3), H, "coarse")

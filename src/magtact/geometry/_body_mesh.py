@@ -99,7 +99,8 @@ def body_mesh(study: Study, H: float, mesh: str | None = None) -> BodyMesh:
     Returns
     -------
     BodyMesh
-        The mesh with the magnet's cavity removed (placement per ``study.magnet.placement``).
+        The mesh with the magnet's cavity removed (placement per ``study.magnet.placement``),
+        its lower edge rounded by ``study.mechanics.magnet_edge_radius``.
     """
     name = study.mechanics.mesh if mesh is None else mesh
     z_low, z_high = (float(v) for v in magnet_span(study, H))
@@ -109,6 +110,7 @@ def body_mesh(study: Study, H: float, mesh: str | None = None) -> BodyMesh:
         R_h=study.body.R_h,
         cavity=(study.magnet.R_m, z_low, z_high),
         density=name,
+        edge_radius=study.mechanics.magnet_edge_radius,
     )
 
 
@@ -120,6 +122,7 @@ def half_cylinder_mesh(
     cavity: tuple[float, float, float] | None = None,
     density: str = "default",
     r_ring: float | None = None,
+    edge_radius: float = 0.0,
 ) -> BodyMesh:
     """Hexahedral mesh of a half cylinder y ≥ 0 with a rounded top edge and an optional cavity.
 
@@ -137,6 +140,9 @@ def half_cylinder_mesh(
     r_ring : float or None
         Radius of the inner ring of block edges [m]; defaults to the cavity radius (without a
         cavity: R / 2).
+    edge_radius : float
+        Radius [m] of the rounded lower edge of the cavity (0: sharp). The cavity nodes within
+        ``edge_radius`` of the edge are projected onto the quarter circle of that radius.
 
     Returns
     -------
@@ -151,6 +157,9 @@ def half_cylinder_mesh(
     dens = DENSITIES[density]
     if cavity is not None:
         R_m, z_low, z_high = cavity
+        if not 0 <= edge_radius < min(R_m, z_high - z_low):
+            raise ValueError(f"the magnet's edge radius {edge_radius} must be in "
+                             f"[0, min(R_m, H_m)) = [0, {min(R_m, z_high - z_low)})")
         if not (0 < R_m < R - R_h and 0 < z_low < z_high <= height):
             raise ValueError(
                 f"the magnet (R_m={R_m}, z in [{z_low}, {z_high}]) must lie inside the body "
@@ -202,11 +211,29 @@ def half_cylinder_mesh(
         z = points[:, 2]
         cavity_nodes = np.flatnonzero((rho < r_cav * (1 + 1e-9)) & (z > z_low - tol)
                                       & (z < z_high + tol))
+        if edge_radius > 0:
+            _round_edge(points, cavity_nodes, r_cav, z_low, edge_radius)
     else:
         cavity_nodes = np.array([], dtype=int)
     surface = _outer_surface(points, cells, tol, exclude=np.union1d(base, cavity_nodes))
     return BodyMesh(points=points, cells=cells, base=base, symmetry=symmetry, cavity=cavity_nodes,
                     surface=surface, z_top=float(height), name=density)
+
+
+def _round_edge(points: np.ndarray, nodes: np.ndarray, r_cav: float, z_low: float,
+                radius: float) -> None:
+    """Round the cavity's lower edge in place: the cavity nodes within ``radius`` of the edge
+    (r = r_cav, z = z_low) are projected from the fillet's centre line
+    (r = r_cav − radius, z = z_low + radius) onto the circle of that radius."""
+    p = points[nodes]
+    rho = np.hypot(p[:, 0], p[:, 1])
+    c_r, c_z = r_cav - radius, z_low + radius
+    near = (rho > c_r) & (p[:, 2] < c_z)
+    d = np.column_stack([rho[near] - c_r, p[near, 2] - c_z])
+    d *= radius / np.linalg.norm(d, axis=1)[:, None]
+    idx = nodes[near]
+    points[idx, :2] *= ((c_r + d[:, 0]) / rho[near])[:, None]
+    points[idx, 2] = c_z + d[:, 1]
 
 
 def _half_disc(radii: list[float], n_radial: list[int],

@@ -313,6 +313,8 @@ class HalfBodyModel:
         Newton's method on the free DOFs. The first iteration is the predictor with the tangent
         of the previous step's last iterate and the prescribed increment du0,
         K11 du1 = −r1 − K10 du0; every later iteration assembles and factorises a new tangent.
+        When three iterations in a row do not improve on the best residual (the contact state
+        cycles between two sets), the remaining updates are halved; a second stall fails.
         On success the contact state variables (stick reference, active set) are accepted.
 
         Raises
@@ -326,13 +328,14 @@ class HalfBodyModel:
         u = self.field[0].values.reshape(-1)  # a view: updates act on the field
         if self._K10 is None:
             self._jacobian()
-        f, best, stalled = self._fun, np.inf, 0
+        f, best, stalled, alpha = self._fun, np.inf, 0, 1.0
         for it in range(1, st.max_iter + 1):
             du = np.zeros(self.n_dofs)
             du[self.dof0] = ext[self.dof0] - u[self.dof0]
             t0 = time.perf_counter()
             du[self.dof1] = self._linear.solve(-f[self.dof1] - self._K10 @ du[self.dof0])
             self.timings["solve"] += time.perf_counter() - t0
+            du *= alpha
             u += du
             f, fnorm = self._line_search(u, du, st.line_search)
             self.iterations += 1
@@ -343,7 +346,11 @@ class HalfBodyModel:
                 return it
             stalled = stalled + 1 if fnorm >= best else 0
             if stalled >= 3:
-                raise NewtonFailed(f"no progress of the Newton iterations (residual {fnorm:.2e})")
+                if alpha < 1:
+                    raise NewtonFailed(
+                        f"no progress of the Newton iterations (residual {fnorm:.2e})")
+                # the contact state cycles: continue with half Newton steps
+                alpha, stalled = 0.5, 0
             best = min(best, fnorm)
             if it < st.max_iter:
                 self._jacobian()
@@ -403,6 +410,7 @@ class HalfBodyModel:
                     dt = (t_try - t) * st.cutback
                     if dt < st.dt_min:
                         self._linear.free()
+                        self._K10 = None
                         raise StepFailure(t_try, t, str(exc).strip() or type(exc).__name__) from exc
                     continue
                 steps += 1
@@ -417,5 +425,6 @@ class HalfBodyModel:
             if on_level is not None:
                 on_level(float(target))
         self._linear.free()
+        self._K10 = None  # the next path starts with a new factorisation
         return {**out, "iterations": self.iterations, "jacobians": self.jacobians,
                 "cutbacks": cutbacks, "steps": steps}

@@ -126,6 +126,9 @@ class Mechanics:
                                      doc="contact penalty relative to the solid's nodal stiffness")
     elastic_slip: float = setting(5e-5, "mm", positive=True,
                                   doc="allowable elastic slip of sticking contact points")
+    magnet_edge_radius: float = setting(3e-4, "mm", minimum=0.0,
+                                        doc="radius of the rounded lower edge of the rigid magnet "
+                                            "in the structural model (0: sharp)")
     dt_initial: float = setting(0.05, positive=True, doc="first load step (in units of t)")
     dt_min: float = setting(1e-4, positive=True, doc="smallest load step before a path fails")
     dt_max: float = setting(0.1, positive=True, doc="largest load step")
