@@ -97,3 +97,15 @@ def test_compare_prints_percentages(model_dir):
     assert result.output.count("+50.00") == 4  # every quantity scales with G
     bad = CliRunner().invoke(app, ["compare", "4", "4,30", "--models", str(model_dir)])
     assert "first design must be 'H_MM,G_KPA'" in str(bad.exception)
+
+
+def test_write_optimise_outputs_for_the_report(tmp_path, small_study):
+    from magtact.optimise import write_optimise_outputs
+
+    choice = write_optimise_outputs(synthetic_models(), load_study(small_study), tmp_path)
+    chosen = json.loads((tmp_path / "chosen.json").read_text())
+    assert chosen["H_mm"] == pytest.approx(choice.design.H * 1e3, rel=1e-12)
+    assert chosen["active_constraints"] == (", ".join(choice.active) or "none")
+    captions = json.loads((tmp_path / "captions.json").read_text())
+    stems = {p.stem for p in tmp_path.iterdir() if p.suffix in (".png", ".csv")}
+    assert stems <= set(captions)  # every figure and table has its caption
