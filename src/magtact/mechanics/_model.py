@@ -103,7 +103,8 @@ class Stepping:
     A step that fails is restored and retried with dt × ``cutback``; a step that needed at most
     ``easy_iter`` Newton iterations lets dt grow × ``growth`` up to ``dt_max``. A step fails
     after ``max_iter`` iterations, or when three successive iterations do not lower the best
-    residual, or when a residual stays non-finite after ``line_search`` halvings of the update.
+    residual a second time (after the first such stall the updates are halved), or when a
+    residual stays non-finite after ``line_search`` halvings of the update.
     ``tol``: ‖r_free‖ / (‖r_prescribed‖ + ε) at convergence.
     """
 
