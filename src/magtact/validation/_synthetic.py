@@ -2,9 +2,9 @@
 
 It is generated, not measured: 4 sensors × 2 repeats of the fabricated design (H = 4.1 mm,
 G = 29.4 kPa) at θ = θ_max, from the model (exact field of the magnet, FE forces of one direct
-structural simulation on the study's default mesh), with noise, drift and sensor-to-sensor scatter added. Its file names
-start with ``synthetic_``, its metadata says ``synthetic = true``, and every table and figure made
-from it says SYNTHETIC. Regenerate it with::
+structural simulation on the study's default mesh), with noise, drift and sensor-to-sensor
+scatter added. Its file names start with ``synthetic_``, its metadata says ``synthetic = true``,
+and every table and figure made from it says SYNTHETIC. Regenerate it with::
 
     python -m magtact.validation --out src/magtact/validation/data
 """
