@@ -174,16 +174,33 @@ def test_bundled_dataset_present_documented_and_fast():
 
 
 def test_bundled_paths_agree_with_a_coarse_recomputation():
+    """Two bundled paths (default mesh) re-solved on the coarse mesh up to t = 0.6.
+
+    Measured when the data set was built: the coarse mesh differs by at most 2.7 % there; the
+    tolerance is 5 % (the coarse mesh's discretisation error, twice the default's 2 % target).
+    """
     from magtact.mechanics import simulate_path
 
     ds = load_bundled()
     study = load_study(None)
-    for i_theta, i_H in [(4, 4), (2, 0)]:
+    t_idx = [4, 8, 12]  # t = 0.2, 0.4, 0.6
+    for i_theta, i_H in [(4, 0), (2, 1)]:  # (θ_max, 3 mm), (θ_max / 2, 4 mm)
         theta, H = float(ds.theta[i_theta]), float(ds.H[i_H])
-        t_idx = [4, 8]
         res = simulate_path(study, H, theta, mesh="coarse", t=ds.t.values[t_idx])
-        ref = ds.sel(G=study.material.G_ref, method="nearest").isel(theta=i_theta, H=i_H, t=t_idx)
-        g = float(ref.G)
+        ref = ds.isel(theta=i_theta, H=i_H, t=t_idx, G=2)
+        scaled = res.scaled(float(ref.G))
         for name in ("F_r", "F_z"):
-            np.testing.assert_allclose(getattr(res.scaled(g), name), ref[name].values,
-                                       rtol=0.08, atol=0, err_msg=name)
+            np.testing.assert_allclose(getattr(scaled, name), ref[name].values, rtol=0.05,
+                                       err_msg=f"{name} at theta={theta:.3f}, H={H}")
+
+
+def test_bundled_field_agrees_with_the_exact_solution():
+    """The bundled B (FE) against the closed form at every point: within 0.5 % of its range."""
+    from magtact.magnetics import hall_field
+
+    ds = load_bundled()
+    T, TH, HH = np.meshgrid(ds.t, ds.theta, ds.H, indexing="ij")
+    B_r, B_z = hall_field(load_study(None), T, TH, HH, solver="exact")
+    for name, exact in (("B_r", B_r), ("B_z", B_z)):
+        scale = float(np.abs(ds[name]).max())
+        np.testing.assert_allclose(ds[name].values, exact, rtol=0, atol=5e-3 * scale)
