@@ -98,6 +98,7 @@ def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: in
     if field_solver is None:
         from ..magnetics import hall_field as field_solver
     start = time.perf_counter()
+    code = _code_attrs(path_solver, field_solver)  # the sources as they are when the run starts
     store = JobCache(cache) if cache is not None else None
     field_job, path_jobs = plan(study, path_solver, field_solver)
     stats = RunStats(paths_total=len(path_jobs))
@@ -143,7 +144,7 @@ def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: in
         "run_cache_corrupt": stats.cache_corrupt,
         "run_wall_time_s": time.perf_counter() - start,
         "run_executor": _executor_name(workers, scheduler),
-        **_code_attrs(path_solver, field_solver),
+        **code,
     }
     ds = assemble(study, field_job, field_entry, path_jobs, results, attrs)
     if stats.failures:
