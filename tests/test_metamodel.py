@@ -275,7 +275,7 @@ def test_fit_pipeline_small(tmp_path):
     ms = res.model_set()
     assert set(res.reports) == {"B_r", "B_z", "f_r", "f_z"}
     assert {k: r.transform for k, r in res.reports.items()} == {
-        "B_r": "odd_log", "B_z": "log", "f_r": "odd_q", "f_z": "anchor_0"}
+        "B_r": "odd_log", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
     for k, rep in res.reports.items():
         assert rep.test.n_points == 4 * ds.sizes["t"]
         assert rep.test.r2 > 0.99, (k, rep.test)
@@ -446,12 +446,13 @@ def test_fallback_transform_when_odd_fits_fail_the_guard_rails(monkeypatch):
 
     def fake_fit(self, X, y):
         real(self, X, y)
-        if np.all(X[:, 1] != 0):  # only the odd_q fit leaves out q = 0: give it a pole
-            self.expression_ = self.expression_ / (self.symbols_[0] - 0.5)
+        if np.all(X[:, 0] != 0):  # only the odd-log fit leaves out the axis: give it a pole
+            self.expression_ = self.expression_ / (self.symbols_[1] + 4.0)
         return self
 
     monkeypatch.setattr(fitmod.SymbolicRegressor, "fit", fake_fit)
+    monkeypatch.setitem(fitmod.TRAIN_TARGET, "B_r", 1.0)
     cfg = replace(STUDY.metamodel, generations=2, population=20, retries=1, operators="rational")
-    rep = fit_models(ds, STUDY, settings=cfg, names=("f_r",)).reports["f_r"]
-    assert rep.transform == "anchor_q" and rep.tries == 4  # 2 rejected + 2 below target
-    assert rep.rejected[0].startswith("odd_q, seed 0:") and len(rep.rejected) == 2
+    rep = fit_models(ds, STUDY, settings=cfg, names=("B_r",)).reports["B_r"]
+    assert rep.transform == "anchor_x" and rep.tries == 3  # 2 rejected + 1 reaching the target
+    assert rep.rejected[0].startswith("odd_log, seed 0:") and len(rep.rejected) == 2

@@ -17,15 +17,16 @@ smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel.
 - **B_z** is positive and decays roughly like a power of the distance: log B_z is close to
   linear over the range and errors become relative, so B_z = exp(g(X, Z)) ("log" transform;
   identity if the data are not all positive).
-- **f_r = F_r / G** is odd in u_r (mirror symmetry), so f_r = q g(p, q, h), h = H in mm, with g
-  fitted to f_r / q off θ = 0 ("odd_q"). F_r is nearly proportional to tan θ at fixed t, so g
-  varies little with q and the fit is close to two-dimensional; it is exactly zero at θ = 0.
-
-The odd transforms are fitted off the axis, so nothing stops g from being singular on it; the
-guard rails catch that, and if no seed passes them the fit falls back to an anchored transform
-fitted on all points (``FALLBACK``): g(X, Z) − g(0, Z) for B_r, g(p, q, h) − g(p, 0, h) for f_r,
-both exactly zero on the axis. The transform used is recorded with each model.
+- **f_r = F_r / G** vanishes at θ = 0 (mirror symmetry): g(p, q, h) − g(p, 0, h), h = H in mm,
+  fitted on all points ("anchor_q"). (Fitting f_r / q instead, which assumes F_r nearly
+  proportional to tan θ, measured 10 % held-out error on the FE data against 2 % for this: at
+  small θ and large t the friction contact makes F_r / tan θ depend on θ.)
 - **f_z = F_z / G** vanishes in the unloaded state: g(p, q, h) − g(0, 0, h).
+
+The odd-log transform is fitted off the axis, so nothing stops g from being singular on it; the
+guard rails catch that, and if no seed passes them the fit falls back to the anchored transform
+g(X, Z) − g(0, Z), fitted on all points and exactly zero on the axis (``FALLBACK``). The
+transform used is recorded with each model.
 
 F is exactly proportional to G (SPEC section 3), so f is the mean of F / G over the G levels;
 the spread between levels is reported as ``G_spread`` (0 for a data set scaled in G).
@@ -50,13 +51,14 @@ from ._regressor import SymbolicRegressor
 from ._symbols import H, p, q
 
 #: Transform of each response (see the module notes).
-TRANSFORMS = {"B_r": "odd_log", "B_z": "log", "f_r": "odd_q", "f_z": "anchor_0"}
+TRANSFORMS = {"B_r": "odd_log", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
 #: Transform used when the data do not suit the first one, or when none of its fits passes
 #: the guard rails (the odd transforms are fitted off the axis, where g may turn singular).
-FALLBACK = {"odd_log": "anchor_x", "odd_q": "anchor_q", "log": "identity"}
-#: Max |error| / range on the training points that ends the seed search (40 % of the
-#: acceptance limits of issue 5 on held-out points: 1 % for B, 2 % for F).
-TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.008, "f_z": 0.008}
+FALLBACK = {"odd_log": "anchor_x", "log": "identity"}
+#: Max |error| / range on the training points that ends the seed search: 40 % of the held-out
+#: limits of issue 5 for B (1 %); the limit itself (2 %) for F, whose FE data are rough at the
+#: ~1 % level (contact events), so that a tighter target only costs refits.
+TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.02, "f_z": 0.02}
 #: Points with |B_r| below this fraction of max |B_r| are left out of the "odd_log" fit: next to
 #: the axis B_r / X is the ratio of two small numbers and carries the field solver's noise.
 ODD_LOG_FLOOR = 0.002
@@ -226,14 +228,6 @@ def _prepare(transform: str, y, cols, train):
         target = np.zeros_like(y)
         target[nz] = np.log(sign * ratio)
         return target, train & nz, sign
-    if transform == "odd_q":
-        # f_r / q: F_r is odd in u_r, so f_r = q g(p, q, h) with g smooth (fitted off θ = 0)
-        nz = cols[:, 1] != 0
-        if not nz.any():
-            return None
-        target = np.zeros_like(y)
-        target[nz] = y[nz] / cols[nz, 1]
-        return target, train & nz, 1.0
     if transform == "log":
         return (np.log(y), train, 1.0) if np.all(y > 0) else None
     return y, train, 1.0
@@ -256,8 +250,6 @@ def _model_expr(name: str, g: sp.Expr, gsyms, feats: dict[str, sp.Expr], transfo
         return sp.exp(G_)
     if transform == "odd_log":
         return sp.Float(sign) * feats[gsyms[0].name] * sp.exp(G_)
-    if transform == "odd_q":
-        return q * G_
     if transform == "identity":
         return G_
     if transform == "anchor_x":

@@ -15,7 +15,7 @@ _WHY = {
     "anchor_x": "g(X, Z) − g(0, Z): zero on the axis (symmetry)",
     "log": "exp(g(X, Z)): positive, relative errors",
     "identity": "g",
-    "odd_q": "q g(p, q, h): odd in u_r, zero at θ = 0 (mirror symmetry)",
+    "anchor_q": "g(p, q, h) − g(p, 0, h): zero at θ = 0 (mirror symmetry)",
     "anchor_0": "g(p, q, h) − g(0, 0, h): zero when unloaded",
 }
 
