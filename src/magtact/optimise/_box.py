@@ -295,9 +295,13 @@ def batch_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *, maxim
     Minimises φ = s f with s = −1 to maximise. Active set: a variable at a bound whose gradient
     points out of the box, or a fixed one. On the free variables the step solves
     (∇²φ + μ I) d = −∇φ with μ ≥ 0 the smallest shift making the reduced Hessian's least
-    eigenvalue at least 1e-10 of its largest magnitude (Newton where convex, a regularised step
-    elsewhere); the step is projected onto the box and halved until the Armijo condition
-    φ(x⁺) ≤ φ(x) + 1e-4 ∇φ·(x⁺ − x) holds.
+    eigenvalue at least max(1e-10 |λ|_max, −λ_min) (Newton where convex, the mirrored negative
+    curvature elsewhere); the step is projected onto the box and halved until the Armijo
+    condition φ(x⁺) ≤ φ(x) + 1e-4 ∇φ·(x⁺ − x) holds (where the reduced Hessian is positive
+    definite the full step is also taken when φ changes only within round-off, so the location
+    converges beyond what values resolve). A row stops when its relative projected
+    gradient is below ``tol``, when the Newton step is below 1e-13 of the box width, or when no
+    step along d decreases φ.
     """
     lo, hi = np.atleast_2d(np.asarray(lo, float)), np.atleast_2d(np.asarray(hi, float))
     n = lo.shape[0]
@@ -346,18 +350,28 @@ def batch_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *, maxim
             act[keep]
         if r.size == 0:
             break
-        d = _newton_step(pg, Hs, act)
+        d, convex = _newton_step(pg, Hs, act)
+        # a Newton step below 1e-13 of the box: the location is resolved, stop there
+        flat = np.max(np.abs(d) / np.where(wr[keep] > 0, wr[keep], 1.0), axis=1) <= 1e-13
+        done[r[flat]] = True
+        r, xr, lr, hr, pg, d, convex = (r[~flat], xr[~flat], lr[~flat], hr[~flat], pg[~flat],
+                                         d[~flat], convex[~flat])
+        if r.size == 0:
+            break
         alpha = np.ones(r.size)
         moved = np.zeros(r.size, bool)
         x_new = xr.copy()
         pending = np.ones(r.size, bool)
-        for _ in range(60):
+        for _ in range(40):
             p = np.flatnonzero(pending)
             if p.size == 0:
                 break
             trial = np.clip(xr[p] + alpha[p, None] * d[p], lr[p], hr[p])
             ft = phi(r[p], trial)
             ok = ft <= f[r[p]] + 1e-4 * np.sum(pg[p] * (trial - xr[p]), axis=1)
+            # near a convex minimum φ changes below round-off: take the full Newton step
+            ok |= (alpha[p] == 1) & convex[p] & (
+                ft <= f[r[p]] + 1e-14 * np.maximum(np.abs(f[r[p]]), scale[r[p]]))
             same = np.all(trial == xr[p], axis=1)
             acc = p[ok & ~same]
             x_new[acc] = trial[ok & ~same]
@@ -377,8 +391,9 @@ def batch_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *, maxim
     return BatchOptimum(x[:, 0].copy(), x[:, 1].copy(), value, kkt, converged)
 
 
-def _newton_step(g, Hs, act) -> np.ndarray:
-    """Regularised Newton step on the free variables of each row (2 variables)."""
+def _newton_step(g, Hs, act) -> tuple[np.ndarray, np.ndarray]:
+    """Regularised Newton step on the free variables of each row (2 variables), and whether
+    the reduced Hessian was positive definite (no shift)."""
     Hm = Hs.copy()
     for i in range(2):
         Hm[:, i, :] = np.where(act[:, i:i + 1], 0.0, Hm[:, i, :])
@@ -394,4 +409,4 @@ def _newton_step(g, Hs, act) -> np.ndarray:
     d0 = -(c * g[:, 0] - b * g[:, 1]) / det
     d1 = -(a * g[:, 1] - b * g[:, 0]) / det
     d = np.stack([d0, d1], axis=1)
-    return np.where(act, 0.0, d)
+    return np.where(act, 0.0, d), mu == 0
