@@ -9,11 +9,9 @@ smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel.
   magnet's centre [mm] (the body does not change the field, SPEC section 2). X = a(H) q and
   Z = −c(H) − a(H) p are affine in (p, q) with coefficients from :mod:`magtact.geometry`, so the
   fit is two-dimensional and exact in H.
-- **B_r** is odd in X and vanishes only on the axis (symmetry), so B_r / X keeps one sign s:
-  B_r = s X exp(g(X, Z)) ("odd_log" transform, fitted off the axis). It is exactly zero on the
-  axis and its errors are relative everywhere, which keeps its slope across the axis (which
-  sets Γ_r at small θ) accurate also far from the magnet. If B_r / X changes sign in the data,
-  the fallback is g(X, Z) − g(0, Z) ("anchor_x"), also exactly zero on the axis.
+- **B_r** changes sign with X and vanishes on the axis (symmetry). It is fitted as g(X, Z) and
+  used as g(X, Z) − g(0, Z), exactly zero on the axis for any g ("anchor_x"). (B_r = s X exp(g),
+  fitted off the axis, gave g singular on the axis in most seeds on the FE data.)
 - **B_z** is positive and decays roughly like a power of the distance: log B_z is close to
   linear over the range and errors become relative, so B_z = exp(g(X, Z)) ("log" transform;
   identity if the data are not all positive).
@@ -23,10 +21,8 @@ smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel.
   small θ and large t the friction contact makes F_r / tan θ depend on θ.)
 - **f_z = F_z / G** vanishes in the unloaded state: g(p, q, h) − g(0, 0, h).
 
-The odd-log transform is fitted off the axis, so nothing stops g from being singular on it; the
-guard rails catch that, and if no seed passes them the fit falls back to the anchored transform
-g(X, Z) − g(0, Z), fitted on all points and exactly zero on the axis (``FALLBACK``). The
-transform used is recorded with each model.
+If no seed of the log fit passes the guard rails, B_z falls back to the identity transform
+(``FALLBACK``). The transform used is recorded with each model.
 
 F is exactly proportional to G (SPEC section 3), so f is the mean of F / G over the G levels;
 the spread between levels is reported as ``G_spread`` (0 for a data set scaled in G).
@@ -51,17 +47,14 @@ from ._regressor import SymbolicRegressor
 from ._symbols import H, p, q
 
 #: Transform of each response (see the module notes).
-TRANSFORMS = {"B_r": "odd_log", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
+TRANSFORMS = {"B_r": "anchor_x", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
 #: Transform used when the data do not suit the first one, or when none of its fits passes
-#: the guard rails (the odd transforms are fitted off the axis, where g may turn singular).
-FALLBACK = {"odd_log": "anchor_x", "log": "identity"}
+#: the guard rails.
+FALLBACK = {"log": "identity"}
 #: Max |error| / range on the training points that ends the seed search: 40 % of the held-out
 #: limits of issue 5 for B (1 %); the limit itself (2 %) for F, whose FE data are rough at the
 #: ~1 % level (contact events), so that a tighter target only costs refits.
 TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.02, "f_z": 0.02}
-#: Points with |B_r| below this fraction of max |B_r| are left out of the "odd_log" fit: next to
-#: the axis B_r / X is the ratio of two small numbers and carries the field solver's noise.
-ODD_LOG_FLOOR = 0.002
 #: Fraction of max |y| below which relative errors are not reported.
 REL_FLOOR = 0.05
 
@@ -123,14 +116,19 @@ class FitResult:
         return ModelSet(**{k: models[k] for k in RESPONSES})
 
 
-def accuracy(y, y_hat) -> Accuracy:
-    """R², max abs error (absolute and over the range of ``y``), max relative error where
-    |y| > 5 % of max |y|."""
+def accuracy(y, y_hat, reference=None) -> Accuracy:
+    """R², max abs error (absolute and over the range of ``reference``), max relative error where
+    |y| > 5 % of max |reference|.
+
+    ``reference`` (default ``y``) is the whole data set of the response, so that errors on a
+    subset (the held-out paths) are measured against the response's full range.
+    """
     y, y_hat = np.ravel(y), np.ravel(y_hat)
+    ref = y if reference is None else np.ravel(reference)
     err = np.abs(y_hat - y)
     ss = np.sum((y - y.mean()) ** 2)
-    rng = np.ptp(y)
-    big = np.abs(y) > REL_FLOOR * np.max(np.abs(y))
+    rng = np.ptp(ref)
+    big = np.abs(y) > REL_FLOOR * np.max(np.abs(ref))
     return Accuracy(
         r2=float(1.0 - np.sum(err**2) / ss) if ss > 0 else float("nan"),
         max_abs_err=float(err.max()),
@@ -217,20 +215,10 @@ def holdout_paths(theta_levels, H_levels, n: int, seed: int = 0) -> list[tuple[f
 
 
 def _prepare(transform: str, y, cols, train):
-    """(target, points the GP sees, sign) for ``transform``; None if the data do not suit it."""
-    if transform == "odd_log":
-        # B_r / X keeps one sign (B_r is odd in X and vanishes only on the axis)
-        nz = (cols[:, 0] != 0) & (np.abs(y) > ODD_LOG_FLOOR * np.max(np.abs(y)))
-        ratio = y[nz] / cols[nz, 0]
-        sign = float(np.sign(np.median(ratio))) if ratio.size else 0.0
-        if sign == 0 or not np.all(sign * ratio > 0):
-            return None
-        target = np.zeros_like(y)
-        target[nz] = np.log(sign * ratio)
-        return target, train & nz, sign
+    """(target, points the GP sees) for ``transform``; None if the data do not suit it."""
     if transform == "log":
-        return (np.log(y), train, 1.0) if np.all(y > 0) else None
-    return y, train, 1.0
+        return (np.log(y), train) if np.all(y > 0) else None
+    return y, train
 
 
 def holdout_mask(table: dict, holdout) -> np.ndarray:
@@ -241,15 +229,12 @@ def holdout_mask(table: dict, holdout) -> np.ndarray:
     return test
 
 
-def _model_expr(name: str, g: sp.Expr, gsyms, feats: dict[str, sp.Expr], transform: str,
-                sign: float = 1.0):
+def _model_expr(name: str, g: sp.Expr, gsyms, feats: dict[str, sp.Expr], transform: str):
     """Assemble the model in (p, q, H) from the fitted g in the feature symbols."""
     sub = {s: feats[s.name] for s in gsyms}
     G_ = g.xreplace(sub)
     if transform == "log":
         return sp.exp(G_)
-    if transform == "odd_log":
-        return sp.Float(sign) * feats[gsyms[0].name] * sp.exp(G_)
     if transform == "identity":
         return G_
     if transform == "anchor_x":
@@ -331,10 +316,10 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     t0 = time.perf_counter()
     while best is None:
         prep = _prepare(transform, y, cols, train)
-        if prep is None:  # the data do not have the sign pattern the transform needs
+        if prep is None:  # the data are not all positive: no log
             transform = FALLBACK[transform]
             continue
-        target, fit_on, sign = prep
+        target, fit_on = prep
         for k in range(cfg.retries + 1):
             seed = cfg.seed + k
             tries += 1
@@ -344,16 +329,20 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
                 local_iterations=cfg.local_iterations, n_threads=cfg.threads, random_state=seed,
                 feature_names=list(feats),
             ).fit(cols[fit_on], target[fit_on])
-            expr = _model_expr(name, reg.expression_, reg.symbols_, feats, transform, sign)
-            model = Metamodel.from_expr(name, expr, RESPONSES[name])
-            reason = _guard(model, study, float(np.max(np.abs(y))))
+            try:
+                expr = _model_expr(name, reg.expression_, reg.symbols_, feats, transform)
+                model = Metamodel.from_expr(name, expr, RESPONSES[name])
+            except ValueError:  # e.g. the anchor g(0, Z) is infinite: a pole on the axis
+                model, reason = None, "infinite constant after the transform (pole on the axis?)"
+            else:
+                reason = _guard(model, study, float(np.max(np.abs(y))))
             if reason:
                 rejected.append(f"{transform}, seed {seed}: {reason}")
                 if log:
                     log(f"{name}: rejected seed {seed} ({reason})")
                 continue
             y_hat = model.value(table["t"], table["theta"], table["H"])
-            err = accuracy(y[train], y_hat[train]).max_abs_err_over_range
+            err = accuracy(y[train], y_hat[train], y).max_abs_err_over_range
             if best is None or err < best[0]:
                 best = (err, seed, model, y_hat, int(fit_on.sum()))
             if err <= TRAIN_TARGET[name]:
@@ -373,8 +362,8 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     report = FitReport(
         name=name, transform=transform, features=tuple(feats), seed=seed, tries=tries,
         fit_time_s=elapsed, n_train=n_fit,
-        train=accuracy(y[train], y_hat[train]),
-        test=accuracy(y[test_mask], y_hat[test_mask]) if test_mask.any() else None,
+        train=accuracy(y[train], y_hat[train], y),
+        test=accuracy(y[test_mask], y_hat[test_mask], y) if test_mask.any() else None,
         rejected=tuple(rejected),
     )
     return model, report

@@ -11,7 +11,6 @@ from ._parse import format_expression
 
 _UNITS = {"B_r": "T", "B_z": "T", "f_r": "N/Pa", "f_z": "N/Pa"}
 _WHY = {
-    "odd_log": "s X exp(g(X, Z)): odd in X, zero on the axis, relative errors",
     "anchor_x": "g(X, Z) − g(0, Z): zero on the axis (symmetry)",
     "log": "exp(g(X, Z)): positive, relative errors",
     "identity": "g",
