@@ -17,10 +17,11 @@ def fast_study(tmp_path, **sections):
     """The MagOne study with small metamodel and optimiser budgets (the DOE sections unchanged,
     so the bundled data set applies)."""
     s = load_study(None)
-    s = replace(s, metamodel=replace(s.metamodel, generations=5, population=400, max_length=40,
+    sections = {"metamodel": replace(s.metamodel, generations=5, population=400, max_length=40,
                                      retries=0, holdout_paths=2),
-                optimise=replace(s.optimise, population=24, ga_generations=3,
-                                 nsga2_generations=10, grid_n=4, sweep_n=101), **sections)
+                "optimise": replace(s.optimise, population=24, ga_generations=3,
+                                    nsga2_generations=10, grid_n=4, sweep_n=101), **sections}
+    s = replace(s, **sections)
     path = tmp_path / "fast.toml"
     path.write_text(s.to_toml(), encoding="utf-8")
     return path
@@ -53,7 +54,10 @@ def test_run_end_to_end_on_bundled_data(tmp_path):
 
     if not bundled_path().is_file():
         pytest.skip("the bundled DOE data set is not built yet (python -m magtact.doe.bundle)")
-    check_run(tmp_path, fast_study(tmp_path))
+    s = load_study(None)  # real FE data: the exact field for B, a modest GP budget for f
+    check_run(tmp_path, fast_study(tmp_path, metamodel=replace(
+        s.metamodel, b_model="exact", generations=20, population=400, max_length=40,
+        retries=2, holdout_paths=2)))
 
 
 def test_run_end_to_end_with_stand_in_doe(tmp_path, monkeypatch):
