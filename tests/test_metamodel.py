@@ -428,3 +428,24 @@ def test_accuracy_uses_the_reference_range():
     acc = accuracy(y[:3], y[:3] + 0.1, reference=y)
     assert acc.max_abs_err_over_range == pytest.approx(0.01)
     assert acc.max_rel_err == pytest.approx(0.1)  # |y| > 0.5 only
+
+
+def test_infinite_anchor_is_rejected_and_refitted(monkeypatch):
+    import magtact.metamodel._fit as fitmod
+
+    ds = synthetic_doe(STUDY, n_t=6)
+    real = fitmod.SymbolicRegressor.fit
+
+    def fake_fit(self, X, y):
+        real(self, X, y)
+        if self.random_state == 0:  # g ~ 1/X: g(0, Z) is infinite
+            self.expression_ = self.expression_ + 1e-9 / self.symbols_[0]
+        return self
+
+    monkeypatch.setattr(fitmod.SymbolicRegressor, "fit", fake_fit)
+    monkeypatch.setitem(fitmod.TRAIN_TARGET, "B_r", 1.0)
+    cfg = replace(STUDY.metamodel, generations=2, population=20, retries=1, operators="rational")
+    rep = fit_models(ds, STUDY, settings=cfg, names=("B_r",)).reports["B_r"]
+    assert rep.seed == 1 and rep.tries == 2
+    assert rep.rejected == ("anchor_x, seed 0: infinite constant after the transform (pole on "
+                            "the axis?)",)
