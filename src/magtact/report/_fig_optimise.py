@@ -55,17 +55,23 @@ def fig_maps(maps, constraints, out_dir: str | Path) -> list[Path]:
 def fig_pareto(opt, path: str | Path) -> list[Path]:
     """Pareto set in objective, constraint and design space, chosen design highlighted.
 
-    NSGA-II's set as points, the exact reduction's front (and its G*(H) curve) as a line, the
-    chosen design as a star (PNG + SVG).
+    NSGA-II's set as points, the exact reduction's Pareto set as a thick line (markers show it
+    when it is a single point) on its curve over all feasible H, the chosen design as a star
+    (PNG + SVG).
     """
     p, r, c = opt.pareto, opt.reduction, opt.constraints
     front = r.front
     chosen = opt.choice.design
     with style():
         fig, axs = plt.subplots(1, 3, figsize=(7.0, 2.4))
+        for ax in axs:
+            ax.ticklabel_format(useOffset=False)
         ax = axs[0]
-        ax.plot(r.Gamma_r[front], r.Gamma_z[front], "-", color="0.4", lw=2.5, alpha=0.6,
-                label="exact reduction")
+        feas = r.feasible
+        ax.plot(r.Gamma_r[feas], r.Gamma_z[feas], "-", color="0.6", lw=1.0,
+                label=r"$(H, G^*(H))$, all $H$")
+        ax.plot(r.Gamma_r[front], r.Gamma_z[front], "o-", color="0.4", lw=2.5, ms=4, alpha=0.6,
+                label="exact Pareto set")
         ax.plot(p.Gamma_r_max, p.Gamma_z_max, ".", color="C0", ms=3, label="NSGA-II")
         ax.plot(chosen.Gamma_r_max, chosen.Gamma_z_max, "*", color="C3", ms=10, label="chosen")
         ax.set(xlabel=GR + " [N/T]", ylabel=GZ + " [N/T]", title="Objective space")
@@ -80,10 +86,10 @@ def fig_pareto(opt, path: str | Path) -> list[Path]:
         ax.set(xlabel=FR + " [N]", ylabel=FZ + " [N]", title="Constraint space")
 
         ax = axs[2]
-        feas = r.feasible
         ax.plot(mm(r.H[feas]), kpa(r.G_star[feas]), "-", color="0.6", lw=1.0,
                 label=r"$G^*(H)$")
-        ax.plot(mm(r.H[front]), kpa(r.G_star[front]), "-", color="0.4", lw=2.5, alpha=0.6)
+        ax.plot(mm(r.H[front]), kpa(r.G_star[front]), "o-", color="0.4", lw=2.5, ms=4,
+                alpha=0.6)
         ax.plot(mm(p.H), kpa(p.G), ".", color="C0", ms=3)
         ax.plot(mm(chosen.H), kpa(chosen.G), "*", color="C3", ms=10)
         H_lo, H_hi = opt.study.design.H
