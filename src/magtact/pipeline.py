@@ -87,6 +87,7 @@ class _Context:
     study: Study
     folder: Path
     recompute: bool
+    refit: bool
     data: list[Path] | None
     cache: Path | None
     workers: int | None
@@ -97,7 +98,7 @@ class _Context:
     doe_source: str = "none"
 
 
-def run_study(study: Study, out: str | Path, *, recompute: bool = False,
+def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: bool = False,
               data: list[str | Path] | None = None, cache: str | Path | None = ".magtact-cache",
               workers: int | None = None, command: str = "",
               log: Callable[[str], None] = print) -> RunResult:
@@ -114,6 +115,9 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False,
         False (default): use the DOE data set bundled with magtact (only valid for the
         built-in MagOne study); True: run the full FE design of experiments (cached in
         ``cache``).
+    refit : bool
+        False (default): when the DOE data and the fit settings are exactly those of the fit
+        shipped with magtact, use that fit; True: always fit the metamodels.
     data : list of path, optional
         Validation CSV files; default: the shipped SYNTHETIC example (labelled so).
     cache : path, optional
@@ -132,14 +136,14 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False,
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    ctx = _Context(study=study, folder=folder, recompute=recompute,
+    ctx = _Context(study=study, folder=folder, recompute=recompute, refit=refit,
                    data=[Path(p) for p in data] if data else None,
                    cache=Path(cache) if cache is not None else None, workers=workers, log=log)
     (folder / "study.toml").write_text(study.to_toml(), encoding="utf-8")
     manifest = {
         "study": study.name, "command": command or "run_study(...)",
         "started": datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
-        "recompute": recompute, "versions": versions(), "stages": [],
+        "recompute": recompute, "refit": refit, "versions": versions(), "stages": [],
     }
     records = []
     for n, (key, title, fn) in enumerate(STAGES, start=1):
@@ -228,8 +232,13 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
 def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
     if ctx.dataset is None:
         raise StageSkipped("needs the DOE data set, which is missing")
-    from .metamodel import write_fit_outputs
+    from .metamodel import copy_prefitted, find_prefitted, write_fit_outputs
 
+    shipped = None if ctx.refit else find_prefitted(ctx.study, ctx.dataset)
+    if shipped is not None:
+        ctx.models, _ = copy_prefitted(shipped, ctx.folder / "metamodel")
+        return ("B_r, B_z, f_r, f_z: the fit shipped with magtact for this very data set and "
+                "these settings (same data SHA-256; --refit fits again)")
     result, files = write_fit_outputs(ctx.study, ctx.dataset, ctx.folder / "metamodel",
                                       log=lambda m: ctx.log(f"      {m}"))
     ctx.models = result.model_set(ctx.study)

@@ -7,15 +7,17 @@ import sys
 from rich.markup import escape
 
 from ..study import StudyError
-from . import _study  # noqa: F401  (registers the command)
-from . import _doe  # noqa: F401
-from . import _validate  # noqa: F401
-from . import _run  # noqa: F401
-from . import _report  # noqa: F401
-from . import _optimise  # noqa: F401
-from . import _fit  # noqa: F401
-from . import _field  # noqa: F401
-from . import _simulate  # noqa: F401
+from . import (  # noqa: F401  (each module registers its command)
+    _doe,
+    _field,
+    _fit,
+    _optimise,
+    _report,
+    _run,
+    _simulate,
+    _study,
+    _validate,
+)
 from ._app import app, console
 
 #: Errors a user can fix: printed as one message, no traceback, exit status 2.

@@ -42,17 +42,22 @@ def parse_design(text: str, what: str) -> tuple[float, float]:
 
 
 def study_models(study: Study, models: Path | None):
-    """The metamodels: from ``models`` (a ``magtact fit`` output folder) if given, else fitted
-    to the bundled DOE data set."""
+    """The metamodels: from ``models`` (a ``magtact fit`` output folder) if given, else the fit
+    shipped for the bundled DOE data set (when the study's fit settings match), else fitted."""
     from ..metamodel import fit_models, load_models
 
     if models is not None:
         return load_models(models)
     from ..doe import load_bundled
+    from ..metamodel import find_prefitted
 
+    ds = load_bundled()
+    shipped = find_prefitted(study, ds)
+    if shipped is not None:
+        return load_models(shipped)
     console.print("fitting metamodels to the bundled DOE data set (give --models DIR to reuse "
                   "fitted ones)", highlight=False)
-    return fit_models(load_bundled(), study).model_set(study)
+    return fit_models(ds, study).model_set(study)
 
 
 @app.command("optimise")

@@ -19,6 +19,9 @@ def run_command(
     recompute: Annotated[bool, typer.Option(
         "--recompute", help="Run the full FE design of experiments (cached) instead of using "
                             "the data set bundled with magtact.")] = False,
+    refit: Annotated[bool, typer.Option(
+        "--refit", help="Fit the metamodels even when the fit shipped with magtact matches the "
+                        "data and settings.")] = False,
     data: Annotated[list[Path] | None, typer.Option(
         "--data", help="Validation CSV file (repeat the option for several); default: the "
                        "shipped SYNTHETIC example.")] = None,
@@ -31,7 +34,7 @@ def run_command(
     from ..pipeline import run_study
 
     s = get_study(study)
-    result = run_study(s, out_dir(out), recompute=recompute, data=data, cache=cache,
+    result = run_study(s, out_dir(out), recompute=recompute, refit=refit, data=data, cache=cache,
                        workers=workers, command="magtact " + " ".join(sys.argv[1:]),
                        log=lambda m: console.print(m, highlight=False, markup=False))
     console.print(f"report: {result.report} ({result.wall_time_s:.1f} s)", highlight=False)
