@@ -141,13 +141,14 @@ def box_optimum(fun: Fun, jac: Fun, hess: Fun, lo, hi, *, maximise: bool, popula
     def d2phi(z):
         return sign * np.asarray(hess(full(z)), float)[0][np.ix_(free, free)] / scale
 
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore",
+                                                divide="ignore"):
         warnings.filterwarnings("ignore", message=".*delta_grad == 0.0.*")
         res = minimize(phi, z_ga, method="trust-constr", jac=dphi, hess=d2phi,
                        bounds=Bounds(lo[free], hi[free], keep_feasible=True),
                        options={"gtol": tol, "xtol": tol, "barrier_tol": tol, "maxiter": 2000})
-    z, nit = _active_set_finish(phi, dphi, d2phi, np.clip(res.x, lo[free], hi[free]),
-                                lo[free], hi[free], tol)
+        z, nit = _active_set_finish(phi, dphi, d2phi, np.clip(res.x, lo[free], hi[free]),
+                                    lo[free], hi[free], tol)
     if not phi(z) <= phi(z_ga) + _ROUNDOFF * max(1.0, abs(phi(z_ga))):
         z = z_ga
     x = full(z)[0]
@@ -187,10 +188,16 @@ def _active_set_finish(phi, dphi, d2phi, z, lo, hi, tol, rounds: int = 4):
                 out[face] = y
                 return out
 
-            res = minimize(lambda y, put=put: phi(put(y)), cand[face], method="trust-exact",
-                           jac=lambda y, put=put, face=face: dphi(put(y))[face],
-                           hess=lambda y, put=put, face=face: d2phi(put(y))[np.ix_(face, face)],
-                           options={"gtol": tol, "maxiter": 200})
+            try:
+                res = minimize(lambda y, put=put: phi(put(y)), cand[face], method="trust-exact",
+                               jac=lambda y, put=put, face=face: dphi(put(y))[face],
+                               hess=lambda y, put=put, face=face: d2phi(put(y))[np.ix_(face,
+                                                                                       face)],
+                               options={"gtol": tol, "maxiter": 200})
+            except ValueError:
+                # the unconstrained step left the box into a region where a fitted model's
+                # Hessian overflows; keep the bound-constrained point found so far
+                break
             nit += int(res.nit)
             cand = _newton_polish(phi, dphi, d2phi, put(res.x), face, lo, hi)
         if np.any(cand < lo) or np.any(cand > hi):
