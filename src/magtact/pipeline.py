@@ -19,9 +19,9 @@ import traceback
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
-from importlib import metadata
 from pathlib import Path
 
+from ._versions import package_versions
 from .study import Study
 
 #: Packages whose versions the report lists.
@@ -182,12 +182,7 @@ def versions() -> dict[str, str]:
     """Versions of Python, the platform and the packages in :data:`PACKAGES`."""
     out = {"python": sys.version.split()[0], "platform": platform.platform(),
            "machine": platform.machine(), "cpus": str(os.cpu_count())}
-    for name in PACKAGES:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = "not installed"
-    return out
+    return out | package_versions(PACKAGES)
 
 
 # ---- stages ----------------------------------------------------------------------------------

@@ -29,11 +29,11 @@ import sys
 import time
 import traceback
 from dataclasses import dataclass
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
+from .._versions import package_versions as versions
 from ..study import Study, mm
 from ._cache import Entry
 
@@ -129,15 +129,6 @@ def solver_identity(func, packages: tuple[str, ...]) -> dict:
     return {"name": f"{func.__module__}.{func.__qualname__}", "code": source_fingerprint(*parts)}
 
 
-def versions(names) -> dict[str, str]:
-    """Installed versions of the named distributions (``"absent"`` when not installed)."""
-    out = {}
-    for name in names:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = "absent"
-    return out
 
 
 def digest(payload: dict) -> str:
