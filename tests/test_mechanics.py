@@ -157,7 +157,7 @@ def test_equilibrium_of_the_half_body(study):
 
 # ---- failures and bad inputs ----------------------------------------------------------------
 def test_path_failed_names_t_theta_H(study):
-    s = _with(study, "mechanics", mesh="coarse", max_newton=2, dt_min=0.04)
+    s = _with(study, "mechanics", mesh="coarse", max_newton=2, dt_initial=0.05, dt_min=0.04)
     with pytest.raises(PathFailed) as info:
         simulate_path(s, 3e-3, 0.2, t=[0.0, 0.05])
     msg = str(info.value)

@@ -102,20 +102,21 @@ class Stepping:
 
     A step that fails is restored and retried with dt × ``cutback``; a step that needed at most
     ``easy_iter`` Newton iterations lets dt grow × ``growth`` up to ``dt_max``. A step fails
-    after ``max_iter`` iterations, or when three successive iterations do not lower the best
-    residual a second time (after the first such stall the updates are halved), or when a
-    residual stays non-finite after ``line_search`` halvings of the update.
-    ``tol``: ‖r_free‖ / (‖r_prescribed‖ + ε) at convergence.
+    after ``max_iter`` iterations, or when, after two iterations that did not halve the best
+    residual (from then on each update is backtracked up to ``line_search`` halvings until the
+    residual decreases), three more fail to halve it, or when a residual stays non-finite after
+    ``line_search`` halvings of the update. ``tol``: ‖r_free‖ / (‖r_prescribed‖ + ε) at
+    convergence.
     """
 
-    dt_initial: float = 0.05
+    dt_initial: float = 0.025
     dt_min: float = 1e-4
     dt_max: float = 0.1
     max_iter: int = 12
     easy_iter: int = 4
     growth: float = 1.5
     cutback: float = 0.5
-    tol: float = 1e-8
+    tol: float = 1e-6
     line_search: int = 4
 
 
@@ -283,11 +284,13 @@ class HalfBodyModel:
         """Convergence measure ‖r_free‖ / (‖r_prescribed‖ + ε), ε ∝ G: G-invariant."""
         return float(np.linalg.norm(f[self.dof1]) / (np.linalg.norm(f[self.dof0]) + self._eps))
 
-    def _line_search(self, u: np.ndarray, du: np.ndarray,
-                     halvings: int) -> tuple[np.ndarray, float]:
+    def _line_search(self, u: np.ndarray, du: np.ndarray, halvings: int,
+                     below: float = np.inf) -> tuple[np.ndarray, float]:
         """Residual after the update u += du (already applied), backtracking u ← u − α du with
-        α = 1/2, 1/4, … while the residual is not finite (cells turned inside out). A larger
-        residual is accepted: with contact it may grow before Newton's method converges.
+        α = 1/2, 1/4, … while the residual is not finite (cells turned inside out) or not
+        below ``below``. Outside the cycling mode of :meth:`_newton` ``below`` is infinite: a
+        larger residual is accepted, since with contact it may grow before Newton's method
+        converges. If no halving gets below ``below``, the smallest step is kept.
 
         Raises
         ------
@@ -298,7 +301,7 @@ class HalfBodyModel:
         fnorm = self._norm(f)
         alpha = 1.0
         for _ in range(halvings):
-            if np.isfinite(fnorm):
+            if np.isfinite(fnorm) and fnorm < below:
                 break
             alpha /= 2
             u -= alpha * du
@@ -314,9 +317,11 @@ class HalfBodyModel:
         Newton's method on the free DOFs. The first iteration is the predictor with the tangent
         of the previous step's last iterate and the prescribed increment du0,
         K11 du1 = −r1 − K10 du0; every later iteration assembles and factorises a new tangent.
-        When three iterations in a row do not improve on the best residual (the contact state
-        cycles between two sets), the remaining updates are halved; a second stall fails.
-        On success the contact state variables (stick reference, active set) are accepted.
+        When two iterations in a row do not halve the best residual so far, the contact state
+        is cycling (a node crossing a plate or switching between stick and slip): from then on
+        every update is backtracked until the residual decreases. Three more iterations
+        without improvement fail the step. On success the contact state variables (stick
+        reference, active set) are accepted.
 
         Raises
         ------
@@ -329,29 +334,27 @@ class HalfBodyModel:
         u = self.field[0].values.reshape(-1)  # a view: updates act on the field
         if self._K10 is None:
             self._jacobian()
-        f, best, stalled, alpha = self._fun, np.inf, 0, 1.0
+        f, fnorm, best, stalled, cycling = self._fun, np.inf, np.inf, 0, False
         for it in range(1, st.max_iter + 1):
             du = np.zeros(self.n_dofs)
             du[self.dof0] = ext[self.dof0] - u[self.dof0]
             t0 = time.perf_counter()
             du[self.dof1] = self._linear.solve(-f[self.dof1] - self._K10 @ du[self.dof0])
             self.timings["solve"] += time.perf_counter() - t0
-            du *= alpha
             u += du
-            f, fnorm = self._line_search(u, du, st.line_search)
+            f, fnorm = self._line_search(u, du, st.line_search, fnorm if cycling else np.inf)
             self.iterations += 1
             if fnorm < st.tol:
                 for item in self.items:
                     item.results.update_statevars()
                 self._fun = f
                 return it
-            stalled = stalled + 1 if fnorm >= best else 0
-            if stalled >= 3:
-                if alpha < 1:
+            stalled = stalled + 1 if fnorm > 0.5 * best else 0
+            if stalled >= (3 if cycling else 2):
+                if cycling:
                     raise NewtonFailed(
                         f"no progress of the Newton iterations (residual {fnorm:.2e})")
-                # the contact state cycles: continue with half Newton steps
-                alpha, stalled = 0.5, 0
+                cycling, stalled = True, 0
             best = min(best, fnorm)
             if it < st.max_iter:
                 self._jacobian()

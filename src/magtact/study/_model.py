@@ -129,11 +129,11 @@ class Mechanics:
     magnet_edge_radius: float = setting(3e-4, "mm", minimum=0.0,
                                         doc="radius of the rounded lower edge of the rigid magnet "
                                             "in the structural model (0: sharp)")
-    dt_initial: float = setting(0.05, positive=True, doc="first load step (in units of t)")
+    dt_initial: float = setting(0.025, positive=True, doc="first load step (in units of t)")
     dt_min: float = setting(1e-4, positive=True, doc="smallest load step before a path fails")
     dt_max: float = setting(0.1, positive=True, doc="largest load step")
     max_newton: int = setting(12, integer=True, minimum=2, doc="Newton iterations per step")
-    newton_tol: float = setting(1e-8, positive=True,
+    newton_tol: float = setting(1e-6, positive=True,
                                 doc="relative residual tolerance of the Newton iterations")
 
 
