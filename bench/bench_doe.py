@@ -60,11 +60,11 @@ def main() -> None:
                  "n_cells": j["n_cells"], "n_dofs": j["n_dofs"]} for j in jobs]
     result = {
         "benchmark": "full default MagOne DOE from an empty cache",
-        "command": "nice -n 10 python bench/bench_doe.py",
+        "command": "python bench/bench_doe.py",
         "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
                     "python": platform.python_version(),
                     "load_average_at_start": load_start, "load_average_at_end": os.getloadavg(),
-                    "note": "2 cores shared with other concurrent jobs; run under nice"},
+                    "note": "2 cores; other work on the machine shows in the load averages"},
         "workers": args.workers,
         "complete": not failures,
         "failures": failures,

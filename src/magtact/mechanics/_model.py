@@ -260,11 +260,15 @@ class HalfBodyModel:
 
     # ---- solution ---------------------------------------------------------------------------
     def _residual(self) -> np.ndarray:
-        """Assemble the residual (internal minus external force) [N] at the current field."""
+        """Assemble the residual (internal minus external force) [N] at the current field.
+
+        Cells turned inside out by a too large update give non-finite values (no warning: the
+        line search and the step control handle them)."""
         f = np.zeros(self.n_dofs)
-        for item in self.items:
-            r = np.asarray(item.assemble.vector(field=self.field).todense()).ravel()
-            f[: len(r)] += r
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for item in self.items:
+                r = np.asarray(item.assemble.vector(field=self.field).todense()).ravel()
+                f[: len(r)] += r
         return f
 
     def _jacobian(self) -> None:
