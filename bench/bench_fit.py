@@ -4,9 +4,11 @@ Fits B_r, B_z, f_r, f_z with the study's [metamodel] settings, records the time 
 the held-out accuracy (whole (θ, H) paths), and compares Γ of the models with Γ from finite
 differences of the DOE data. Writes ``bench/results/fit.json``.
 
-    nice -n 10 python bench/bench_fit.py [--data DOE.nc] [--out bench/results/fit.json]
+    python bench/bench_fit.py [--data DOE.nc] [--out bench/results/fit.json] [--models-out DIR]
 
-Without ``--data`` the bundled data set is used (``magtact.doe.load_bundled``).
+Without ``--data`` the bundled data set is used (``magtact.doe.load_bundled``). The fit runs
+through :func:`magtact.metamodel.write_fit_outputs`, as ``magtact fit`` does; ``--models-out
+src/magtact/metamodel/data/magone`` keeps its files as the fit shipped with magtact.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import argparse
 import json
 import os
 import platform
+import tempfile
 import time
 from dataclasses import asdict
 from pathlib import Path
@@ -22,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from magtact.doe import load_bundled, load_dataset
-from magtact.metamodel import fit_models
+from magtact.metamodel import write_fit_outputs
 from magtact.sensitivity import compare_with_data
 from magtact.study import load_study
 
@@ -52,12 +55,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=None)
     ap.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "fit.json")
+    ap.add_argument("--models-out", type=Path, default=None,
+                    help="keep the model files, report and figures there (default: discarded)")
     args = ap.parse_args()
     study = load_study(None)
     ds = load_dataset(args.data) if args.data else load_bundled()
-    t0 = time.perf_counter()
-    res = fit_models(ds, study, log=print)
-    total = time.perf_counter() - t0
+    with tempfile.TemporaryDirectory(prefix="magtact-bench-fit-") as tmp:
+        t0 = time.perf_counter()
+        res, _ = write_fit_outputs(study, ds, args.models_out or tmp, log=print)
+        total = time.perf_counter() - t0
     models = res.model_set(study)
     rows = {}
     for k, rep in res.reports.items():

@@ -5,6 +5,7 @@ while it runs; ``"complete": true`` once the part has finished). The parts can r
 
     nice -n 10 python bench/bench_mechanics.py                # all parts
     nice -n 10 python bench/bench_mechanics.py --part grid    # one part
+    python bench/bench_mechanics.py --part convergence --H 7  # one height: ..._H7.json
 
 Parts:
 - ``solver``: time to factorise the tangent of the default mesh (H = 7 mm, t = 0) with PARDISO
@@ -61,7 +62,7 @@ def _header(study, part: str) -> dict:
         "part": part, "complete": False,
         "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
                     "load_average_at_start": os.getloadavg(), "felupe": fem.__version__,
-                    "note": "2 cores shared by several concurrent jobs; run under nice"},
+                    "note": "2 cores; other work on the machine shows in the load average"},
         "settings": {k: getattr(study.mechanics, k) for k in study.mechanics.__dataclass_fields__},
     }
 
@@ -93,10 +94,11 @@ def part_solver(study) -> None:
     _save(data)
 
 
-def part_convergence(study) -> None:
+def part_convergence(study, heights_mm: list[float]) -> None:
     theta = study.loading.theta_max
-    data = _header(study, "convergence") | {"cases": []}
-    cases = {H: {"H_mm": H * 1e3, "theta_rad": theta} for H in (3e-3, 7e-3)}
+    suffix = "" if heights_mm == [3.0, 7.0] else "_H" + "_".join(f"{h:g}" for h in heights_mm)
+    data = _header(study, "convergence" + suffix) | {"cases": []}
+    cases = {h * 1e-3: {"H_mm": h, "theta_rad": theta} for h in heights_mm}
     data["cases"] = list(cases.values())
     for mesh in ("default", "fine"):  # both default paths first: the fine ones are long
         for H, case in cases.items():
@@ -143,11 +145,17 @@ def part_grid(study) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--part", choices=("all", "solver", "convergence", "grid"), default="all")
+    ap.add_argument("--H", type=float, nargs="+", default=[3.0, 7.0],
+                    help="base heights [mm] of the convergence part (default 3 7); other than "
+                         "the default, the JSON is named mechanics_convergence_H<..>.json")
     args = ap.parse_args()
     study = load_study(None)
     parts = ("solver", "convergence", "grid") if args.part == "all" else (args.part,)
     for part in parts:
-        {"solver": part_solver, "convergence": part_convergence, "grid": part_grid}[part](study)
+        if part == "convergence":
+            part_convergence(study, args.H)
+        else:
+            {"solver": part_solver, "grid": part_grid}[part](study)
 
 
 if __name__ == "__main__":
