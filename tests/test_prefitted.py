@@ -2,7 +2,6 @@
 
 from dataclasses import replace
 
-import numpy as np
 import pytest
 
 from magtact.doe import load_bundled
@@ -27,16 +26,44 @@ def test_other_settings_or_data_are_not_served(ds):
     assert find_prefitted(s, other) is None
 
 
-def test_shipped_models_reproduce_the_fe_data(ds, tmp_path):
-    models, files = copy_prefitted(prefitted_dir(), tmp_path)
+def _errors(models, ds, name):
+    """(train, held-out) max |error| / range of one shipped model on the bundled data."""
+    from magtact.metamodel._fit import _table, accuracy, holdout_mask
+
+    table = _table(ds)[0]
+    model = getattr(models, name)
+    y_hat = model.value(table["t"], table["theta"], table["H"])
+    test = holdout_mask(table, model.info["accuracy"]["holdout_paths_theta_H"])
+    y = table[name]
+    return (accuracy(y[~test], y_hat[~test], y).max_abs_err_over_range,
+            accuracy(y[test], y_hat[test], y).max_abs_err_over_range)
+
+
+@pytest.fixture(scope="module")
+def shipped(tmp_path_factory):
+    models, files = copy_prefitted(prefitted_dir(), tmp_path_factory.mktemp("shipped"))
     assert {f.name for f in files} >= {"B_r.json", "B_z.json", "f_r.json", "f_z.json",
                                        "metamodels.md"}
-    T, TH, H = np.meshgrid(ds.t.values, ds.theta.values, ds.H.values, indexing="ij")
-    for name, model, data in (("B_r", models.B_r, ds.B_r), ("B_z", models.B_z, ds.B_z)):
-        err = np.abs(model.value(T, TH, H) - data.values).max() / np.ptp(data.values)
-        assert err < 0.01, name  # issue 5: ≤ 1 % of range for the field
-    G = float(ds.G.values[2])
-    for name, model, data in (("f_r", models.f_r, ds.F_r), ("f_z", models.f_z, ds.F_z)):
-        y = data.sel(G=G).values
-        err = np.abs(G * model.value(T, TH, H) - y).max() / np.ptp(y)
-        assert err < 0.03, name  # all points incl. training; held-out figures in metamodels.md
+    return models
+
+
+@pytest.mark.parametrize("name", ["B_r", "B_z", "f_r", "f_z"])
+def test_shipped_accuracy_report_is_what_the_models_give(ds, shipped, name):
+    """The accuracy written into each shipped file is recomputed from its expression, and the
+    training error is within the fit's target (SPEC section 5; F data are rough at ~1 %)."""
+    train, test = _errors(shipped, ds, name)
+    report = getattr(shipped, name).info["accuracy"]
+    assert train == pytest.approx(report["train"]["max_abs_err_over_range"], rel=1e-6)
+    assert test == pytest.approx(report["test"]["max_abs_err_over_range"], rel=1e-6)
+    assert train < (0.01 if name.startswith("B") else 0.02)
+
+
+@pytest.mark.parametrize("name", [
+    "B_r", "B_z", "f_z",
+    pytest.param("f_r", marks=pytest.mark.xfail(
+        strict=True, reason="issue 5: f_r misses 2 % on held-out paths (3.2 %); the FE data "
+                            "jump by up to 3 % of the range between t levels (contact events)")),
+])
+def test_shipped_held_out_accuracy_meets_issue_5(ds, shipped, name):
+    """Issue 5: max |error| ≤ 1 % of range for B, ≤ 2 % for F/G on held-out (θ, H) paths."""
+    assert _errors(shipped, ds, name)[1] <= (0.01 if name.startswith("B") else 0.02)
