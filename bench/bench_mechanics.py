@@ -14,6 +14,9 @@ Parts:
   per direction): F_z(t = 1) and min F_r and their relative change (target < 2 %).
 - ``grid``: every (θ, H) of the default DOE grid on the default mesh: completion, wall time,
   Newton iterations, Jacobians, cut-backs, and where the time goes.
+- ``directions``: θ = θ_max on the default mesh with one of its parameters doubled at a time
+  (cells in z, radially, around the circle, across the rounded edge): which direction carries
+  the discretisation error, against the fine mesh of the ``convergence`` part if it was run.
 """
 
 from __future__ import annotations
@@ -114,6 +117,37 @@ def part_convergence(study, heights_mm: list[float]) -> None:
     _save(data)
 
 
+def part_directions(study, heights_mm: list[float]) -> None:
+    from magtact.geometry._body_mesh import DENSITIES
+
+    base = DENSITIES["default"]
+    variants = {"z": {"h_z": base["h_z"] / 2},
+                "radial": {"radial": tuple(2 * n for n in base["radial"])},
+                "circumferential": {"m": 2 * base["m"]},
+                "corner": {"n_corner": 2 * base["n_corner"]}}
+    suffix = "" if heights_mm == [3.0, 7.0] else "_H" + "_".join(f"{h:g}" for h in heights_mm)
+    data = _header(study, "directions" + suffix) | {"cases": []}
+    theta = study.loading.theta_max
+    for h in heights_mm:
+        conv = RESULTS / f"mechanics_convergence_H{h:g}.json"
+        fine = json.loads(conv.read_text())["cases"][0].get("fine") if conv.is_file() else None
+        for direction, change in variants.items():
+            DENSITIES[f"default_x2_{direction}"] = base | change
+            rec = _path_record(simulate_path(study, h * 1e-3, theta,
+                                             mesh=f"default_x2_{direction}"))
+            rec["doubled"] = direction
+            if fine is not None:
+                rec["change_vs_fine_F_z_t1"] = abs(rec["F_z_t1_N"] / fine["F_z_t1_N"] - 1)
+                rec["change_vs_fine_F_r_min"] = abs(rec["F_r_min_N"] / fine["F_r_min_N"] - 1)
+            data["cases"].append(rec)
+            print(f"H = {h:g} mm, doubled {direction}: {rec['n_dofs']} DOFs, "
+                  f"{rec['wall_time_s']} s, F_z(1) = {rec['F_z_t1_N']:.4f} N, "
+                  f"min F_r = {rec['F_r_min_N']:.4f} N", flush=True)
+            _save(data)
+    data["complete"] = True
+    _save(data)
+
+
 def part_grid(study) -> None:
     data = _header(study, "grid") | {"paths": []}
     for H in study.H_levels:
@@ -144,16 +178,18 @@ def part_grid(study) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("all", "solver", "convergence", "grid"), default="all")
+    ap.add_argument("--part", choices=("all", "solver", "convergence", "grid", "directions"),
+                    default="all")
     ap.add_argument("--H", type=float, nargs="+", default=[3.0, 7.0],
-                    help="base heights [mm] of the convergence part (default 3 7); other than "
-                         "the default, the JSON is named mechanics_convergence_H<..>.json")
+                    help="base heights [mm] of the convergence and directions parts (default "
+                         "3 7); other than the default, the JSON is named ..._H<..>.json")
     args = ap.parse_args()
     study = load_study(None)
-    parts = ("solver", "convergence", "grid") if args.part == "all" else (args.part,)
+    parts = (("solver", "convergence", "directions", "grid") if args.part == "all"
+             else (args.part,))
     for part in parts:
-        if part == "convergence":
-            part_convergence(study, args.H)
+        if part in ("convergence", "directions"):
+            {"convergence": part_convergence, "directions": part_directions}[part](study, args.H)
         else:
             {"solver": part_solver, "grid": part_grid}[part](study)
 
