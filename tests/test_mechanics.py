@@ -63,6 +63,16 @@ def test_body_mesh_volume_and_node_sets(study, placement):
         assert z_high == pytest.approx(h)
 
 
+def test_named_densities_are_the_study_choices_and_grow_in_cells(study):
+    from magtact.geometry._body_mesh import DENSITIES
+    from magtact.study import MESH_DENSITIES
+
+    assert tuple(DENSITIES) == MESH_DENSITIES
+    cells = [half_cylinder_mesh(6e-3, 4e-3, R_h=1e-3, cavity=(2.5e-3, 1e-3, 3e-3),
+                                density=d).n_cells for d in MESH_DENSITIES]
+    assert cells == sorted(cells) and len(set(cells)) == len(cells)
+
+
 def test_mesh_bad_inputs(study):
     with pytest.raises(ValueError, match="unknown mesh density 'medium'"):
         body_mesh(study, 3e-3, "medium")

@@ -8,15 +8,11 @@ from typing import Annotated
 
 import typer
 
+from ..study import MESH_DENSITIES
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
-
-class MeshDensity(StrEnum):
-    """Named mesh densities of the half body."""
-
-    coarse = "coarse"
-    default = "default"
-    fine = "fine"
+#: Named mesh densities of the half body (``magtact.study.MESH_DENSITIES``).
+MeshDensity = StrEnum("MeshDensity", {name: name for name in MESH_DENSITIES})
 
 
 @app.command("simulate")

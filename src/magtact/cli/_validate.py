@@ -9,7 +9,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from ..study import PRESETS, Study
+from ..study import MESH_DENSITIES, PRESETS, Study
 from ._app import app, console, get_study, out_dir
 
 
@@ -73,8 +73,8 @@ def validate_command(
     solver: Annotated[str, typer.Option(help="Field solver of the direct simulation: exact|fe.")]
     = "exact",
     mesh: Annotated[str | None, typer.Option(
-        help="Structural mesh of the direct simulation: coarse|default|fine; default: the "
-             "study's.")] = None,
+        help=f"Structural mesh of the direct simulation: {'|'.join(MESH_DENSITIES)}; default: "
+             "the study's.")] = None,
     f_lo: Annotated[float, typer.Option("--f-lo", help="Low cut-off (cycles per mm of u_z).")]
     = 0.0,
     f_hi: Annotated[float, typer.Option("--f-hi", help="High cut-off (cycles per mm of u_z); 0: no "

@@ -36,6 +36,7 @@ _GRADING = {"progression": 0.9, "bump": 0.6, "z_grading": 0.3}
 DENSITIES: dict[str, dict] = {
     "coarse": {"m": 3, "radial": (2, 3, 2), "h_z": 1.2e-3, "n_corner": 2} | _GRADING,
     "default": {"m": 5, "radial": (3, 5, 3), "h_z": 0.75e-3, "n_corner": 3} | _GRADING,
+    "accurate": {"m": 5, "radial": (6, 10, 6), "h_z": 0.375e-3, "n_corner": 3} | _GRADING,
     "fine": {"m": 10, "radial": (6, 10, 6), "h_z": 0.375e-3, "n_corner": 6} | _GRADING,
 }
 
@@ -93,7 +94,7 @@ def body_mesh(study: Study, H: float, mesh: str | None = None) -> BodyMesh:
         Body and magnet dimensions (SPEC section 1).
     H : float
         Base height [m]; the body is a cylinder of radius R and height H + H_g.
-    mesh : {"coarse", "default", "fine"} or None
+    mesh : {"coarse", "default", "accurate", "fine"} or None
         Mesh density; ``None`` takes ``study.mechanics.mesh``.
 
     Returns
@@ -135,7 +136,7 @@ def half_cylinder_mesh(
     cavity : (R_m, z_low, z_high) or None
         Cylindrical cavity on the axis of radius R_m between the heights z_low and z_high [m]
         (the magnet), or None for a plain body.
-    density : {"coarse", "default", "fine"}
+    density : {"coarse", "default", "accurate", "fine"}
         Named mesh density (:data:`DENSITIES`).
     r_ring : float or None
         Radius of the inner ring of block edges [m]; defaults to the cavity radius (without a

@@ -55,7 +55,7 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
         Shear modulus [Pa] of the result; default ``study.material.G_ref``. With
         ``study.mechanics.scale_in_G`` the solve runs at G_ref and the forces are scaled by
         G / G_ref (exact for this model); otherwise the solve runs at G.
-    mesh : {"coarse", "default", "fine"} or None
+    mesh : {"coarse", "default", "accurate", "fine"} or None
         Mesh density; default ``study.mechanics.mesh``.
     t : (n_t,) array_like or None
         Increasing load levels in [0, 1]; default ``study.t_levels``.

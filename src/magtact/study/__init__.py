@@ -3,6 +3,7 @@
 from ._load import PRESETS, StudyError, load_study, magone, magone_printed, study_from_dict
 from ._model import (
     DOE,
+    MESH_DENSITIES,
     Body,
     Constraints,
     Design,
@@ -16,7 +17,7 @@ from ._model import (
 from ._units import MU0, from_si, kpa, mm, to_si
 
 __all__ = [
-    "DOE", "MU0", "PRESETS", "Body", "Constraints", "Design", "Loading", "Magnet", "Magnetics",
-    "Material", "Mechanics", "Study", "StudyError", "from_si", "kpa", "load_study", "magone",
-    "magone_printed", "mm", "study_from_dict", "to_si",
+    "DOE", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints", "Design", "Loading",
+    "Magnet", "Magnetics", "Material", "Mechanics", "Study", "StudyError", "from_si", "kpa",
+    "load_study", "magone", "magone_printed", "mm", "study_from_dict", "to_si",
 ]

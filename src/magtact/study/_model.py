@@ -29,6 +29,11 @@ def key_of(f) -> str:
     return f"{f.name}_{unit}" if unit else f.name
 
 
+#: Named mesh densities of the structural half body, coarse to fine (cells per direction in
+#: :data:`magtact.geometry.DENSITIES`). "accurate" refines the default in z and radially, the
+#: two directions that carry its discretisation error (bench/results/mechanics_directions_*.json).
+MESH_DENSITIES = ("coarse", "default", "accurate", "fine")
+
 @dataclass(frozen=True)
 class Body:
     """Elastomer body: one cylinder of radius R and height H + H_g (SPEC section 1)."""
@@ -115,7 +120,7 @@ class Magnetics:
 class Mechanics:
     """Structural solver settings (SPEC section 3)."""
 
-    mesh: str = setting("default", choices=("coarse", "default", "fine"),
+    mesh: str = setting("default", choices=MESH_DENSITIES,
                         doc="named mesh density of the hexahedral half body")
     scale_in_G: bool = setting(True, doc="solve at G_ref and scale forces by G/G_ref")
     solver: str = setting("pardiso", choices=("pardiso", "superlu"),

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..study import Study, load_study
+from ..study import MESH_DENSITIES, Study, load_study
 from ._io import RESPONSES, UNITS
 from ._model import PathModel
 
@@ -119,7 +119,7 @@ def write_synthetic(out: str | Path, study: Study | None = None, *, seed: int = 
         Random seed.
     solver : {"exact", "fe"}
         Field solver of the model.
-    mesh : {"coarse", "default", "fine"}, optional
+    mesh : {"coarse", "default", "accurate", "fine"}, optional
         Structural mesh; default ``study.mechanics.mesh``.
 
     Returns
@@ -168,7 +168,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", default=str(SYNTHETIC_DIR), help="output folder")
     parser.add_argument("--seed", type=int, default=20240607)
     parser.add_argument("--solver", default="exact", choices=("exact", "fe"))
-    parser.add_argument("--mesh", default=None, choices=("coarse", "default", "fine"))
+    parser.add_argument("--mesh", default=None, choices=MESH_DENSITIES)
     args = parser.parse_args(argv)
     for path in write_synthetic(args.out, seed=args.seed, solver=args.solver, mesh=args.mesh):
         print(path)
