@@ -17,6 +17,8 @@ Parts:
 - ``directions``: θ = θ_max on the default mesh with one of its parameters doubled at a time
   (cells in z, radially, around the circle, across the rounded edge): which direction carries
   the discretisation error, against the fine mesh of the ``convergence`` part if it was run.
+- ``accurate``: θ = θ_max on the ``accurate`` mesh (the default refined in z and radially),
+  against the default and fine meshes of the ``convergence`` part if it was run.
 """
 
 from __future__ import annotations
@@ -99,8 +101,7 @@ def part_solver(study) -> None:
 
 def part_convergence(study, heights_mm: list[float]) -> None:
     theta = study.loading.theta_max
-    suffix = "" if heights_mm == [3.0, 7.0] else "_H" + "_".join(f"{h:g}" for h in heights_mm)
-    data = _header(study, "convergence" + suffix) | {"cases": []}
+    data = _header(study, "convergence" + _suffix(heights_mm)) | {"cases": []}
     cases = {h * 1e-3: {"H_mm": h, "theta_rad": theta} for h in heights_mm}
     data["cases"] = list(cases.values())
     for mesh in ("default", "fine"):  # both default paths first: the fine ones are long
@@ -117,6 +118,34 @@ def part_convergence(study, heights_mm: list[float]) -> None:
     _save(data)
 
 
+def _fine_record(h: float) -> dict | None:
+    """The fine-mesh record of the ``convergence`` part at H = h mm, if it was run."""
+    conv = RESULTS / f"mechanics_convergence_H{h:g}.json"
+    return json.loads(conv.read_text())["cases"][0].get("fine") if conv.is_file() else None
+
+
+def _versus_fine(rec: dict, fine: dict | None) -> dict:
+    if fine is None:
+        return rec
+    return rec | {"change_vs_fine_F_z_t1": abs(rec["F_z_t1_N"] / fine["F_z_t1_N"] - 1),
+                  "change_vs_fine_F_r_min": abs(rec["F_r_min_N"] / fine["F_r_min_N"] - 1)}
+
+
+def _suffix(heights_mm: list[float]) -> str:
+    return "" if heights_mm == [3.0, 7.0] else "_H" + "_".join(f"{h:g}" for h in heights_mm)
+
+
+def part_accurate(study, heights_mm: list[float]) -> None:
+    data = _header(study, "accurate" + _suffix(heights_mm)) | {"cases": []}
+    for h in heights_mm:
+        rec = _path_record(simulate_path(study, h * 1e-3, study.loading.theta_max,
+                                         mesh="accurate"))
+        data["cases"].append(_versus_fine(rec, _fine_record(h)))
+        _save(data)
+    data["complete"] = True
+    _save(data)
+
+
 def part_directions(study, heights_mm: list[float]) -> None:
     from magtact.geometry._body_mesh import DENSITIES
 
@@ -125,20 +154,15 @@ def part_directions(study, heights_mm: list[float]) -> None:
                 "radial": {"radial": tuple(2 * n for n in base["radial"])},
                 "circumferential": {"m": 2 * base["m"]},
                 "corner": {"n_corner": 2 * base["n_corner"]}}
-    suffix = "" if heights_mm == [3.0, 7.0] else "_H" + "_".join(f"{h:g}" for h in heights_mm)
-    data = _header(study, "directions" + suffix) | {"cases": []}
+    data = _header(study, "directions" + _suffix(heights_mm)) | {"cases": []}
     theta = study.loading.theta_max
     for h in heights_mm:
-        conv = RESULTS / f"mechanics_convergence_H{h:g}.json"
-        fine = json.loads(conv.read_text())["cases"][0].get("fine") if conv.is_file() else None
+        fine = _fine_record(h)
         for direction, change in variants.items():
             DENSITIES[f"default_x2_{direction}"] = base | change
             rec = _path_record(simulate_path(study, h * 1e-3, theta,
                                              mesh=f"default_x2_{direction}"))
-            rec["doubled"] = direction
-            if fine is not None:
-                rec["change_vs_fine_F_z_t1"] = abs(rec["F_z_t1_N"] / fine["F_z_t1_N"] - 1)
-                rec["change_vs_fine_F_r_min"] = abs(rec["F_r_min_N"] / fine["F_r_min_N"] - 1)
+            rec = _versus_fine(rec | {"doubled": direction}, fine)
             data["cases"].append(rec)
             print(f"H = {h:g} mm, doubled {direction}: {rec['n_dofs']} DOFs, "
                   f"{rec['wall_time_s']} s, F_z(1) = {rec['F_z_t1_N']:.4f} N, "
@@ -178,18 +202,20 @@ def part_grid(study) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("all", "solver", "convergence", "grid", "directions"),
-                    default="all")
+    ap.add_argument("--part", default="all", choices=("all", "solver", "convergence", "grid",
+                                                      "directions", "accurate"))
     ap.add_argument("--H", type=float, nargs="+", default=[3.0, 7.0],
-                    help="base heights [mm] of the convergence and directions parts (default "
-                         "3 7); other than the default, the JSON is named ..._H<..>.json")
+                    help="base heights [mm] of the convergence, directions and accurate parts "
+                         "(default 3 7); otherwise the JSON is named ..._H<..>.json")
     args = ap.parse_args()
     study = load_study(None)
-    parts = (("solver", "convergence", "directions", "grid") if args.part == "all"
+    parts = (("solver", "convergence", "directions", "accurate", "grid") if args.part == "all"
              else (args.part,))
+    by_height = {"convergence": part_convergence, "directions": part_directions,
+                 "accurate": part_accurate}
     for part in parts:
-        if part in ("convergence", "directions"):
-            {"convergence": part_convergence, "directions": part_directions}[part](study, args.H)
+        if part in by_height:
+            by_height[part](study, args.H)
         else:
             {"solver": part_solver, "grid": part_grid}[part](study)
 
