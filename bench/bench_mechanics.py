@@ -106,8 +106,11 @@ def part_convergence(study, heights_mm: list[float]) -> None:
     data["cases"] = list(cases.values())
     for mesh in ("default", "fine"):  # both default paths first: the fine ones are long
         for H, case in cases.items():
-            case[mesh] = _path_record(simulate_path(study, H, theta, mesh=mesh))
-            if mesh == "fine":
+            try:
+                case[mesh] = _path_record(simulate_path(study, H, theta, mesh=mesh))
+            except PathFailed as exc:
+                case[mesh] = {"mesh": mesh, "completed": False, "error": str(exc)}
+            if mesh == "fine" and case["default"]["completed"] and case["fine"]["completed"]:
                 d, f = case["default"], case["fine"]
                 case["change_F_z_t1"] = abs(d["F_z_t1_N"] / f["F_z_t1_N"] - 1)
                 case["change_F_r_min"] = abs(d["F_r_min_N"] / f["F_r_min_N"] - 1)
@@ -121,7 +124,8 @@ def part_convergence(study, heights_mm: list[float]) -> None:
 def _fine_record(h: float) -> dict | None:
     """The fine-mesh record of the ``convergence`` part at H = h mm, if it was run."""
     conv = RESULTS / f"mechanics_convergence_H{h:g}.json"
-    return json.loads(conv.read_text())["cases"][0].get("fine") if conv.is_file() else None
+    fine = json.loads(conv.read_text())["cases"][0].get("fine") if conv.is_file() else None
+    return fine if fine and fine["completed"] else None
 
 
 def _versus_fine(rec: dict, fine: dict | None) -> dict:
@@ -137,10 +141,15 @@ def _suffix(heights_mm: list[float]) -> str:
 
 def part_accurate(study, heights_mm: list[float]) -> None:
     data = _header(study, "accurate" + _suffix(heights_mm)) | {"cases": []}
+    theta = study.loading.theta_max
     for h in heights_mm:
-        rec = _path_record(simulate_path(study, h * 1e-3, study.loading.theta_max,
-                                         mesh="accurate"))
-        data["cases"].append(_versus_fine(rec, _fine_record(h)))
+        try:
+            rec = _versus_fine(_path_record(simulate_path(study, h * 1e-3, theta,
+                                                          mesh="accurate")), _fine_record(h))
+        except PathFailed as exc:
+            rec = {"H_mm": h, "theta_rad": theta, "mesh": "accurate", "completed": False,
+                   "error": str(exc)}
+        data["cases"].append(rec)
         _save(data)
     data["complete"] = True
     _save(data)
