@@ -58,12 +58,7 @@ def test_shipped_accuracy_report_is_what_the_models_give(ds, shipped, name):
     assert train < (0.01 if name.startswith("B") else 0.02)
 
 
-@pytest.mark.parametrize("name", [
-    "B_r", "B_z", "f_z",
-    pytest.param("f_r", marks=pytest.mark.xfail(
-        strict=True, reason="issue 5: f_r misses 2 % on held-out paths (3.2 %); the FE data "
-                            "jump by up to 3 % of the range between t levels (contact events)")),
-])
+@pytest.mark.parametrize("name", ["B_r", "B_z", "f_r", "f_z"])
 def test_shipped_held_out_accuracy_meets_issue_5(ds, shipped, name):
     """Issue 5: max |error| ≤ 1 % of range for B, ≤ 2 % for F/G on held-out (θ, H) paths."""
     assert _errors(shipped, ds, name)[1] <= (0.01 if name.startswith("B") else 0.02)

@@ -164,6 +164,16 @@ def test_gamma_from_data_agrees_with_exact_formulas():
     assert coarse["gamma_r"]["max"] > 2 * check["gamma_r"]["max"]  # converges with refinement
     gr, gz = gamma_from_data(ds)
     assert np.all(np.isnan(gr[0])) and np.all(np.isfinite(gr[1:]))
+    # the floor keeps the points where |γ_model| > floor · max |γ_model|, and only those
+    gm = gamma(analytic_set(), *np.meshgrid(ds.t.values, ds.theta.values, ds.H.values,
+                                             indexing="ij"), 1.0)
+    keep = ds.t.values[:, None, None] >= 0.2
+    for floor in (0.0, 0.5):
+        above = compare_with_data(analytic_set(), ds, t_min=0.2, floor=floor)
+        for v, g in zip(above.values(), gm, strict=True):
+            g = np.where(keep, np.abs(g), np.nan)
+            assert v["n_points_above_floor"] == np.sum(g > floor * np.nanmax(g))
+            assert v["max_above_floor"] <= v["max"] and v["floor"] == floor
 
 
 def test_gamma_from_data_needs_three_levels():

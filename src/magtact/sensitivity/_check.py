@@ -42,15 +42,18 @@ def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
     return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])
 
 
-def compare_with_data(models: ModelSet, ds, t_min: float = 0.2) -> dict[str, dict[str, float]]:
+def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
+                      floor: float = 0.05) -> dict[str, dict[str, float]]:
     """Relative difference between the models' γ and the data's finite-difference γ.
 
     Points with t < ``t_min`` are excluded (the finite differences of the data are singular at
     t = 0). Returns, for ``gamma_r`` and ``gamma_z``, the median, 95th percentile and maximum of
-    |γ_model − γ_data| / |γ_model| and the number of points, over all those points and (keys
-    with the suffix ``_interior``) over the points where both differences are central (not on
-    the last t level nor the first or last θ level): one-sided differences at the edges of a
-    coarse grid are the least accurate part of the data's Γ.
+    |γ_model − γ_data| / |γ_model| and the number of points, over all those points, (suffix
+    ``_interior``) over the points where both differences are central (not on the last t level
+    nor the first or last θ level): one-sided differences at the edges of a coarse grid are the
+    least accurate part of the data's Γ, and (suffix ``_above_floor``) over the points where
+    |γ_model| > ``floor`` · max |γ_model|, the convention of the metamodels' relative errors:
+    where γ_r nearly vanishes (θ = 0 at large H), a relative difference says nothing.
     """
     t_, th_, H_ = (np.asarray(ds[k].values, dtype=float) for k in ("t", "theta", "H"))
     T, TH, HH = np.meshgrid(t_, th_, H_, indexing="ij")
@@ -61,13 +64,14 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2) -> dict[str, dic
     out = {}
     for name, gm, gd in zip(("gamma_r", "gamma_z"), model, data, strict=True):
         rel_all = np.abs(gm - gd) / np.abs(gm)
+        above = keep & (np.abs(gm) > floor * np.nanmax(np.abs(gm[keep])))
         stats = {}
-        for suffix, mask in (("", keep), ("_interior", interior)):
+        for suffix, mask in (("", keep), ("_interior", interior), ("_above_floor", above)):
             rel = rel_all[mask]
             rel = rel[np.isfinite(rel)]
             if rel.size:
                 stats |= {"median" + suffix: float(np.median(rel)),
                           "p95" + suffix: float(np.percentile(rel, 95)),
                           "max" + suffix: float(rel.max()), "n_points" + suffix: int(rel.size)}
-        out[name] = stats | {"t_min": t_min}
+        out[name] = stats | {"t_min": t_min, "floor": floor}
     return out

@@ -30,9 +30,10 @@ def key_of(f) -> str:
 
 
 #: Named mesh densities of the structural half body, coarse to fine (cells per direction in
-#: :data:`magtact.geometry.DENSITIES`). "accurate" refines the default in z and radially, the
-#: two directions that carry its discretisation error (bench/results/mechanics_directions_*.json);
-#: it fails near t = 0.98 at H = 7 mm, θ_max (bench/results/mechanics_accurate.json).
+#: :data:`magtact.geometry.DENSITIES`). "accurate" has about twice the default's cells in z and
+#: radially, the two directions that carry the discretisation error
+#: (bench/results/mechanics_directions_*.json); it fails near t = 0.98 at H = 7 mm, θ_max
+#: (bench/results/mechanics_accurate.json).
 MESH_DENSITIES = ("coarse", "default", "accurate", "fine")
 
 @dataclass(frozen=True)
