@@ -157,7 +157,8 @@ def test_gamma_from_data_agrees_with_exact_formulas():
     ds = synthetic_doe(study, n_t=41)
     check = compare_with_data(analytic_set(), ds, t_min=0.2)
     for v in check.values():  # second-order differences: ~(Δθ)² (one-sided at the edges)
-        assert v["n_points"] == 33 * 17 * 5 and v["n_points_interior"] == 32 * 15 * 5
+        # interior: central in t and θ, θ = 0 included (continued to −θ by the mirror symmetry)
+        assert v["n_points"] == 33 * 17 * 5 and v["n_points_interior"] == 32 * 16 * 5
         assert v["max"] < 0.025 and v["median"] < 0.002 and v["max_interior"] < 0.015
     coarse = compare_with_data(analytic_set(), synthetic_doe(
         replace(STUDY, doe=replace(STUDY.doe, n_theta=9)), n_t=41), t_min=0.2)

@@ -12,7 +12,9 @@ def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
     """γ_r, γ_z = Γ / G [N/(T·Pa)] on the DOE grid (t, θ, H) by finite differences.
 
     Derivatives along t and θ are second-order differences of the gridded data
-    (``numpy.gradient``, one-sided of second order at the edges). With x = (t, θ),
+    (``numpy.gradient``, one-sided of second order at the edges). When the first θ level is 0,
+    the data are continued to −θ by the mirror symmetry of the sensor (F_r and B_r odd in θ,
+    F_z and B_z even), so that the θ differences there are central too. With x = (t, θ),
     ∂F/∂B = (∂F/∂x)(∂B/∂x)⁻¹ (the map x → u cancels), which is singular at t = 0: values there
     are NaN.
 
@@ -30,12 +32,20 @@ def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
         a = ds[name].transpose("t", "theta", "H", ...).values
         return (a / G).mean(axis=-1) if name.startswith("F") else np.asarray(a, dtype=float)
 
-    def d(a):
-        return np.stack([np.gradient(a, t_, axis=0, edge_order=2),
-                         np.gradient(a, th_, axis=1, edge_order=2)], axis=-1)
+    mirror = th_[0] == 0
 
-    J = np.stack([d(arr("B_r")), d(arr("B_z"))], axis=-2)  # (..., B, x)
-    dF = np.stack([d(arr("F_r")), d(arr("F_z"))], axis=-2)  # (..., F, x)
+    def d(a, parity):
+        if mirror:  # ghost level −θ_1 from the mirror symmetry, dropped after differencing
+            a = np.concatenate([parity * a[:, 1:2], a], axis=1)
+            th = np.concatenate([[-th_[1]], th_])
+        else:
+            th = th_
+        d_th = np.gradient(a, th, axis=1, edge_order=2)[:, int(mirror):]
+        return np.stack([np.gradient(a[:, int(mirror):], t_, axis=0, edge_order=2), d_th],
+                        axis=-1)
+
+    J = np.stack([d(arr("B_r"), -1), d(arr("B_z"), 1)], axis=-2)  # (..., B, x)
+    dF = np.stack([d(arr("F_r"), -1), d(arr("F_z"), 1)], axis=-2)  # (..., F, x)
     S = np.full(J.shape, np.nan)
     ok = (np.abs(np.linalg.det(J)) > 0) & (t_ > 0)[:, None, None]
     S[ok] = dF[ok] @ np.linalg.inv(J[ok])
@@ -50,8 +60,9 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
     t = 0). Returns, for ``gamma_r`` and ``gamma_z``, the median, 95th percentile and maximum of
     |γ_model − γ_data| / |γ_model| and the number of points, over all those points, (suffix
     ``_interior``) over the points where both differences are central (not on the last t level
-    nor the first or last θ level): one-sided differences at the edges of a coarse grid are the
-    least accurate part of the data's Γ, and (suffix ``_above_floor``) over the points where
+    nor the last θ level, nor the first unless it is θ = 0): one-sided differences at the edges
+    of a coarse grid are the least accurate part of the data's Γ, and (suffix
+    ``_above_floor``) over the points where
     |γ_model| > ``floor`` · max |γ_model|, the convention of the metamodels' relative errors:
     where γ_r nearly vanishes (θ = 0 at large H), a relative difference says nothing.
     """
@@ -60,7 +71,8 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
     data = gamma_from_data(ds)
     model = gamma(models, T, TH, HH, 1.0)
     keep = T >= t_min
-    interior = keep & (T < t_.max()) & (TH > th_.min()) & (TH < th_.max())
+    first = TH > th_.min() if th_.min() > 0 else True  # central at θ = 0 by the mirror
+    interior = keep & (T < t_.max()) & first & (TH < th_.max())
     out = {}
     for name, gm, gd in zip(("gamma_r", "gamma_z"), model, data, strict=True):
         rel_all = np.abs(gm - gd) / np.abs(gm)
