@@ -136,6 +136,9 @@ def part_convergence(study, heights_mm: list[float], reuse_fine: bool = False,
             else:
                 try:
                     case[mesh] = _path_record(simulate_path(study, H, theta, mesh=mesh, t=t))
+                    if t_max < 1:  # the last level is not t = 1
+                        for k in ("F_z", "F_r"):
+                            case[mesh][f"{k}_t_end_N"] = case[mesh].pop(f"{k}_t1_N")
                 except PathFailed as exc:
                     case[mesh] = {"mesh": mesh, "completed": False, "error": str(exc)}
             if mesh == "fine" and case["default"]["completed"] and case["fine"]["completed"]:
