@@ -45,14 +45,17 @@ RESULTS = Path(__file__).parent / "results"
 
 
 def _path_record(r) -> dict:
+    """JSON record of a path; the forces at its last level are keyed ``*_t1_N`` when that level
+    is t = 1, else ``*_t_end_N``."""
     i = int(np.argmin(r.F_r))
+    end = "t1" if r.t[-1] == 1 else "t_end"
     return {
         "H_mm": r.H * 1e3, "theta_rad": r.theta, "mesh": r.mesh, "n_dofs": r.n_dofs,
         "n_cells": r.n_cells, "completed": True, "wall_time_s": round(r.wall_time, 2),
         "newton_iterations": r.newton_iterations, "jacobians": r.jacobians,
         "cutbacks": r.cutbacks, "steps": r.steps,
         "timings_s": {k: round(v, 2) for k, v in r.timings.items()},
-        "F_z_t1_N": float(r.F_z[-1]), "F_r_t1_N": float(r.F_r[-1]),
+        f"F_z_{end}_N": float(r.F_z[-1]), f"F_r_{end}_N": float(r.F_r[-1]),
         "F_r_min_N": float(r.F_r[i]), "t_at_F_r_min": float(r.t[i]),
         "F_z_N": r.F_z.tolist(), "F_r_N": r.F_r.tolist(),
     }
@@ -136,9 +139,6 @@ def part_convergence(study, heights_mm: list[float], reuse_fine: bool = False,
             else:
                 try:
                     case[mesh] = _path_record(simulate_path(study, H, theta, mesh=mesh, t=t))
-                    if t_max < 1:  # the last level is not t = 1
-                        for k in ("F_z", "F_r"):
-                            case[mesh][f"{k}_t_end_N"] = case[mesh].pop(f"{k}_t1_N")
                 except PathFailed as exc:
                     case[mesh] = {"mesh": mesh, "completed": False, "error": str(exc)}
             if mesh == "fine" and case["default"]["completed"] and case["fine"]["completed"]:

@@ -8,6 +8,11 @@ from ..metamodel import ModelSet
 from ._gamma import gamma
 
 
+def _mirrored(theta_levels: np.ndarray) -> bool:
+    """Whether the θ grid starts at 0, where the data are continued to −θ by symmetry."""
+    return bool(theta_levels[0] == 0)
+
+
 def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
     """γ_r, γ_z = Γ / G [N/(T·Pa)] on the DOE grid (t, θ, H) by finite differences.
 
@@ -32,17 +37,14 @@ def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
         a = ds[name].transpose("t", "theta", "H", ...).values
         return (a / G).mean(axis=-1) if name.startswith("F") else np.asarray(a, dtype=float)
 
-    mirror = th_[0] == 0
+    ghost = int(_mirrored(th_))  # ghost level −θ_1, dropped after differencing
+    th = np.concatenate([[-th_[1]], th_]) if ghost else th_
 
     def d(a, parity):
-        if mirror:  # ghost level −θ_1 from the mirror symmetry, dropped after differencing
+        if ghost:
             a = np.concatenate([parity * a[:, 1:2], a], axis=1)
-            th = np.concatenate([[-th_[1]], th_])
-        else:
-            th = th_
-        d_th = np.gradient(a, th, axis=1, edge_order=2)[:, int(mirror):]
-        return np.stack([np.gradient(a[:, int(mirror):], t_, axis=0, edge_order=2), d_th],
-                        axis=-1)
+        d_th = np.gradient(a, th, axis=1, edge_order=2)[:, ghost:]
+        return np.stack([np.gradient(a[:, ghost:], t_, axis=0, edge_order=2), d_th], axis=-1)
 
     J = np.stack([d(arr("B_r"), -1), d(arr("B_z"), 1)], axis=-2)  # (..., B, x)
     dF = np.stack([d(arr("F_r"), -1), d(arr("F_z"), 1)], axis=-2)  # (..., F, x)
@@ -62,16 +64,16 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
     ``_interior``) over the points where both differences are central (not on the last t level
     nor the last θ level, nor the first unless it is θ = 0): one-sided differences at the edges
     of a coarse grid are the least accurate part of the data's Γ, and (suffix
-    ``_above_floor``) over the points where
-    |γ_model| > ``floor`` · max |γ_model|, the convention of the metamodels' relative errors:
-    where γ_r nearly vanishes (θ = 0 at large H), a relative difference says nothing.
+    ``_above_floor``) over the points where |γ_model| > ``floor`` · max |γ_model|, the
+    convention of the metamodels' relative errors: where γ_r nearly vanishes (θ = 0 at large
+    H), a relative difference says nothing.
     """
     t_, th_, H_ = (np.asarray(ds[k].values, dtype=float) for k in ("t", "theta", "H"))
     T, TH, HH = np.meshgrid(t_, th_, H_, indexing="ij")
     data = gamma_from_data(ds)
     model = gamma(models, T, TH, HH, 1.0)
     keep = T >= t_min
-    first = TH > th_.min() if th_.min() > 0 else True  # central at θ = 0 by the mirror
+    first = True if _mirrored(th_) else TH > th_.min()
     interior = keep & (T < t_.max()) & first & (TH < th_.max())
     out = {}
     for name, gm, gd in zip(("gamma_r", "gamma_z"), model, data, strict=True):
