@@ -10,9 +10,9 @@ while it runs; ``"complete": true`` once the part has finished). The parts can r
 Parts:
 - ``solver``: time to factorise the tangent of the default mesh (H = 7 mm, t = 0) with PARDISO
   and SuperLU, and the accuracy of both solutions.
-- ``convergence``: θ = θ_max, H = 3 and 7 mm on the default and the fine mesh (cells per
-  direction relative to the default: z 1.6×, radially 1.4–2×, around the circle 3.3×, across the
-  rounded edge 2×): F_z(t = 1) and min F_r and their relative change (target < 2 %).
+- ``convergence``: θ = θ_max, H = 3 and 7 mm on the default and the fine mesh (twice the
+  default's cells in every direction): F_z(t = 1) and min F_r and their relative change
+  (target < 2 %).
   ``--reuse-fine`` keeps the fine paths of the existing JSON when nothing they depend on changed;
   ``--t-max 0.6`` follows the paths only to t = 0.6 (min F_r of the paths whose fine version
   fails near t = 1).
@@ -21,8 +21,9 @@ Parts:
 - ``directions``: θ = θ_max on the default mesh with one of its parameters doubled at a time
   (cells in z, radially, around the circle, across the rounded edge): which direction carries
   the discretisation error, against the fine mesh of the ``convergence`` part if it was run.
-- ``accurate``: θ = θ_max on the ``accurate`` mesh (the default refined in z and radially),
-  against the default and fine meshes of the ``convergence`` part if it was run.
+- ``accurate``: θ = θ_max on the ``accurate`` mesh (the default refined in z and radially), as
+  it is and with the layer under the magnet graded towards the magnet's face too
+  (``grade_magnet_face``), against the fine mesh of the ``convergence`` part if it was run.
 """
 
 from __future__ import annotations
@@ -184,10 +185,15 @@ def _theta_max_path(study, h: float, mesh: str, fine: dict | None) -> dict:
 
 
 def part_accurate(study, heights_mm: list[float]) -> None:
+    base = DENSITIES["accurate"]
+    DENSITIES["accurate_graded_face"] = base | {"grade_magnet_face": not base["grade_magnet_face"]}
     data = _header(study, "accurate" + _suffix(heights_mm)) | {"cases": []}
     for h in heights_mm:
-        data["cases"].append(_theta_max_path(study, h, "accurate", _fine_record(h)))
-        _save(data)
+        for mesh in ("accurate", "accurate_graded_face"):
+            rec = _theta_max_path(study, h, mesh, _fine_record(h))
+            data["cases"].append(rec | {"grade_magnet_face": DENSITIES[mesh]["grade_magnet_face"]})
+            print(f"H = {h:g} mm, {mesh}: {rec.get('error') or rec['F_z_t1_N']}", flush=True)
+            _save(data)
     data["complete"] = True
     _save(data)
 

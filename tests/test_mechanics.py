@@ -239,3 +239,18 @@ def test_magnet_edge_is_rounded(study):
     assert m.volume() > sharp.volume()
     with pytest.raises(ValueError, match="edge radius"):
         body_mesh(_with(study, "mechanics", magnet_edge_radius=3e-3), H, "coarse")
+
+
+@pytest.mark.parametrize("graded_face", [True, False])
+def test_layer_under_the_magnet_is_graded_towards_the_base(graded_face):
+    from magtact.geometry._body_mesh import DENSITIES, _z_levels
+
+    cavity = (2.5e-3, 5e-3, 7e-3)
+    z = _z_levels(9e-3, 1e-3, cavity, DENSITIES["default"] | {"grade_magnet_face": graded_face})
+    assert np.all(np.diff(z) > 0) and np.any(np.isclose(z, cavity[1], rtol=0, atol=1e-10))
+    dz = np.diff(z[z <= cavity[1] + 1e-10])
+    assert dz.sum() == pytest.approx(cavity[1]) and dz[0] < dz.mean()
+    if graded_face:  # refined towards both the base and the magnet's face, symmetrically
+        assert dz[-1] == pytest.approx(dz[0])
+    else:  # the cell under the magnet is the thickest of the layer
+        assert dz[-1] == pytest.approx(dz.max()) and dz[-1] > dz.mean()

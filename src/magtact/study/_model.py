@@ -30,10 +30,9 @@ def key_of(f) -> str:
 
 
 #: Named mesh densities of the structural half body, coarse to fine (cells per direction in
-#: :data:`magtact.geometry.DENSITIES`). "accurate" has about twice the default's cells in z and
-#: radially, the two directions that carry the discretisation error
-#: (bench/results/mechanics_directions_*.json); it fails near t = 0.98 at H = 7 mm, θ_max
-#: (bench/results/mechanics_accurate.json).
+#: :data:`magtact.geometry.DENSITIES`). "accurate" has twice the default's cells in z and
+#: radially, "fine" twice the default's cells in every direction (the reference of
+#: bench/results/mechanics_convergence_H*.json).
 MESH_DENSITIES = ("coarse", "default", "accurate", "fine")
 
 @dataclass(frozen=True)
@@ -133,7 +132,7 @@ class Mechanics:
                                      doc="contact penalty relative to the solid's nodal stiffness")
     elastic_slip: float = setting(5e-5, "mm", positive=True,
                                   doc="allowable elastic slip of sticking contact points")
-    magnet_edge_radius: float = setting(3e-4, "mm", minimum=0.0,
+    magnet_edge_radius: float = setting(6e-4, "mm", minimum=0.0,
                                         doc="radius of the rounded lower edge of the rigid magnet "
                                             "in the structural model (0: sharp)")
     dt_initial: float = setting(0.025, positive=True, doc="first load step (in units of t)")
