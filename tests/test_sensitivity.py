@@ -175,6 +175,12 @@ def test_gamma_from_data_agrees_with_exact_formulas():
             g = np.where(keep, np.abs(g), np.nan)
             assert v["n_points_above_floor"] == np.sum(g > floor * np.nanmax(g))
             assert v["max_above_floor"] <= v["max"] and v["floor"] == floor
+    # the share within 5 % (above the default floor) and the largest difference on Γ's scale
+    for v, g, d in zip(check.values(), gm, (gr, gz), strict=True):
+        g, d = np.abs(g[np.broadcast_to(keep, g.shape)]), d[np.broadcast_to(keep, d.shape)]
+        above = g > 0.05 * g.max()
+        assert v["within_5_percent_above_floor"] == np.mean(np.abs(g - d)[above] / g[above] <= 0.05)
+        assert v["max_abs_over_max"] == pytest.approx(np.max(np.abs(g - d)) / g.max(), rel=1e-12)
 
 
 def test_gamma_from_data_needs_three_levels():

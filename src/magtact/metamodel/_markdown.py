@@ -56,11 +56,16 @@ def write_markdown(result: FitResult, path: str | Path, *, title: str = "Metamod
                   "| | where | median | 95th percentile | max | points |",
                   "|---|---|---|---|---|---|"]
         for k, v in gamma_check.items():
-            for sfx, label in (("", "all"), ("_interior", "central differences only")):
+            for sfx, label in (("", "all"), ("_interior", "central differences only"),
+                               ("_above_floor", f"Γ above {v['floor']:.0%} of its max")):
                 if "median" + sfx in v:
                     lines.append(f"| {k} | {label} | {v['median' + sfx]:.3g} | "
                                  f"{v['p95' + sfx]:.3g} | {v['max' + sfx]:.3g} | "
                                  f"{v['n_points' + sfx]} |")
+        lines.append("")
+        lines += [f"{k}: {v['within_5_percent_above_floor']:.1%} of the points above the floor "
+                  f"within 5 %; largest absolute difference {v['max_abs_over_max']:.2%} of "
+                  "max Γ." for k, v in gamma_check.items()]
         lines += ["", "The data's finite differences along θ use the DOE's coarse θ levels, so "
                   "part of this difference is the error of the finite differences.", ""]
     lines += ["## Expressions", ""]

@@ -66,7 +66,10 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
     of a coarse grid are the least accurate part of the data's Γ, and (suffix
     ``_above_floor``) over the points where |γ_model| > ``floor`` · max |γ_model|, the
     convention of the metamodels' relative errors: where γ_r nearly vanishes (θ = 0 at large
-    H), a relative difference says nothing.
+    H), a relative difference says nothing. Also: ``within_5_percent_above_floor``, the
+    fraction of those points where the relative difference is at most 5 %, and
+    ``max_abs_over_max``, max |γ_model − γ_data| / max |γ_model| over all points with
+    t ≥ ``t_min`` (the absolute difference on the scale of Γ, like the metamodels' error/range).
     """
     t_, th_, H_ = (np.asarray(ds[k].values, dtype=float) for k in ("t", "theta", "H"))
     T, TH, HH = np.meshgrid(t_, th_, H_, indexing="ij")
@@ -87,5 +90,10 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
                 stats |= {"median" + suffix: float(np.median(rel)),
                           "p95" + suffix: float(np.percentile(rel, 95)),
                           "max" + suffix: float(rel.max()), "n_points" + suffix: int(rel.size)}
+        diff = np.abs(gm - gd)[keep]
+        scale = np.nanmax(np.abs(gm[keep]))
+        rel_above = rel_all[above]
+        stats |= {"within_5_percent_above_floor": float(np.mean(rel_above <= 0.05)),
+                  "max_abs_over_max": float(np.nanmax(diff) / scale)}
         out[name] = stats | {"t_min": t_min, "floor": floor}
     return out
