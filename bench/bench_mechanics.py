@@ -21,6 +21,10 @@ Parts:
 - ``directions``: θ = θ_max on the default mesh with one of its parameters doubled at a time
   (cells in z, radially, around the circle, across the rounded edge): which direction carries
   the discretisation error, against the fine mesh of the ``convergence`` part if it was run.
+- ``order``: θ = θ_max on the default mesh with 1.5 times its cells in every direction; with the
+  default and fine paths of the ``convergence`` part (1 and 2 times), the observed order p of
+  F_z(t = 1) and min F_r in the cell size (F = F_∞ + C h^p), and from it the predicted change
+  between a mesh k times the default and its doubled mesh, and the smallest k with < 2 %.
 - ``accurate``: θ = θ_max on the ``accurate`` mesh (the default refined in z and radially), as
   it is and with the layer under the magnet graded towards the magnet's face too
   (``grade_magnet_face``), against the fine mesh of the ``convergence`` part if it was run.
@@ -155,11 +159,66 @@ def part_convergence(study, heights_mm: list[float], reuse_fine: bool = False,
     _save(data)
 
 
-def _fine_record(h: float) -> dict | None:
-    """The fine-mesh record of the ``convergence`` part at H = h mm, if it was run."""
+def _convergence_record(h: float, mesh: str) -> dict | None:
+    """The completed ``mesh`` ("default" or "fine") record of the ``convergence`` part at
+    H = h mm, if it was run."""
     conv = RESULTS / f"mechanics_convergence_H{h:g}.json"
-    fine = json.loads(conv.read_text())["cases"][0].get("fine") if conv.is_file() else None
-    return fine if fine and fine["completed"] else None
+    rec = json.loads(conv.read_text())["cases"][0].get(mesh) if conv.is_file() else None
+    return rec if rec and rec["completed"] else None
+
+
+def _fine_record(h: float) -> dict | None:
+    return _convergence_record(h, "fine")
+
+
+def _observed_order(f1: float, f15: float, f2: float, target: float = 0.02) -> dict:
+    """Fit F(k) = F_∞ + C k^(−p) to the values at 1, 1.5 and 2 times the default's cells per
+    direction; then the predicted relative change between k and 2k times the default and the
+    smallest such k with a change below ``target`` (None where no order fits)."""
+    from scipy.optimize import brentq
+
+    a, b = 1 / 1.5, 1 / 2
+    ratio = (f1 - f15) / (f15 - f2) if f15 != f2 else np.inf
+    g = lambda p: (1 - a**p) / (a**p - b**p) - ratio  # noqa: E731 (increasing in p)
+    if not (g(0.05) < 0 < g(8.0)):
+        return {"ratio_of_differences": ratio, "order": None}
+    p = brentq(g, 0.05, 8.0)
+    C = (f1 - f15) / (1 - a**p)
+    f_inf = f1 - C
+
+    def change(k):
+        return abs(C * k**-p * (1 - 2**-p)) / abs(f_inf + C * k**-p)
+
+    k_min = brentq(lambda k: change(k) - target, 1.0, 1e3) if change(1.0) > target else 1.0
+    return {"ratio_of_differences": ratio, "order": p, "extrapolated": f_inf,
+            "error_of_default": abs(C / f_inf), "predicted_change_default_vs_x2": change(1.0),
+            "predicted_change_x1.5_vs_x3": change(1.5), f"k_min_for_{target:g}": k_min}
+
+
+def part_order(study, heights_mm: list[float]) -> None:
+    base = DENSITIES["default"]
+
+    def up(n):
+        return int(1.5 * n + 0.5)
+
+    DENSITIES["default_x1.5"] = base | {
+        "m": up(base["m"]), "radial": tuple(map(up, base["radial"])), "h_z": base["h_z"] / 1.5,
+        "n_corner": up(base["n_corner"])}
+    data = _header(study, "order" + _suffix(heights_mm)) | {"cases": []}
+    for h in heights_mm:
+        d, f = _convergence_record(h, "default"), _convergence_record(h, "fine")
+        rec = _theta_max_path(study, h, "default_x1.5", f)
+        if d and f and rec["completed"]:
+            rec["order"] = {
+                q: _observed_order(d[key], rec[key], f[key]) | {"values_x1_x1.5_x2": [
+                    d[key], rec[key], f[key]]} for q, key in (("F_z_t1", "F_z_t1_N"),
+                                                            ("F_r_min", "F_r_min_N"))}
+            rec["n_dofs_x1_x2"] = [d["n_dofs"], f["n_dofs"]]
+        data["cases"].append(rec)
+        print(f"H = {h:g} mm: {rec.get('error') or rec.get('order')}", flush=True)
+        _save(data)
+    data["complete"] = True
+    _save(data)
 
 
 def _versus_fine(rec: dict, fine: dict | None) -> dict:
@@ -249,7 +308,7 @@ def part_grid(study) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--part", default="all", choices=("all", "solver", "convergence", "grid",
-                                                      "directions", "accurate"))
+                                                      "directions", "accurate", "order"))
     ap.add_argument("--H", type=float, nargs="+", default=[3.0, 7.0],
                     help="base heights [mm] of the convergence, directions and accurate parts "
                          "(default 3 7); otherwise the JSON is named ..._H<..>.json")
@@ -262,11 +321,12 @@ def main() -> None:
                          "min F_r up to it is compared; JSON ..._to<t_max>.json)")
     args = ap.parse_args()
     study = load_study(None)
-    parts = (("solver", "convergence", "directions", "accurate", "grid") if args.part == "all"
+    parts = (("solver", "convergence", "directions", "accurate", "order", "grid")
+             if args.part == "all"
              else (args.part,))
     by_height = {"convergence": partial(part_convergence, reuse_fine=args.reuse_fine,
                                         t_max=args.t_max),
-                 "directions": part_directions, "accurate": part_accurate}
+                 "directions": part_directions, "accurate": part_accurate, "order": part_order}
     for part in parts:
         if part in by_height:
             by_height[part](study, args.H)
