@@ -326,7 +326,7 @@ def main() -> None:
     ap.add_argument("--reuse-fine", action="store_true",
                     help="convergence: keep the fine-mesh paths of the part's existing JSON if "
                          "its solver settings and fine mesh are the current ones (they take "
-                         "15–90 min each); the default paths are always recomputed")
+                         "10–45 min each); the default paths are always recomputed")
     ap.add_argument("--t-max", type=float, default=1.0,
                     help="convergence: follow the paths only to this load level (then only "
                          "min F_r up to it is compared; JSON ..._to<t_max>.json)")
