@@ -169,10 +169,6 @@ def _convergence_record(h: float, mesh: str) -> dict | None:
     return rec if rec and rec["completed"] else None
 
 
-def _fine_record(h: float) -> dict | None:
-    return _convergence_record(h, "fine")
-
-
 def _observed_order(f: tuple[float, float, float], k: tuple[float, float],
                     target: float = 0.02) -> dict:
     """Fit F(k) = F_∞ + C k^(−p) to the values ``f`` at 1, k[0] and k[1] times the default's cells
@@ -260,7 +256,7 @@ def part_accurate(study, heights_mm: list[float]) -> None:
     data = _header(study, "accurate" + _suffix(heights_mm)) | {"cases": []}
     for h in heights_mm:
         for mesh in ("accurate", "accurate_graded_face"):
-            rec = _theta_max_path(study, h, mesh, _fine_record(h))
+            rec = _theta_max_path(study, h, mesh, _convergence_record(h, "fine"))
             data["cases"].append(rec | {"grade_magnet_face": DENSITIES[mesh]["grade_magnet_face"]})
             print(f"H = {h:g} mm, {mesh}: {rec.get('error') or rec['F_z_t1_N']}", flush=True)
             _save(data)
@@ -276,7 +272,7 @@ def part_directions(study, heights_mm: list[float]) -> None:
                 "corner": {"n_corner": 2 * base["n_corner"]}}
     data = _header(study, "directions" + _suffix(heights_mm)) | {"cases": []}
     for h in heights_mm:
-        fine = _fine_record(h)
+        fine = _convergence_record(h, "fine")
         for direction, change in variants.items():
             DENSITIES[f"default_x2_{direction}"] = base | change
             rec = _theta_max_path(study, h, f"default_x2_{direction}", fine)
