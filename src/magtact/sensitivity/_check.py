@@ -80,8 +80,10 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
     interior = keep & (T < t_.max()) & first & (TH < th_.max())
     out = {}
     for name, gm, gd in zip(("gamma_r", "gamma_z"), model, data, strict=True):
-        rel_all = np.abs(gm - gd) / np.abs(gm)
-        above = keep & (np.abs(gm) > floor * np.nanmax(np.abs(gm[keep])))
+        diff = np.abs(gm - gd)
+        scale = np.nanmax(np.abs(gm[keep]))
+        rel_all = diff / np.abs(gm)
+        above = keep & (np.abs(gm) > floor * scale)
         stats = {}
         for suffix, mask in (("", keep), ("_interior", interior), ("_above_floor", above)):
             rel = rel_all[mask]
@@ -90,10 +92,7 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
                 stats |= {"median" + suffix: float(np.median(rel)),
                           "p95" + suffix: float(np.percentile(rel, 95)),
                           "max" + suffix: float(rel.max()), "n_points" + suffix: int(rel.size)}
-        diff = np.abs(gm - gd)[keep]
-        scale = np.nanmax(np.abs(gm[keep]))
-        rel_above = rel_all[above]
-        stats |= {"within_5_percent_above_floor": float(np.mean(rel_above <= 0.05)),
-                  "max_abs_over_max": float(np.nanmax(diff) / scale)}
+        stats |= {"within_5_percent_above_floor": float(np.mean(rel_all[above] <= 0.05)),
+                  "max_abs_over_max": float(np.nanmax(diff[keep]) / scale)}
         out[name] = stats | {"t_min": t_min, "floor": floor}
     return out
