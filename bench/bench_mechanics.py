@@ -28,8 +28,8 @@ Parts:
   the nominal refinement (1.5, 2) and with the cube root of the cell counts (the 1.5 mesh rounds
   its counts up, so it is 1.5 in z and 1.5–1.67 in the other directions).
 - ``accurate``: θ = θ_max on the ``accurate`` mesh (the default refined in z and radially), as
-  it is and with the layer under the magnet graded towards the magnet's face too
-  (``grade_magnet_face``), against the fine mesh of the ``convergence`` part if it was run.
+  it is and with the other grading of the layer under the magnet (``grade_magnet_face``
+  switched), against the fine mesh of the ``convergence`` part if it was run.
 """
 
 from __future__ import annotations
@@ -252,10 +252,12 @@ def _theta_max_path(study, h: float, mesh: str, fine: dict | None) -> dict:
 
 def part_accurate(study, heights_mm: list[float]) -> None:
     base = DENSITIES["accurate"]
-    DENSITIES["accurate_graded_face"] = base | {"grade_magnet_face": not base["grade_magnet_face"]}
+    flipped = not base["grade_magnet_face"]
+    other = "accurate_" + ("graded_face" if flipped else "graded_base_only")
+    DENSITIES[other] = base | {"grade_magnet_face": flipped}
     data = _header(study, "accurate" + _suffix(heights_mm)) | {"cases": []}
     for h in heights_mm:
-        for mesh in ("accurate", "accurate_graded_face"):
+        for mesh in ("accurate", other):
             rec = _theta_max_path(study, h, mesh, _convergence_record(h, "fine"))
             data["cases"].append(rec | {"grade_magnet_face": DENSITIES[mesh]["grade_magnet_face"]})
             print(f"H = {h:g} mm, {mesh}: {rec.get('error') or rec['F_z_t1_N']}", flush=True)
