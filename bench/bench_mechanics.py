@@ -257,8 +257,9 @@ def part_accurate(study, heights_mm: list[float]) -> None:
     DENSITIES[other] = base | {"grade_magnet_face": flipped}
     data = _header(study, "accurate" + _suffix(heights_mm)) | {"cases": []}
     for h in heights_mm:
+        fine = _convergence_record(h, "fine")
         for mesh in ("accurate", other):
-            rec = _theta_max_path(study, h, mesh, _convergence_record(h, "fine"))
+            rec = _theta_max_path(study, h, mesh, fine)
             data["cases"].append(rec | {"grade_magnet_face": DENSITIES[mesh]["grade_magnet_face"]})
             print(f"H = {h:g} mm, {mesh}: {rec.get('error') or rec['F_z_t1_N']}", flush=True)
             _save(data)
@@ -319,8 +320,8 @@ def main() -> None:
     ap.add_argument("--part", default="all", choices=("all", "solver", "convergence", "grid",
                                                       "directions", "accurate", "order"))
     ap.add_argument("--H", type=float, nargs="+", default=[3.0, 7.0],
-                    help="base heights [mm] of the convergence, directions and accurate parts "
-                         "(default 3 7); otherwise the JSON is named ..._H<..>.json")
+                    help="base heights [mm] of the convergence, directions, accurate and order "
+                         "parts (default 3 7); otherwise the JSON is named ..._H<..>.json")
     ap.add_argument("--reuse-fine", action="store_true",
                     help="convergence: keep the fine-mesh paths of the part's existing JSON if "
                          "its solver settings and fine mesh are the current ones (they take "
