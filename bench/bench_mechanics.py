@@ -19,8 +19,9 @@ Parts:
 - ``grid``: every (θ, H) of the default DOE grid on the default mesh: completion, wall time,
   Newton iterations, Jacobians, cut-backs, and where the time goes.
 - ``directions``: θ = θ_max on the default mesh with one of its parameters doubled at a time
-  (cells in z, radially, around the circle, across the rounded edge): which direction carries
-  the discretisation error, against the fine mesh of the ``convergence`` part if it was run.
+  (cells in z, radially, around the circle, across the rounded edge; radially also one ring at
+  a time): which direction and which ring carries the discretisation error, against the fine
+  mesh of the ``convergence`` part if it was run.
 - ``order``: θ = θ_max on the default mesh with 1.5 times its cells in every direction; with the
   default and fine paths of the ``convergence`` part (1 and 2 times), the observed order p of
   F_z(t = 1) and min F_r in the cell size (F = F_∞ + C h^p), and from it the predicted change
@@ -273,6 +274,11 @@ def part_directions(study, heights_mm: list[float]) -> None:
                 "radial": {"radial": tuple(2 * n for n in base["radial"])},
                 "circumferential": {"m": 2 * base["m"]},
                 "corner": {"n_corner": 2 * base["n_corner"]}}
+    # the radial doubling split by ring: under the magnet, magnet's edge to the rounded edge,
+    # rounded edge to the side
+    for i, ring in enumerate(("radial_under_magnet", "radial_beside_magnet", "radial_outer")):
+        variants[ring] = {"radial": tuple(2 * n if j == i else n
+                                          for j, n in enumerate(base["radial"]))}
     data = _header(study, "directions" + _suffix(heights_mm)) | {"cases": []}
     for h in heights_mm:
         fine = _convergence_record(h, "fine")
