@@ -43,10 +43,12 @@ from ._path import magnet_span
 #: weight 0.5 it completes, and the default is as far from it as with base-only grading (3.9 %
 #: in F_z(t = 1) at H = 7 mm, 2.5 % at H = 3 mm), so the base-only grading stays.
 #: Doubling the cells in one direction at a time (bench/results/mechanics_directions_H*.json)
-#: showed the error in z and radially, not around the circle or across the rounded edge, so the
-#: default has few segments around the circle (the equal-area polygon keeps the cross-section
-#: exact). ``fine`` has twice the default's cells in every direction (the reference of the
-#: convergence benchmark); ``accurate`` twice the default's cells in z and radially.
+#: showed the error mostly in z and radially (in the rings under and beside the magnet), little
+#: around the circle at H = 3 mm (as much as radially at H = 7 mm) and none across the rounded
+#: edge, so the default has few segments around the circle (the equal-area polygon keeps the
+#: cross-section exact). ``fine`` has twice the default's cells in every direction (the
+#: reference of the convergence benchmark); ``accurate`` twice the default's cells in z and
+#: radially.
 _GRADING = {"progression": 0.9, "bump": 0.6, "z_grading": 0.3, "grade_magnet_face": False}
 _DEFAULT = {"m": 3, "radial": (4, 7, 3), "h_z": 0.6e-3, "n_corner": 3}
 DENSITIES: dict[str, dict] = {
