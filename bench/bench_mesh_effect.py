@@ -73,7 +73,8 @@ def main() -> None:
                                           "finer": roughness(fine)["f_r"]},
         "chosen_design": designs,
         "chosen_design_change": {k: designs["finer"][k] / designs["default"][k] - 1
-                                 for k in designs["default"]},
+                                 for k in ("H_mm", "G_kPa", "Gamma_r_max_N_per_T",
+                                           "Gamma_z_max_N_per_T", "F_r_min_N", "F_z_max_N")},
         "fit_and_optimise_time_s": time.perf_counter() - t0,
     }
     args.out.write_text(json.dumps(out, indent=1) + "\n")
