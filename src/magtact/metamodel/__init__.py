@@ -1,6 +1,7 @@
 """Closed-form metamodels of the study's responses by genetic programming (SPEC section 5)."""
 
 from ._exact_field import ExactField
+from ._field_force import ComposedForce, FieldForceModel
 from ._fit import (
     TRAIN_TARGET,
     TRANSFORMS,
@@ -23,7 +24,8 @@ from ._regressor import OPERATOR_SETS, SymbolicRegressor
 from ._symbols import H, p, q, t, theta
 
 __all__ = [
-    "OPERATOR_SETS", "RESPONSES", "TRAIN_TARGET", "TRANSFORMS", "Accuracy", "ExactField",
+    "OPERATOR_SETS", "RESPONSES", "TRAIN_TARGET", "TRANSFORMS", "Accuracy", "ComposedForce",
+    "ExactField", "FieldForceModel",
     "FitReport", "FitResult", "H", "Metamodel", "ModelSet", "SymbolicRegressor", "accuracy",
     "copy_prefitted", "data_hash", "find_prefitted", "fit_models", "fit_response",
     "format_expression", "hall_features", "holdout_paths", "load_model", "load_models",

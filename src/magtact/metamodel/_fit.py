@@ -42,6 +42,7 @@ import sympy as sp
 
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..study import Study
+from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._regressor import SymbolicRegressor
 from ._symbols import H, p, q
@@ -94,6 +95,7 @@ class FitResult:
     reports: dict[str, FitReport]
     data_hash: str
     holdout: tuple[tuple[float, float], ...]
+    field_models: tuple | None = None
 
     def model_set(self, study: Study | None = None) -> ModelSet:
         """The four models; B_r, B_z from the exact field when they were not fitted.
@@ -104,6 +106,8 @@ class FitResult:
             If a force model is missing, or B is missing and no ``study`` is given.
         """
         models = dict(self.models)
+        if self.field_models is not None:
+            models |= dict(zip(("B_r", "B_z"), self.field_models, strict=True))
         if not {"B_r", "B_z"} <= set(models):
             if study is None:
                 raise ValueError("B_r, B_z were not fitted: pass the study for the exact field")
@@ -113,6 +117,9 @@ class FitResult:
         missing = set(RESPONSES) - set(models)
         if missing:
             raise ValueError(f"no model for {sorted(missing)}")
+        for k in ("f_r", "f_z"):
+            if isinstance(models[k], FieldForceModel):
+                models[k] = ComposedForce(models[k], models["B_r"], models["B_z"])
         return ModelSet(**{k: models[k] for k in RESPONSES})
 
 
@@ -258,9 +265,18 @@ def _guard(model: Metamodel, study: Study, y_max: float, n: tuple[int, int, int]
     T, TH, HH = np.meshgrid(tt, th, hh, indexing="ij")
     with np.errstate(all="ignore"):
         v = model.value(T, TH, HH)
-        checks = {"value": v, "gradient": model.grad(T, TH, HH), "Hessian": model.hess(T, TH, HH)}
-        for k, a in enumerate(model.jet(T, TH, HH, 3)[1:], start=1):
-            checks[f"order-{k} feature derivative"] = a
+        if isinstance(model, ComposedForce):  # what the published sensitivity evaluates
+            checks = {"value": v}
+            for k, a in enumerate(model.jet(T, TH, HH, 2)[1:], start=1):
+                checks[f"order-{k} feature derivative"] = a
+            for b, jet in zip(("B_r", "B_z"), model.partials(T, TH, HH, 2), strict=True):
+                for k, a in enumerate(jet):
+                    checks[f"order-{k} derivative of the partial in {b}"] = a
+        else:
+            checks = {"value": v, "gradient": model.grad(T, TH, HH),
+                      "Hessian": model.hess(T, TH, HH)}
+            for k, a in enumerate(model.jet(T, TH, HH, 3)[1:], start=1):
+                checks[f"order-{k} feature derivative"] = a
     for what, a in checks.items():
         if not np.all(np.isfinite(a)):
             return f"non-finite {what} inside the domain"
@@ -270,7 +286,8 @@ def _guard(model: Metamodel, study: Study, y_max: float, n: tuple[int, int, int]
 
 
 def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=None,
-                 log=None) -> tuple[Metamodel, FitReport]:
+                 log=None, field_models: tuple | None = None
+                 ) -> tuple[Metamodel | FieldForceModel, FitReport]:
     """Fit one response (see the module notes for features and transforms).
 
     Parameters
@@ -285,6 +302,11 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
         Defaults to ``study.metamodel``.
     log : callable, optional
         Called with progress messages.
+    field_models : (B_r, B_z) models, optional
+        Fit a force (``f_r``, ``f_z``) as a function of field and load, f̂(B_r, B_z, p, q, H),
+        for the published sensitivity definition (:class:`FieldForceModel`); the GP sees the
+        data's own field, the guard rails and accuracy the force along the path with these
+        field models. No anchoring transform ("identity"), as in the publication.
 
     Raises
     ------
@@ -303,7 +325,14 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     y = table[name]
     transform = TRANSFORMS[name]
     pv, qv = table["t"], table["t"] * np.tan(table["theta"])
-    if name.startswith("B"):
+    published = field_models is not None and name in ("f_r", "f_z")
+    if published:
+        # field in mT and H in mm: inputs of order one for the GP
+        feats = {"b_r": B_r * 1000, "b_z": B_z * 1000, "p": p, "q": q, "h": H * 1000}
+        cols = np.column_stack([table["B_r"] * 1000, table["B_z"] * 1000, pv, qv,
+                                table["H"] * 1000])
+        transform = "identity"
+    elif name.startswith("B"):
         X_, Z_ = hall_features(study)
         fx = sp.lambdify((p, q, H), [X_, Z_], "numpy")
         Xv, Zv = (np.broadcast_to(a, pv.shape) for a in fx(pv, qv, table["H"]))
@@ -331,7 +360,10 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
             ).fit(cols[fit_on], target[fit_on])
             try:
                 expr = _model_expr(name, reg.expression_, reg.symbols_, feats, transform)
-                model = Metamodel.from_expr(name, expr, RESPONSES[name])
+                if published:
+                    model = ComposedForce(FieldForceModel.from_expr(name, expr), *field_models)
+                else:
+                    model = Metamodel.from_expr(name, expr, RESPONSES[name])
             except ValueError:  # e.g. the anchor g(0, Z) is infinite: a pole on the axis
                 model, reason = None, "infinite constant after the transform (pole on the axis?)"
             else:
@@ -359,6 +391,8 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
             transform = FALLBACK[transform]
     elapsed = time.perf_counter() - t0
     _, seed, model, y_hat, n_fit = best
+    if published:
+        model = model.model
     report = FitReport(
         name=name, transform=transform, features=tuple(feats), seed=seed, tries=tries,
         fit_time_s=elapsed, n_train=n_fit,
@@ -369,7 +403,8 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     return model, report
 
 
-def fit_models(ds, study: Study, *, settings=None, names=None, log=None) -> FitResult:
+def fit_models(ds, study: Study, *, settings=None, names=None, log=None,
+               definition: str | None = None, field_models: tuple | None = None) -> FitResult:
     """Fit B_r, B_z, f_r, f_z to a DOE data set (layout of ``magtact.doe``).
 
     Parameters
@@ -382,18 +417,31 @@ def fit_models(ds, study: Study, *, settings=None, names=None, log=None) -> FitR
         A ``Metamodel`` settings section (default ``study.metamodel``).
     names : sequence of str, optional
         Responses to fit; default: all four, or only f_r, f_z when the settings say
-        ``b_model = "exact"`` (then :meth:`FitResult.model_set` uses the exact field).
+        ``b_model = "exact"`` (then :meth:`FitResult.model_set` uses the exact field) or when
+        ``field_models`` are given.
     log : callable, optional
         Progress messages.
+    definition : {"jacobian", "published"}, optional
+        Sensitivity definition the force models serve (default: the study's
+        ``[sensitivity] definition``). ``"published"``: forces as functions of field and load,
+        f̂(B_r, B_z, p, q, H) (:class:`FieldForceModel`), fitted after the field models.
+    field_models : (B_r, B_z), optional
+        Field models to use instead of fitting them (e.g. a shipped fit); then only the forces
+        are fitted, and :meth:`FitResult.model_set` uses these.
 
     Returns
     -------
     FitResult
-        Models (with accuracy, settings and data hash in each ``info``) and reports.
+        Models (with accuracy, settings, definition and data hash in each ``info``) and reports.
     """
     cfg = settings or study.metamodel
+    definition = definition or study.sensitivity.definition
+    if definition not in ("jacobian", "published"):
+        raise ValueError(f"[sensitivity] definition must be 'jacobian' or 'published', "
+                         f"got {definition!r}")
     if names is None:
-        names = ("f_r", "f_z") if cfg.b_model == "exact" else tuple(RESPONSES)
+        names = (("f_r", "f_z") if cfg.b_model == "exact" or field_models is not None
+                 else tuple(RESPONSES))
     table, spread, (t_, th_, H_) = _table(ds)
     hold = holdout_paths(th_, H_, cfg.holdout_paths)
     test = holdout_mask(table, hold)
@@ -402,7 +450,11 @@ def fit_models(ds, study: Study, *, settings=None, names=None, log=None) -> FitR
     for name in names:
         if log:
             log(f"fitting {name} ({cfg.generations} generations, population {cfg.population})")
-        m, rep = fit_response(name, table, test, study, settings=cfg, log=log)
+        field = None
+        if definition == "published" and name in ("f_r", "f_z"):
+            field = field_models or _field_for(models, study, cfg)
+        m, rep = fit_response(name, table, test, study, settings=cfg, log=log,
+                              field_models=field)
         info = {
             "transform": rep.transform, "features": list(rep.features),
             "accuracy": {"train": asdict(rep.train),
@@ -412,7 +464,22 @@ def fit_models(ds, study: Study, *, settings=None, names=None, log=None) -> FitR
             "rejected": list(rep.rejected), "fit_time_s": rep.fit_time_s,
             "data_hash": digest, "G_spread": spread.get(name, 0.0),
         }
-        models[name] = Metamodel(name=m.name, expr=m.expr, units=m.units, expr_pq=m.expr_pq,
-                                 info=info)
+        if name in ("f_r", "f_z"):
+            info["definition"] = definition
+        if isinstance(m, FieldForceModel):
+            models[name] = FieldForceModel(name=m.name, expr=m.expr, units=m.units, info=info)
+        else:
+            models[name] = Metamodel(name=m.name, expr=m.expr, units=m.units,
+                                     expr_pq=m.expr_pq, info=info)
         reports[name] = rep
-    return FitResult(models=models, reports=reports, data_hash=digest, holdout=tuple(hold))
+    return FitResult(models=models, reports=reports, data_hash=digest, holdout=tuple(hold),
+                     field_models=field_models)
+
+
+def _field_for(models: dict, study: Study, cfg) -> tuple:
+    """The field models a published force model is composed with: fitted or exact."""
+    if cfg.b_model == "exact" or not {"B_r", "B_z"} <= set(models):
+        from ._exact_field import ExactField
+
+        return ExactField(study, "B_r"), ExactField(study, "B_z")
+    return models["B_r"], models["B_z"]

@@ -21,12 +21,22 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
+from ._field_force import FIELD_SYMBOLS, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
 from ._symbols import PQ_TO_TTH, TTH
 
 FORMAT = "magtact-metamodel/1"
 EXACT_FORMAT = "magtact-exact-field/1"
+#: A force model of the published sensitivity definition, f̂(B_r, B_z, p, q, H).
+FIELD_FORCE_FORMAT = "magtact-field-force/1"
+FIELD_VARIABLES = {
+    "B_r": "field component along the shear direction at the Hall point [T]",
+    "B_z": "vertical field component at the Hall point [T]",
+    "p": "feature p = t [-]",
+    "q": "feature q = t tan(theta) [-]",
+    "H": "base height of the body [m]",
+}
 VARIABLES = {
     "t": "non-dimensional load [-]",
     "theta": "shear angle [rad]",
@@ -88,11 +98,51 @@ def _check_agree(expr, expr_pq, source, n: int = 16) -> None:
         raise ValueError(f"{source}: 'expression' and 'expression_pq' describe different models")
 
 
-def save_model(model: Metamodel, path: str | Path) -> Path:
+def field_force_to_dict(model: FieldForceModel) -> dict:
+    """The JSON-ready content of a field-force model file (published definition)."""
+    return {
+        "format": FIELD_FORCE_FORMAT,
+        "definition": "published",
+        "name": model.name,
+        "units": model.units,
+        "variables": FIELD_VARIABLES,
+        "expression": format_expression(model.expr),
+        "latex": sp.latex(model.expr),
+        "info": model.info,
+    }
+
+
+def field_force_from_dict(data: dict, source: str = "<dict>") -> FieldForceModel:
+    """A field-force model from the content of its file.
+
+    Raises
+    ------
+    ValueError
+        Wrong format tag, missing keys, or an expression outside the grammar.
+    """
+    if not isinstance(data, dict) or data.get("format") != FIELD_FORCE_FORMAT:
+        raise ValueError(f"{source}: not a field-force model file "
+                         f"(expected format {FIELD_FORCE_FORMAT!r})")
+    for key in ("name", "units", "expression"):
+        if not isinstance(data.get(key), str):
+            raise ValueError(f"{source}: key {key!r} is missing or not a string")
+    try:
+        expr = parse_expression(data["expression"], FIELD_SYMBOLS)
+    except ValueError as exc:
+        raise ValueError(f"{source}: {exc}") from None
+    info = data.get("info", {})
+    if not isinstance(info, dict):
+        raise ValueError(f"{source}: 'info' must be an object")
+    return FieldForceModel(name=data["name"], expr=expr, units=data["units"], info=info)
+
+
+def save_model(model: Metamodel | FieldForceModel, path: str | Path) -> Path:
     """Write one model file (JSON) and return its path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(model_to_dict(model), indent=2) + "\n")
+    content = (field_force_to_dict(model) if isinstance(model, FieldForceModel)
+               else model_to_dict(model))
+    path.write_text(json.dumps(content, indent=2) + "\n")
     return path
 
 
@@ -126,7 +176,9 @@ def save_models(models: ModelSet, folder: str | Path) -> list[Path]:
     paths = []
     for k, m in models.items():
         path = folder / f"{k}.json"
-        if isinstance(m, Metamodel):
+        if isinstance(m, ComposedForce):
+            save_model(m.model, path)
+        elif isinstance(m, Metamodel):
             save_model(m, path)
         else:
             path.write_text(json.dumps({"format": EXACT_FORMAT, "name": k, "units": "T",
@@ -152,10 +204,12 @@ def _load_any(path: Path, name: str):
         except (KeyError, TypeError, tomllib.TOMLDecodeError) as exc:
             raise ValueError(f"{path}: exact-field file without a valid study ({exc})") from None
         return ExactField(study, name)
+    if isinstance(data, dict) and data.get("format") == FIELD_FORCE_FORMAT:
+        return field_force_from_dict(data, str(path))
     return model_from_dict(data, str(path))
 
 
-def load_models(folder: str | Path, B_model=None) -> ModelSet:
+def load_models(folder: str | Path, B_model=None, definition: str | None = None) -> ModelSet:
     """Read ``B_r, B_z, f_r, f_z`` from ``<folder>/<name>.json`` (see :func:`save_models`).
 
     Parameters
@@ -164,13 +218,16 @@ def load_models(folder: str | Path, B_model=None) -> ModelSet:
     B_model : tuple, optional
         ``(B_r, B_z)`` models to use instead of the folder's field files (e.g. the exact field);
         then only ``f_r.json`` and ``f_z.json`` are read.
+    definition : {"jacobian", "published"}, optional
+        The sensitivity definition the study asks for; the force files must be of it.
 
     Raises
     ------
     FileNotFoundError
         If a file is missing.
     ValueError
-        If a file is not a valid model file or holds another response.
+        If a file is not a valid model file, holds another response, or serves another
+        sensitivity definition than ``definition``.
     """
     folder = Path(folder)
     models = {}
@@ -187,4 +244,13 @@ def load_models(folder: str | Path, B_model=None) -> ModelSet:
             raise ValueError(f"{path}: holds {m.name!r} [{m.units}], "
                              f"expected {k!r} [{RESPONSES[k]}]")
         models[k] = m
-    return ModelSet(**models)
+    for k in ("f_r", "f_z"):
+        if isinstance(models[k], FieldForceModel):
+            models[k] = ComposedForce(models[k], models["B_r"], models["B_z"])
+    out = ModelSet(**models)
+    if definition is not None and out.definition != definition:
+        raise ValueError(
+            f"{folder}: the force models serve the {out.definition!r} sensitivity definition, "
+            f"but the study's [sensitivity] definition is {definition!r}: fit models for it "
+            f"(magtact fit) or set definition = {out.definition!r}")
+    return out

@@ -209,6 +209,17 @@ class ModelSet:
                              f"missing {sorted(missing)}, unknown {sorted(extra)}")
         return cls(**{k: Metamodel.from_expr(k, exprs[k], RESPONSES[k], info) for k in RESPONSES})
 
+    @property
+    def definition(self) -> str:
+        """The sensitivity definition the force models serve: ``"jacobian"`` for models of
+        (t, θ, H), ``"published"`` for force models of (B_r, B_z, t, θ, H) along the path."""
+        from ._field_force import ComposedForce
+
+        kinds = {isinstance(m, ComposedForce) for m in (self.f_r, self.f_z)}
+        if len(kinds) != 1:
+            raise ValueError("f_r and f_z belong to different sensitivity definitions")
+        return "published" if kinds.pop() else "jacobian"
+
     def __getitem__(self, name: str) -> Metamodel:
         if name not in RESPONSES:
             raise KeyError(f"no response {name!r}; responses: {list(RESPONSES)}")

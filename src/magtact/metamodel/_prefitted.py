@@ -42,6 +42,9 @@ def find_prefitted(study: Study, ds) -> Path | None:
         settings = {k: v for k, v in info.get("settings", {}).items() if k not in _NEUTRAL}
         if settings != wanted:
             return None
+        if name in ("f_r", "f_z") and \
+                info.get("definition", "jacobian") != study.sensitivity.definition:
+            return None
         digest = digest or data_hash(ds)
         if info.get("data_hash") != digest:
             return None

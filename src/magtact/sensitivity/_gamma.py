@@ -73,20 +73,29 @@ def _jets(models: ModelSet, t, theta, H, order: int):
 
 
 def dF_dB(models: ModelSet, t, theta, H, G=1.0) -> np.ndarray:
-    """Jacobian ∂F/∂B at fixed design, shape (..., 2, 2) [N/T].
+    """∂F/∂B at fixed design under the model set's definition, shape (..., 2, 2) [N/T].
 
     Rows (F_r, F_z), columns (B_r, B_z); arguments broadcast (t [-], θ [rad], H [m], G [Pa]).
+    For ``models.definition == "jacobian"`` the total derivative through the displacement,
+    (∂F/∂u)(∂B/∂u)⁻¹; for ``"published"`` the partial derivatives of the force models
+    F(B_r, B_z, t, θ, H) in B at fixed (t, θ, H), evaluated on the sensor's path.
     """
+    G = np.asarray(G, dtype=float)[..., None, None]
+    if models.definition == "published":
+        rows = [[jet[0] for jet in models[f].partials(t, theta, H, 0)] for f in ("f_r", "f_z")]
+        return G * _stack(rows, np.broadcast_shapes(*(np.shape(v) for r in rows for v in r)),
+                          (2, 2))
     jets = _jets(models, t, theta, H, 1)
     J = np.stack([jets["B_r"][1], jets["B_z"][1]], axis=-2)  # (..., 2 [B], 2 [p, q])
     dfx = np.stack([jets["f_r"][1], jets["f_z"][1]], axis=-2)  # (..., 2 [f], 2 [p, q])
-    return np.asarray(G, dtype=float)[..., None, None] * (dfx @ np.linalg.inv(J))
+    return G * (dfx @ np.linalg.inv(J))
 
 
 def gamma(models: ModelSet, t, theta, H, G) -> tuple[np.ndarray, np.ndarray]:
     """Sensitivities Γ_r, Γ_z [N/T] at (t, θ, H, G) (broadcast).
 
-    Γ_r = |∂F_r/∂B|, Γ_z = |∂F_z/∂B| (SPEC section 6), finite at t = 0 (see the module notes).
+    Γ_r = |∂F_r/∂B|, Γ_z = |∂F_z/∂B| (docs/method.md, sensitivity) under the model set's
+    definition (see :func:`dF_dB`); finite at t = 0 (see the module notes).
     """
     S = dF_dB(models, t, theta, H, G)
     return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])
@@ -124,7 +133,14 @@ class Responses:
     def at(self, H) -> ResponsesAtH:
         """The responses at design height ``H`` [m] (a float, or an array that broadcasts
         against the ``t, theta`` arrays of the calls, for many designs at once)."""
+        if self.models.definition == "published":
+            return PublishedResponsesAtH(self.models, H)
         return ResponsesAtH(self.models, H)
+
+    @property
+    def definition(self) -> str:
+        """The sensitivity definition of the models (``"jacobian"`` or ``"published"``)."""
+        return self.models.definition
 
 
 class ResponsesAtH:
@@ -183,6 +199,52 @@ class ResponsesAtH:
             out.append(np.einsum("...ij,...ik,...jl->...kl", Phi2, dv, dv)
                        + np.einsum("...i,...ikl->...kl", Phi1, d2v))
         return out
+
+
+class PublishedResponsesAtH(ResponsesAtH):
+    """Responses at height(s) H under the published definition; see :class:`Responses`.
+
+    The forces are the field-force models composed with the path, f = f̂(B(p, q, H), p, q, H),
+    and γ = |∂f̂/∂B| at fixed (p, q, H) (equivalently fixed (t, θ, H)), composed with the path.
+    With s = (s_r, s_z) = ∂f̂/∂(B_r, B_z) along the path, γ = |s| and
+
+        ∇γ = Σ_k s_k ∇s_k / γ,   ∇²γ = (Σ_k ∇s_k ∇s_kᵀ + s_k ∇²s_k) / γ − ∇γ ∇γᵀ / γ,
+
+    with ∇ in (p, q), converted to (t, θ) like the Jacobian's.
+    """
+
+    def _jet(self, name, t, theta, order):
+        if name in ("f_r", "f_z"):
+            return self.models[name].jet(t, theta, self.H, order)
+        f = "f_r" if name == "gamma_r" else "f_z"
+        (sr, sz) = self.models[f].partials(t, theta, self.H, order)
+        g = np.hypot(sr[0], sz[0])
+        out = [g]
+        if order >= 1:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                dg = (sr[0][..., None] * sr[1] + sz[0][..., None] * sz[1]) / g[..., None]
+            out.append(dg)
+        if order >= 2:
+            outer = (np.einsum("...i,...j->...ij", sr[1], sr[1])
+                     + np.einsum("...i,...j->...ij", sz[1], sz[1])
+                     + sr[0][..., None, None] * sr[2] + sz[0][..., None, None] * sz[2])
+            with np.errstate(invalid="ignore", divide="ignore"):
+                out.append((outer - np.einsum("...i,...j->...ij", dg, dg))
+                           / g[..., None, None])
+        return out
+
+    def value(self, name: str, t, theta) -> np.ndarray:
+        self._check(name)
+        return self._jet(name, t, theta, 0)[0]
+
+    def grad(self, name: str, t, theta) -> np.ndarray:
+        self._check(name)
+        return _to_ttheta(t, theta, self._jet(name, t, theta, 1)[1])
+
+    def hess(self, name: str, t, theta) -> np.ndarray:
+        self._check(name)
+        _, gx, hx = self._jet(name, t, theta, 2)
+        return _to_ttheta_hess(t, theta, gx, hx)
 
 
 def _jx(t, theta):

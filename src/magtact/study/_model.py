@@ -175,6 +175,23 @@ class Metamodel:
     threads: int = setting(2, integer=True, minimum=1, doc="threads of the GP")
 
 
+#: Definitions of the sensitivity Γ (docs/method.md, sensitivity): "jacobian", the total
+#: derivative ∂F/∂B through the magnet's displacement, a property of the sensor; "published",
+#: the partial derivative in B of a force model F(B_r, B_z, t, θ, H) at fixed (t, θ, H), as in
+#: de Boer et al. (Sensors 2017), a property of the fitted expression as much as of the sensor.
+SENSITIVITY_DEFINITIONS = ("jacobian", "published")
+
+
+@dataclass(frozen=True)
+class Sensitivity:
+    """How the sensitivity Γ = |∂F/∂B| is defined (docs/method.md, sensitivity)."""
+
+    definition: str = setting("jacobian", choices=SENSITIVITY_DEFINITIONS,
+                              doc="'jacobian': dF/dB through the magnet displacement (default); "
+                                  "'published': partial derivative in B of F(B, t, theta, H) "
+                                  "at fixed (t, theta, H), as in the publication")
+
+
 @dataclass(frozen=True)
 class Optimise:
     """Design optimisation (SPEC section 7): per-design extrema, maps, NSGA-II, reduction."""
@@ -215,6 +232,7 @@ class Study:
     mechanics: Mechanics = field(default_factory=Mechanics)
     constraints: Constraints = field(default_factory=Constraints)
     metamodel: Metamodel = field(default_factory=Metamodel)
+    sensitivity: Sensitivity = field(default_factory=Sensitivity)
     optimise: Optimise = field(default_factory=Optimise)
 
     # ---- DOE levels (SI) -------------------------------------------------------------------

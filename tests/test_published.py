@@ -1,0 +1,126 @@
+"""The published sensitivity definition against exact answers, independent of genetic programming.
+
+A synthetic sensor: the field B(p, q) is an exact invertible map and the force f(p, q) exact.
+Two force expressions f̂(B_r, B_z, p, q) that agree along the sensor's path but use B and (p, q)
+differently give the same Jacobian Γ (a property of the sensor) and different published Γ (a
+property of the expression).
+"""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from magtact.metamodel import (
+    ComposedForce,
+    FieldForceModel,
+    Metamodel,
+    ModelSet,
+    load_models,
+    save_models,
+)
+from magtact.metamodel._field_force import B_r, B_z
+from magtact.metamodel._symbols import H, p, q
+from magtact.sensitivity import Responses, dF_dB, gamma
+
+# field: B_r linear in q, B_z quadratic in p (invertible for p in [0, 1]); H scales both
+b1, b0, b2, b3 = sp.Float(0.04), sp.Float(0.2), sp.Float(-0.05), sp.Float(0.01)
+FIELD = {"B_r": b1 * q * (1 + H * 100), "B_z": b0 + b2 * p + b3 * p**2 + H}
+# force per unit G along the path, and the same in field variables
+F_PQ = {"f_r": sp.Float(-2e-5) * q * (1 + p), "f_z": sp.Float(3e-5) * p + sp.Float(1e-5) * q**2}
+q_of_B = B_r / (b1 * (1 + H * 100))
+F_B = {"f_r": sp.Float(-2e-5) * q_of_B * (1 + p),
+       "f_z": sp.Float(3e-5) * p + sp.Float(1e-5) * q_of_B**2}
+
+
+def _field_models():
+    return [Metamodel.from_expr(k, FIELD[k], "T") for k in ("B_r", "B_z")]
+
+
+def _published(forces: dict) -> ModelSet:
+    Br, Bz = _field_models()
+    return ModelSet(B_r=Br, B_z=Bz, **{k: ComposedForce(FieldForceModel.from_expr(k, e), Br, Bz)
+                                       for k, e in forces.items()})
+
+
+def _jacobian(forces: dict) -> ModelSet:
+    """The Jacobian model set of the forces along the path (B substituted symbolically)."""
+    Br, Bz = _field_models()
+    sub = {B_r: FIELD["B_r"], B_z: FIELD["B_z"]}
+    return ModelSet(B_r=Br, B_z=Bz,
+                    **{k: Metamodel.from_expr(k, sp.expand(e.xreplace(sub)), "N/Pa")
+                       for k, e in forces.items()})
+
+
+@pytest.fixture(scope="module")
+def grid():
+    rng = np.random.default_rng(1)
+    return rng.uniform(0.05, 1, 40), rng.uniform(0.0, 0.4, 40), rng.uniform(3e-3, 7e-3, 40)
+
+
+def test_equal_forces_equal_jacobian_different_published(grid):
+    t, th, h = grid
+    in_pq = {k: e for k, e in F_PQ.items()}  # no field symbol: the partial in B is zero
+    in_b = F_B
+    a, b = _published(in_pq), _published(in_b)
+    assert a.definition == b.definition == "published"
+    # the two expressions are equal along the path
+    for k in ("f_r", "f_z"):
+        np.testing.assert_allclose(a[k].value(t, th, h), b[k].value(t, th, h), rtol=1e-12)
+    # same Jacobian Γ
+    ja, jb = gamma(_jacobian(in_pq), t, th, h, 20e3), gamma(_jacobian(in_b), t, th, h, 20e3)
+    assert _jacobian(in_pq).definition == "jacobian"
+    for x, y in zip(ja, jb, strict=True):
+        np.testing.assert_allclose(x, y, rtol=1e-10)
+        assert np.all(x > 0)
+    # different published Γ: zero for the expression without B, the Jacobian's for the other
+    pa, pb = gamma(a, t, th, h, 20e3), gamma(b, t, th, h, 20e3)
+    np.testing.assert_array_equal(pa[0], 0.0)
+    np.testing.assert_array_equal(pa[1], 0.0)
+    assert np.all(pb[0] > 0) and np.all(pb[1] > 0)
+    assert not np.allclose(pb[1], jb[1], rtol=1e-3)
+
+
+def test_published_gamma_is_the_partial_derivative_of_its_expression(grid):
+    t, th, h = grid
+    ms = _published(F_B)
+    S = dF_dB(ms, t, th, h, 1.0)
+    Br, Bz = ms.fields(t, th, h)
+    pv, qv = t, t * np.tan(th)
+    for i, k in enumerate(("f_r", "f_z")):
+        f = sp.lambdify((B_r, B_z, p, q, H), F_B[k], "numpy")
+        for j, (dr, dz) in enumerate(((1, 0), (0, 1))):
+            eps = 1e-6 * 0.1
+            fd = (f(Br + dr * eps, Bz + dz * eps, pv, qv, h)
+                  - f(Br - dr * eps, Bz - dz * eps, pv, qv, h)) / (2 * eps)
+            np.testing.assert_allclose(S[..., i, j], fd, rtol=1e-6, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["f_r", "f_z", "gamma_r", "gamma_z"])
+def test_published_responses_derivatives_match_differences(grid, name):
+    t, th, h = grid
+    R = Responses(_published(F_B)).at(h)
+    g, Hs = R.grad(name, t, th), R.hess(name, t, th)
+    e = 1e-6
+    for k, (dt, dth) in enumerate(((e, 0), (0, e))):
+        fd = (R.value(name, t + dt, th + dth) - R.value(name, t - dt, th - dth)) / (2 * e)
+        np.testing.assert_allclose(g[..., k], fd, rtol=1e-5, atol=1e-9 * np.abs(fd).max())
+        fd2 = (R.grad(name, t + dt, th + dth) - R.grad(name, t - dt, th - dth)) / (2 * e)
+        # round-off of the differenced gradient: ~1e-10 of its size
+        np.testing.assert_allclose(Hs[..., k, :], fd2, rtol=1e-5,
+                                   atol=1e-8 * np.abs(g).max())
+
+
+def test_model_files_round_trip_and_refuse_the_other_definition(tmp_path, grid):
+    t, th, h = grid
+    ms = _published(F_B)
+    save_models(ms, tmp_path)
+    back = load_models(tmp_path, definition="published")
+    np.testing.assert_array_equal(gamma(back, t, th, h, 1.0)[1], gamma(ms, t, th, h, 1.0)[1])
+    with pytest.raises(ValueError, match=r"serve the 'published' sensitivity definition.*"
+                                         r"\[sensitivity\] definition is 'jacobian'"):
+        load_models(tmp_path, definition="jacobian")
+    jac = tmp_path / "jac"
+    save_models(_jacobian(F_B), jac)
+    with pytest.raises(ValueError, match=r"serve the 'jacobian' sensitivity definition.*"
+                                         r"\[sensitivity\] definition is 'published'"):
+        load_models(jac, definition="published")
