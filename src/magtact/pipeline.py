@@ -30,11 +30,6 @@ PACKAGES = ("magtact", "numpy", "scipy", "xarray", "h5netcdf", "gmsh", "scikit-f
             "typer", "rich")
 
 
-#: Study sections that determine the DOE data set (the others may differ from the bundle's).
-DOE_SECTIONS = ("body", "magnet", "loading", "material", "design", "doe", "magnetics",
-                "mechanics")
-
-
 class StageSkipped(Exception):
     """A stage could not run because an input it needs is missing (not an error of its own)."""
 
@@ -195,7 +190,7 @@ def _stage_field(ctx: _Context, rec: StageRecord) -> str:
 
 
 def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
-    from .doe import load_bundled, run_doe, save_dataset, write_csv
+    from .doe import load_bundled, matches_study, run_doe, save_dataset, write_csv
 
     folder = ctx.folder / "doe"
     if ctx.recompute:
@@ -205,8 +200,7 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
                           f"computed, {a.get('run_paths_cached')} from the cache")
     else:
         ds = load_bundled()
-        bundled = ds.attrs.get("study_toml")
-        if bundled is not None and not _same_study(bundled, ctx.study):
+        if not matches_study(ds, ctx.study):
             raise StageSkipped("the bundled data set was computed for the built-in MagOne "
                                "study, whose geometry, material, levels or solver settings "
                                "differ from this study's: run with --recompute")
@@ -283,19 +277,6 @@ STAGES: tuple[tuple[str, str, Callable], ...] = (
 
 
 # ---- helpers ---------------------------------------------------------------------------------
-def _same_study(toml_text: str, study: Study) -> bool:
-    """True if a data set's study TOML agrees with ``study`` in every section the DOE uses."""
-    import tomllib
-
-    from .study import study_from_dict
-
-    try:
-        other = study_from_dict(tomllib.loads(toml_text))
-    except Exception:
-        return False
-    return all(getattr(other, name) == getattr(study, name) for name in DOE_SECTIONS)
-
-
 def _copy_evidence(folder: Path) -> None:
     """Copy bench/results/*.json of a source checkout into ``folder/evidence`` (if present)."""
     root = Path(__file__).resolve().parents[2] / "bench" / "results"

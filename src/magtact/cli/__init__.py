@@ -13,6 +13,7 @@ from . import (  # noqa: F401  (each module registers its command)
     _fit,
     _optimise,
     _report,
+    _reproduce,
     _run,
     _simulate,
     _study,

@@ -196,3 +196,28 @@ def write_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         for row in zip(*(full[name].tolist() for name in CSV_COLUMNS), strict=True):
             writer.writerow([repr(x + 0.0) for x in row])  # + 0.0: no '-0.0'
     return path
+
+
+#: Study sections that determine a DOE data set (the others may differ from the data set's).
+DOE_SECTIONS = ("body", "magnet", "loading", "material", "design", "doe", "magnetics",
+                "mechanics")
+
+
+def matches_study(ds, study) -> bool:
+    """True if the data set was computed for a study that agrees with ``study`` in every
+    section a DOE depends on (:data:`DOE_SECTIONS`), read from its ``study_toml`` attribute."""
+    import tomllib
+
+    from ..study import study_from_dict
+
+    text = ds.attrs.get("study_toml")
+    if text is None:
+        return False
+    try:
+        # only the sections a DOE depends on: settings added since the data set was written
+        # (sensitivity, optimisation, ...) take their defaults
+        data = {k: v for k, v in tomllib.loads(text).items() if k in DOE_SECTIONS}
+        other = study_from_dict(data | {"base": "magone"})
+    except Exception:  # a data set whose study no longer loads belongs to no study of today
+        return False
+    return all(getattr(other, name) == getattr(study, name) for name in DOE_SECTIONS)

@@ -15,7 +15,15 @@ from ._fit import (
     hall_features,
     holdout_paths,
 )
-from ._io import load_model, load_models, model_from_dict, model_to_dict, save_model, save_models
+from ._io import (
+    load_field_models,
+    load_model,
+    load_models,
+    model_from_dict,
+    model_to_dict,
+    save_model,
+    save_models,
+)
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._outputs import write_fit_outputs
 from ._parse import format_expression, parse_expression
@@ -25,10 +33,10 @@ from ._symbols import H, p, q, t, theta
 
 __all__ = [
     "OPERATOR_SETS", "RESPONSES", "TRAIN_TARGET", "TRANSFORMS", "Accuracy", "ComposedForce",
-    "ExactField", "FieldForceModel",
-    "FitReport", "FitResult", "H", "Metamodel", "ModelSet", "SymbolicRegressor", "accuracy",
-    "copy_prefitted", "data_hash", "find_prefitted", "fit_models", "fit_response",
-    "format_expression", "hall_features", "holdout_paths", "load_model", "load_models",
-    "model_from_dict", "model_to_dict", "p", "parse_expression", "prefitted_dir", "q",
-    "save_model", "save_models", "t", "theta", "write_fit_outputs",
+    "ExactField", "FieldForceModel", "FitReport", "FitResult", "H", "Metamodel", "ModelSet",
+    "SymbolicRegressor", "accuracy", "copy_prefitted", "data_hash", "find_prefitted",
+    "fit_models", "fit_response", "format_expression", "hall_features", "holdout_paths",
+    "load_field_models", "load_model", "load_models", "model_from_dict", "model_to_dict", "p",
+    "parse_expression", "prefitted_dir", "q", "save_model", "save_models", "t", "theta",
+    "write_fit_outputs",
 ]

@@ -209,6 +209,28 @@ def _load_any(path: Path, name: str):
     return model_from_dict(data, str(path))
 
 
+def load_field_models(folder: str | Path) -> tuple:
+    """Read only ``B_r.json`` and ``B_z.json`` of a model folder (fitted or exact field).
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        As :func:`load_models`.
+    """
+    folder = Path(folder)
+    out = []
+    for k in ("B_r", "B_z"):
+        path = folder / f"{k}.json"
+        if not path.is_file():
+            raise FileNotFoundError(f"metamodel file not found: {path}")
+        m = _load_any(path, k)
+        if m.name != k or m.units != RESPONSES[k]:
+            raise ValueError(f"{path}: holds {m.name!r} [{m.units}], "
+                             f"expected {k!r} [{RESPONSES[k]}]")
+        out.append(m)
+    return tuple(out)
+
+
 def load_models(folder: str | Path, B_model=None, definition: str | None = None) -> ModelSet:
     """Read ``B_r, B_z, f_r, f_z`` from ``<folder>/<name>.json`` (see :func:`save_models`).
 

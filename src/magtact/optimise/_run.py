@@ -96,6 +96,7 @@ class Optimisation:
         c = self.constraints
         doc = {
             "study": self.study.name,
+            "sensitivity_definition": self.study.sensitivity.definition,
             "constraints": {
                 "F_r_c_N": c.F_r_c, "F_z_c_N": c.F_z_c, "source": c.source,
                 "reference": None if c.reference is None else _design_json(c.reference),

@@ -21,6 +21,8 @@ import json
 from datetime import UTC, datetime
 from pathlib import Path
 
+from ._publication import publication_section
+
 #: Stages in pipeline order: (folder, title, what it is).
 STAGES: tuple[tuple[str, str, str], ...] = (
     ("field", "Magnetic field",
@@ -101,12 +103,13 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
                      "noise, drift and scatter), not with measurements.</div>")
     toc = " · ".join(f'<a href="#{k}">{_e(t)}</a>' for k, t, _ in STAGES)
     parts.append(f'<p><a href="#summary">Summary</a> · <a href="#chosen">Chosen design</a> · '
-                 f'{toc} · <a href="#evidence">Evidence</a> · <a href="#settings">Settings</a>'
-                 "</p>")
+                 f'{toc} · <a href="#publication">The publication</a> · '
+                 '<a href="#evidence">Evidence</a> · <a href="#settings">Settings</a></p>')
     parts.append(_summary(manifest, stages, folder))
     parts.append(_chosen(folder / "optimise"))
     for key, title, what in STAGES:
         parts.append(_stage(folder / key, key, title, what, stages.get(key)))
+    parts.append(publication_section(folder / "publication", _definition(folder)))
     parts.append(_evidence([folder / "evidence"] + ([Path(evidence)] if evidence else [])))
     parts.append(_settings(folder / "study.toml"))
     parts.append(_versions(manifest))
@@ -119,6 +122,13 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
 
 
 # ---- sections ------------------------------------------------------------------------------
+def _definition(folder: Path) -> str | None:
+    """The sensitivity definition of the run (from its design.json), if recorded."""
+    data = _load_json(folder / "optimise" / "design.json") or {}
+    return data.get("sensitivity_definition")
+
+
+
 def _summary(manifest: dict, stages: dict, folder: Path) -> str:
     rows = []
     for key, title, _ in STAGES:

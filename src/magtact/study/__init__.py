@@ -19,6 +19,6 @@ from ._units import MU0, from_si, kpa, mm, to_si
 
 __all__ = [
     "DOE", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints", "Design", "Loading",
-    "Magnet", "Magnetics", "Material", "Mechanics", "Sensitivity", "Study", "StudyError", "from_si", "kpa",
-    "load_study", "magone", "magone_printed", "mm", "study_from_dict", "to_si",
+    "Magnet", "Magnetics", "Material", "Mechanics", "Sensitivity", "Study", "StudyError",
+    "from_si", "kpa", "load_study", "magone", "magone_printed", "mm", "study_from_dict", "to_si",
 ]

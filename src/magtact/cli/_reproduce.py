@@ -1,0 +1,62 @@
+"""`magtact reproduce`: the publication's sensitivity beside magtact's, over GP seeds."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from ._app import StudyArg, app, console, get_study, out_dir
+
+
+@app.command("reproduce")
+def reproduce_command(
+    study: StudyArg = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="Results folder (created); the "
+                                      "section lands in OUT/publication and OUT/report.html.")]
+    = Path("results"),
+    seeds: Annotated[int, typer.Option(
+        "--seeds", help="GP seeds per sensitivity definition (at least 1).")] = 8,
+    workers: Annotated[int | None, typer.Option(
+        "--workers", "-j", help="Worker processes (default: the number of cores).")] = None,
+    data: Annotated[Path | None, typer.Option(
+        "--data", help="DOE data set (.nc); default: the bundled MagOne data set.")] = None,
+    definition: Annotated[list[str] | None, typer.Option(
+        "--definition", help="Sensitivity definition to include (repeat for several); "
+                             "default: jacobian and published.")] = None,
+) -> None:
+    """Refit the force models with N seeds under the Jacobian and the published definition of
+    Γ, rerun the optimisation, and compare with the publication (CSV, JSON, figures, report)."""
+    from ..publication import DEFINITIONS, cell_text, reproduce
+    from ..report import build_report, publication_figures
+
+    if seeds < 1:
+        raise typer.BadParameter(f"must be at least 1, got {seeds}", param_hint="--seeds")
+    for d in definition or ():
+        if d not in DEFINITIONS:
+            raise typer.BadParameter(
+                f"unknown sensitivity definition {d!r} ([sensitivity] definition): choose "
+                f"from {', '.join(DEFINITIONS)}", param_hint="--definition")
+    s = get_study(study)
+    result = reproduce(s, seeds=seeds, workers=workers, data=data,
+                       definitions=tuple(definition) if definition else DEFINITIONS,
+                       log=lambda m: console.print(m, highlight=False, markup=False))
+    folder = out_dir(out) / "publication"
+    files = result.write(folder)
+    files += publication_figures(folder)
+    report = build_report(out)
+    table = Table(title=f"magtact and the publication ({s.name}; median [min, max] over "
+                        f"{seeds} seeds)")
+    cols = [k for k in result.comparison[0] if "/" in k]
+    for c in ["quantity", "scale-free", "publication", *cols]:
+        table.add_column(c, justify="left" if c == "quantity" else "right")
+    for r in result.comparison:
+        table.add_row(escape(f"{r['quantity']} [{r['unit']}]"),
+                      "yes" if r["scale_free"] else "no", f"{r['publication']:.3g}",
+                      *(escape(cell_text(r[c])) for c in cols))
+    console.print(table)
+    console.print(f"{len(files)} files in {folder}; report {report} "
+                  f"({result.wall_time_s:.0f} s, {result.workers} workers)", highlight=False)

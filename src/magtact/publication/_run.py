@@ -1,0 +1,173 @@
+"""``reproduce``: the seed study under both definitions, the comparison table and its files."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from tempfile import mkdtemp
+
+from ..study import Study
+from ._compare import FIGURES, cell_text, comparison, spread
+from ._seeds import DEFINITIONS, seed_study
+
+
+@dataclass(frozen=True)
+class Reproduction:
+    """The seed study and the comparison with the publication.
+
+    Attributes
+    ----------
+    study : Study
+    seeds : tuple of int
+    records : list of dict
+        One per (definition, seed); see :func:`magtact.publication.seed_study`.
+    spread : dict
+        Per definition and figure: values over seeds, min, max, max/min.
+    comparison : list of dict
+        Rows of the side-by-side table (see :func:`magtact.publication.comparison`).
+    wall_time_s : float
+    workers : int
+    """
+
+    study: Study
+    seeds: tuple[int, ...]
+    records: list[dict]
+    spread: dict
+    comparison: list[dict]
+    wall_time_s: float
+    workers: int
+
+    def write(self, out: str | Path) -> list[Path]:
+        """Write ``publication.json`` (everything), ``seeds.csv``, ``spread.csv`` and
+        ``comparison.csv`` (user units) into ``out``; return the files."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        doc = {"title": "magtact and the publication", "study": self.study.name,
+               "definition_of_study": self.study.sensitivity.definition,
+               "seeds": list(self.seeds), "workers": self.workers,
+               "G_range_Pa": list(self.study.design.G),
+               "wall_time_s": self.wall_time_s, "spread": self.spread,
+               "comparison": self.comparison, "records": self.records}
+        files = [_write(out / "publication.json", json.dumps(_finite(doc), indent=1,
+                                                             ensure_ascii=False))]
+        rows = [[r["definition"], r["seed"], r["ok"], r.get("fit_time_s", math.nan)]
+                + [_fmt(_path(r, p)) for *_, p in FIGURES] + [r.get("gamma_z_trend", "")]
+                for r in self.records]
+        files.append(_csv(out / "seeds.csv", ["definition", "seed", "ok", "fit_time_s"]
+                          + [k for k, *_ in FIGURES] + ["gamma_z_trend"], rows))
+        rows = [[d, f["label"], f["unit"], f["n"], _fmt(f["min"]), _fmt(f["max"]),
+                 _fmt(f["max_over_min"])]
+                for d, figs in self.spread.items() for k, f in figs.items() if "min" in f]
+        files.append(_csv(out / "spread.csv", ["definition", "figure", "unit", "seeds", "min",
+                                               "max", "max_over_min"], rows))
+        cols = [k for k in self.comparison[0] if "/" in k] if self.comparison else []
+        rows = [[r["quantity"], r["unit"], "yes" if r["scale_free"] else "no",
+                 _fmt(r["publication"])] + [cell_text(r[c]) for c in cols]
+                for r in self.comparison]
+        files.append(_csv(out / "comparison.csv", ["quantity", "unit", "scale_free",
+                                                   "publication"] + cols, rows))
+        return files
+
+
+def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
+              data: str | Path | None = None, models: str | Path | None = None,
+              definitions=DEFINITIONS, sweep_n: int = 201,
+              log: Callable[[str], None] | None = None) -> Reproduction:
+    """Refit the force models with ``seeds`` seeds under each definition and compare.
+
+    Parameters
+    ----------
+    study : Study
+    seeds : int
+        Number of seeds (``study.metamodel.seed`` and the next ones).
+    workers : int, optional
+        Worker processes (default: the number of cores).
+    data : path, optional
+        DOE data set file; default: the bundled MagOne data set (valid for the MagOne study
+        only).
+    models : path, optional
+        Folder with the field models (``B_r.json``, ``B_z.json``) all fits share; default: the
+        fit shipped for the bundled data set when it matches, else the field is fitted once.
+    definitions : sequence of str
+    sweep_n : int
+        Heights of each fit's exact-reduction sweep.
+    log : callable, optional
+
+    Raises
+    ------
+    ValueError
+        ``seeds`` < 1, an unknown definition, or the bundled data set with a study it was not
+        computed for.
+    """
+    from ..doe import load_bundled, load_dataset, matches_study
+    from ..metamodel import fit_models, prefitted_dir
+    from ..metamodel import save_model as save_models_field
+
+    if not isinstance(seeds, int) or seeds < 1:
+        raise ValueError(f"--seeds must be a whole number of at least 1, got {seeds!r}")
+    t0 = time.perf_counter()
+    ds = load_dataset(data) if data is not None else load_bundled()
+    if data is None and not matches_study(ds, study):
+        raise ValueError("the bundled DOE data set belongs to the built-in MagOne study, whose "
+                         "geometry, material or levels differ from this study's: give the "
+                         "study's own data set with --data (from `magtact doe`)")
+    if models is None:
+        if data is None and study.metamodel.b_model == "fit":
+            models = prefitted_dir()  # fitted to this very data set
+        else:
+            if log:
+                log("fitting the field models once (shared by every seed)")
+            field = fit_models(ds, study, names=("B_r", "B_z")).model_set(study)
+            models = Path(mkdtemp(prefix="magtact-field-"))
+            for k in ("B_r", "B_z"):
+                save_models_field(field[k], models / f"{k}.json")
+    first = study.metamodel.seed
+    chosen = tuple(range(first, first + seeds))
+    n_workers = max(1, min(workers or os.cpu_count() or 1, seeds * len(definitions)))
+    records = seed_study(study, ds, models, seeds=chosen, definitions=definitions,
+                         workers=n_workers, data_path=data, sweep_n=sweep_n, log=log)
+    return Reproduction(study, chosen, records, spread(records), comparison(records),
+                        time.perf_counter() - t0, n_workers)
+
+
+def _path(rec: dict, path: str):
+    v = rec
+    for k in path.split("."):
+        v = v.get(k, math.nan) if isinstance(v, dict) else math.nan
+    return v
+
+
+def _fmt(v) -> str:
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
+def _finite(x):
+    """NaN and inf as null: publication.json stays valid JSON."""
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_finite(v) for v in x]
+    return x
+
+
+def _write(path: Path, text: str) -> Path:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(text + "\n", encoding="utf-8")
+    tmp.replace(path)
+    return path
+
+
+def _csv(path: Path, header: list[str], rows) -> Path:
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        w.writerows(rows)
+    return path

@@ -1,0 +1,219 @@
+"""The seed study: how much of each answer belongs to the sensor and how much to the GP's seed.
+
+For each sensitivity definition and each seed, the force models are refitted (field models
+fixed), and the figures the publication reports are recomputed: held-out accuracy, the worst
+sensitivities of the original design, the chosen design under the default constraints and under
+the constraints of the original design (exact reduction and decision rule), the number of
+branches of the Pareto set, and Γ_z along the path at the tallest height and θ_max. Fits run in
+worker processes, one (definition, seed) each.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import tomllib
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..study import Study, from_si, study_from_dict
+
+#: Sensitivity definitions compared.
+DEFINITIONS = ("jacobian", "published")
+#: Height of the publication's fabricated sensor [m] (clipped to the study's H bounds).
+H_FABRICATED = 4.1e-3
+#: Points along t of the Γ_z curve at the tallest height.
+N_T_CURVE = 41
+
+
+def seed_study(study: Study, ds, models_dir: str | Path, *, seeds: Sequence[int],
+               definitions: Sequence[str] = DEFINITIONS, workers: int | None = None,
+               data_path: str | Path | None = None, sweep_n: int = 201,
+               log: Callable[[str], None] | None = None) -> list[dict]:
+    """Refit the force models with every seed under every definition and measure each fit.
+
+    Parameters
+    ----------
+    study : Study
+    ds : xarray.Dataset
+        The DOE data set (used in this process only to check it; workers read ``data_path``).
+    models_dir : path
+        Folder of a model set whose field models (``B_r.json``, ``B_z.json``) every fit uses.
+    seeds : sequence of int
+        GP seeds (each fit uses one seed, no retries, so that seeds are independent samples).
+    definitions : sequence of {"jacobian", "published"}
+    workers : int, optional
+        Worker processes (default: the number of cores); each GP runs on one thread.
+    data_path : path, optional
+        The data set file the workers load; None: the bundled MagOne data set.
+    sweep_n : int
+        Heights of the exact reduction's sweep per fit.
+    log : callable, optional
+        Progress messages (one per finished fit).
+
+    Returns
+    -------
+    list of dict
+        One record per (definition, seed), in that order; see :func:`_measure` for the keys.
+
+    Raises
+    ------
+    ValueError
+        For an empty seed list or an unknown definition.
+    """
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("--seeds must be at least 1")
+    for d in definitions:
+        if d not in DEFINITIONS:
+            raise ValueError(f"[sensitivity] definition must be one of {list(DEFINITIONS)}, "
+                             f"got {d!r}")
+    jobs = [(d, s) for d in definitions for s in seeds]
+    args = dict(study_toml=study.to_toml(), models_dir=str(models_dir),
+                data_path=None if data_path is None else str(data_path), sweep_n=sweep_n)
+    workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
+    records: dict[tuple[str, int], dict] = {}
+    if workers == 1:
+        for d, s in jobs:
+            records[(d, s)] = _measure(definition=d, seed=s, **args)
+            if log:
+                log(_line(records[(d, s)], len(records), len(jobs)))
+    else:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            futures = {pool.submit(_measure, definition=d, seed=s, **args): (d, s)
+                       for d, s in jobs}
+            for fut in as_completed(futures):
+                records[futures[fut]] = fut.result()
+                if log:
+                    log(_line(records[futures[fut]], len(records), len(jobs)))
+    return [records[j] for j in jobs]
+
+
+def _line(rec: dict, done: int, total: int) -> str:
+    head = f"[{done}/{total}] {rec['definition']} seed {rec['seed']}"
+    if not rec["ok"]:
+        return f"{head}: {rec['message']}"
+    return (f"{head}: fit {rec['fit_time_s']:.0f} s; original design Γ_r,max "
+            f"{rec['original']['Gamma_r_max']:.3g}, Γ_z,max {rec['original']['Gamma_z_max']:.3g}"
+            f" N/T; H* {rec['chosen'].get('H_mm', float('nan')):.3g} mm")
+
+
+def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definition: str,
+             seed: int, sweep_n: int) -> dict:
+    """Fit the forces with one seed under one definition and measure the figures (a worker).
+
+    Keys of the record: ``definition, seed, ok, message, fit_time_s, accuracy`` (held-out
+    max |error| / range and R² of f_r, f_z), ``original``, ``fabricated`` (per design: H_mm,
+    G_kPa, Gamma_r_max, Gamma_z_max [N/T], F_r_min, F_z_max [N], t_m, theta_m),
+    ``chosen``/``chosen_reference`` (the chosen design under the default constraints / those of
+    the original design, or ``infeasible`` with the message), ``branches``/``branches_reference``
+    (Pareto branches of the exact reduction), ``gamma_z_curve`` (t, Γ_z [N/T] at the largest H,
+    θ_max, G of the original design) and its ``gamma_z_trend``, and ``sweep`` (H_mm and the
+    per-unit-G extrema γ_r,max, γ_z,max [N/(T·Pa)], f_r,min, f_z,max [N/Pa] over H).
+    """
+    from ..doe import load_bundled, load_dataset
+    from ..metamodel import fit_models, load_field_models
+    from ..optimise import (
+        ForceConstraints,
+        InfeasibleError,
+        decision_index,
+        exact_reduction,
+        force_constraints,
+        heights_batch,
+        shear_bound_conditioning,
+        sweep,
+    )
+    from ..sensitivity import Responses, gamma
+
+    study = study_from_dict(tomllib.loads(study_toml))
+    study = replace(study,
+                    metamodel=replace(study.metamodel, seed=seed, retries=0, threads=1),
+                    sensitivity=replace(study.sensitivity, definition=definition),
+                    optimise=replace(study.optimise, sweep_n=sweep_n,
+                                     sweep_coarse=min(study.optimise.sweep_coarse, sweep_n)))
+    rec: dict = {"definition": definition, "seed": seed, "ok": False, "message": ""}
+    ds = load_dataset(data_path) if data_path else load_bundled()
+    field_models = load_field_models(models_dir)
+    t0 = time.perf_counter()
+    try:
+        fit = fit_models(ds, study, definition=definition, field_models=field_models)
+    except RuntimeError as exc:  # every try failed the guard rails
+        rec["message"] = f"no model passed the guard rails: {exc}"
+        return rec
+    rec["fit_time_s"] = time.perf_counter() - t0
+    rec["accuracy"] = {k: {"test_max_err_over_range": r.test.max_abs_err_over_range,
+                           "test_r2": r.test.r2} if r.test else None
+                       for k, r in fit.reports.items()}
+    models = fit.model_set(study)
+    R = Responses(models)
+    d = study.design
+    # batched per-height extrema (projected Newton, checked against the GA + trust-region
+    # method in the tests): the seed study needs many designs, not the last digit of each
+    H_fab = min(max(H_FABRICATED, d.H[0]), d.H[1])
+    designs = heights_batch(R, [d.H_original, H_fab], study)
+    rec["original"] = _row(designs, 0, d.G_original)
+    rec["fabricated"] = _row(designs, 1, d.G_original)
+    table = sweep(R, study)
+    rec["sweep"] = {"H_mm": from_si(table.H, "mm").tolist(),
+                    "gamma_r_max": table.gamma_r_max.tolist(),
+                    "gamma_z_max": table.gamma_z_max.tolist(),
+                    "f_r_min": table.f_r_min.tolist(), "f_z_max": table.f_z_max.tolist(),
+                    "t_m": table.t_m.tolist()}
+    reference = ForceConstraints(rec["original"]["F_r_min"], rec["original"]["F_z_max"],
+                                 "reference")
+    for key, c in (("", force_constraints(R, study)), ("_reference", reference)):
+        try:
+            red = exact_reduction(R, study, c, table)
+        except InfeasibleError as exc:
+            rec["chosen" + key] = {"infeasible": str(exc)}
+            rec["branches" + key] = 0
+            continue
+        idx = np.flatnonzero(red.front)
+        k = int(idx[decision_index(np.stack([red.Gamma_r[idx], red.Gamma_z[idx]], axis=1))])
+        row = _row(table, k, red.G_star[k])
+        g_r, g_z = c.margins(row["F_r_min"], row["F_z_max"])
+        rtol = study.optimise.active_rtol
+        active = [n for n, g, lim in (("F_r", g_r, c.F_r_c), ("F_z", g_z, c.F_z_c))
+                  if abs(g) <= rtol * abs(lim)]
+        rec["chosen" + key] = row | {"active": active, "F_r_c_N": c.F_r_c, "F_z_c_N": c.F_z_c}
+        rec["branches" + key] = count_branches(red.front)
+    cond = shear_bound_conditioning(R, study, np.linspace(*d.H, 21))
+    rec["conditioning"] = {"H_mm": from_si(cond.H, "mm").tolist(), "tol": cond.tol,
+                           "t_m": cond.t_m.tolist(), "t_tol": cond.t_tol.tolist(),
+                           "dF_z_rel": cond.dF_z_rel.tolist()}
+    tt = np.linspace(0.0, 1.0, N_T_CURVE)
+    gz = gamma(models, tt, study.loading.theta_max, d.H[1], d.G_original)[1]
+    rec["gamma_z_curve"] = {"t": tt.tolist(), "Gamma_z": np.asarray(gz).tolist(),
+                            "H_mm": from_si(d.H[1], "mm"), "theta_rad": study.loading.theta_max}
+    rec["gamma_z_trend"] = trend(gz)
+    rec["ok"] = True
+    return rec
+
+
+def _row(table, k: int, G: float) -> dict:
+    """Design k of a per-height table at shear modulus G [Pa], in user units."""
+    return {"H_mm": float(from_si(table.H[k], "mm")), "G_kPa": float(from_si(G, "kPa")),
+            "Gamma_r_max": float(G * table.gamma_r_max[k]),
+            "Gamma_z_max": float(G * table.gamma_z_max[k]),
+            "F_r_min": float(G * table.f_r_min[k]), "F_z_max": float(G * table.f_z_max[k]),
+            "t_m": float(table.t_m[k]), "theta_m": float(table.theta_m[k])}
+
+
+def count_branches(front: np.ndarray) -> int:
+    """Number of maximal runs of consecutive True in ``front`` (branches of a Pareto set
+    sampled on a sweep)."""
+    f = np.asarray(front, dtype=bool).astype(int)
+    return int(np.sum(np.diff(np.concatenate([[0], f])) == 1))
+
+
+def trend(y, rtol: float = 1e-9) -> str:
+    """``"increasing"``, ``"decreasing"``, ``"constant"`` or ``"mixed"`` for a sampled curve."""
+    d = np.diff(np.asarray(y, dtype=float))
+    tol = rtol * max(float(np.max(np.abs(y))), 1e-300)
+    up, down = np.any(d > tol), np.any(d < -tol)
+    return "mixed" if up and down else "increasing" if up else "decreasing" if down \
+        else "constant"

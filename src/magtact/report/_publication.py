@@ -1,0 +1,119 @@
+"""The report's section "magtact and the publication", from ``<run>/publication``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..study import to_si
+from ._fig_publication import (
+    fig_conditioning,
+    fig_gamma_over_H,
+    fig_gamma_z_along_t,
+    fig_resolution_range,
+    fig_seed_spread,
+)
+
+#: Captions of the section's figures (file stem → caption).
+CAPTIONS = {
+    "seed_spread": "Γ_r,max and Γ_z,max of the original design and the chosen height H* for "
+                   "every GP seed, per sensitivity definition (log scale for Γ). The Jacobian "
+                   "is a property of the sensor; the published partial derivative is a "
+                   "property of the fitted expression.",
+    "gamma_z_along_t": "Γ_z along the loading path at the largest H and θ_max, one line per "
+                       "seed; the publication reports Γ_z increasing monotonically with t.",
+    "gamma_over_H": "Γ_r,max and Γ_z,max over H at the original design's G, one line per seed "
+                    "and definition.",
+    "resolution_range": "The resolution–range trade-off: a design (H, G) has Γ = G γ(H) and "
+                        "F = G f(H), so over G it moves along a line through the origin whose "
+                        "slope is fixed by H (solid: the G bounds). Lower slope: less "
+                        "sensitivity to field noise per newton of range.",
+    "conditioning": "How well-posed the stable-shear bound is: t_m (minimum of F_r) against the "
+                    "smallest t at which F_r is within 1 % of its range of the minimum, and the "
+                    "drop of F_z,max between the two.",
+}
+
+
+def _reference_record(doc: dict) -> dict | None:
+    """The record of the study's own definition and first seed (the study's own fit)."""
+    own = doc.get("definition_of_study", "jacobian")
+    recs = [r for r in doc.get("records", []) if r.get("ok")]
+    for r in recs:
+        if r["definition"] == own:
+            return r
+    return recs[0] if recs else None
+
+
+def publication_figures(folder: str | Path) -> list[Path]:
+    """Draw the section's figures from ``folder/publication.json``; write ``captions.json``."""
+    folder = Path(folder)
+    doc = json.loads((folder / "publication.json").read_text(encoding="utf-8"))
+    records = doc["records"]
+    files = fig_seed_spread(records, folder / "seed_spread")
+    files += fig_gamma_z_along_t(records, folder / "gamma_z_along_t")
+    own = _reference_record(doc)
+    if own is not None:
+        G = to_si(own["original"]["G_kPa"], "kPa")
+        files += fig_gamma_over_H(records, G, folder / "gamma_over_H")
+        files += fig_resolution_range(own["sweep"], tuple(doc["G_range_Pa"]),
+                                      folder / "resolution_range")
+        files += fig_conditioning(own["conditioning"], folder / "conditioning")
+    (folder / "captions.json").write_text(json.dumps(CAPTIONS, indent=1, ensure_ascii=False))
+    return files
+
+
+def publication_section(folder: Path, run_definition: str | None) -> str:
+    """HTML of the section (``folder`` = ``<run>/publication``; absent: how to make it)."""
+    from ._html import _e, _figure, _load_json
+
+    head = ('<h2 id="publication">magtact and the publication</h2>'
+            "<p>de Boer et al. (Sensors 2017) optimise the MagOne sensor with a sensitivity "
+            "defined as the partial derivative of a fitted force expression "
+            "F(B_r, B_z, t, θ, H) in B at fixed (t, θ, H); magtact's default is the Jacobian "
+            "∂F/∂B = (∂F/∂u)(∂B/∂u)⁻¹ through the magnet's displacement, a property of the "
+            "sensor (docs/method.md, sensitivity). The publication prints G in 1–5 kPa; "
+            "<code>magone</code> reads it as 10–50 kPa. "
+            + (f"This run used the <b>{_e(run_definition)}</b> definition. "
+               if run_definition else "") + "</p>")
+    doc = _load_json(folder / "publication.json")
+    if not doc:
+        return (head + '<div class="missing">No seed study in this folder: run '
+                "<code>magtact reproduce --out FOLDER</code> (about ten minutes on two cores) "
+                "to add the side-by-side table and its figures.</div>")
+    cols = [k for k in doc["comparison"][0] if "/" in k] if doc["comparison"] else []
+    from ..publication import cell_text
+
+    rows = "".join(
+        f'<tr><td class="l">{_e(r["quantity"])}</td><td>{_e(r["unit"])}</td>'
+        f'<td>{"yes" if r["scale_free"] else "no"}</td><td>{r["publication"]:.3g}</td>'
+        + "".join(f"<td>{_e(cell_text(r[c]))}</td>" for c in cols) + "</tr>"
+        for r in doc["comparison"])
+    labels = "".join(f"<th>magtact, {_e(c.split('/')[0])}, G "
+                     f"{'as the study reads it' if c.endswith('study') else 'as printed'}</th>"
+                     for c in cols)
+    table = ('<table class="publication"><tr><th class="l">quantity</th><th>unit</th>'
+             f"<th>scale-free</th><th>publication (G as printed)</th>{labels}</tr>{rows}"
+             "</table>")
+    spread_rows = "".join(
+        f'<tr><td class="l">{_e(d)}</td><td class="l">{_e(f["label"])}</td>'
+        f'<td>{_e(f["unit"])}</td><td>{f.get("n", "")}</td><td>{_num(f.get("min"))}</td>'
+        f'<td>{_num(f.get("max"))}</td><td>{_num(f.get("max_over_min"))}</td></tr>'
+        for d, figs in doc["spread"].items() for f in figs.values() if "min" in f)
+    spread = ('<table><tr><th class="l">definition</th><th class="l">figure</th><th>unit</th>'
+              "<th>seeds</th><th>min</th><th>max</th><th>max / min</th></tr>"
+              f"{spread_rows}</table>")
+    captions = _load_json(folder / "captions.json") or {}
+    figs = "".join(_figure(folder / f"{k}.png", c) for k, c in captions.items()
+                   if (folder / f"{k}.png").is_file())
+    text = ("<p>Median [min, max] over "
+            f"{len(doc['seeds'])} GP seeds per definition ({doc['wall_time_s']:.0f} s, "
+            f"{doc['workers']} workers). Rows marked scale-free do not depend on how G is "
+            "read: they are where magtact and the publication can be compared directly. "
+            "Every force and Γ is G times a function of H, so each height has a fixed ratio of "
+            "worst sensitivity to measurable force (figure <i>resolution–range</i>): choosing "
+            "H chooses that ratio, and G then slides the design along its line.</p>")
+    return head + text + table + "<h3>Spread across seeds</h3>" + spread + figs
+
+
+def _num(v) -> str:
+    return "—" if v is None else f"{v:.3g}"
