@@ -124,3 +124,116 @@ def test_model_files_round_trip_and_refuse_the_other_definition(tmp_path, grid):
     with pytest.raises(ValueError, match=r"serve the 'jacobian' sensitivity definition.*"
                                          r"\[sensitivity\] definition is 'published'"):
         load_models(jac, definition="published")
+
+
+# ---- the published definition on real data, the seed study's pieces, bad input -----------
+TINY = {"generations": 3, "population": 40, "retries": 0, "threads": 1, "holdout_paths": 2}
+
+
+def _tiny(study):
+    from dataclasses import replace
+
+    return replace(study, metamodel=replace(study.metamodel, **TINY))
+
+
+def test_published_fit_on_the_bundled_data_runs_through_the_optimiser():
+    from magtact.doe import load_bundled
+    from magtact.metamodel import fit_models, load_field_models, prefitted_dir
+    from magtact.optimise import heights_batch
+    from magtact.study import load_study
+
+    study = _tiny(load_study("magone"))
+    fit = fit_models(load_bundled(), study, definition="published",
+                     field_models=load_field_models(prefitted_dir()))
+    assert set(fit.models) == {"f_r", "f_z"}
+    assert all(isinstance(m, FieldForceModel) for m in fit.models.values())
+    assert {s.name for s in fit.models["f_z"].expr.free_symbols} <= {"B_r", "B_z", "p", "q",
+                                                                     "H"}
+    assert fit.models["f_r"].info["definition"] == "published"
+    ms = fit.model_set(study)
+    assert ms.definition == "published"
+    table = heights_batch(ms, [3e-3, 5e-3], study)
+    for a in (table.f_r_min, table.f_z_max, table.gamma_r_max, table.gamma_z_max):
+        assert np.all(np.isfinite(a))
+
+
+def test_shipped_fit_is_not_used_for_the_other_definition():
+    from dataclasses import replace
+
+    from magtact.doe import load_bundled
+    from magtact.metamodel import find_prefitted
+    from magtact.study import load_study
+
+    study = load_study("magone")
+    ds = load_bundled()
+    assert find_prefitted(study, ds) is not None
+    pub = replace(study, sensitivity=replace(study.sensitivity, definition="published"))
+    assert find_prefitted(pub, ds) is None
+
+
+def test_branches_and_trend():
+    from magtact.publication import count_branches, trend
+
+    assert count_branches([0, 1, 1, 0, 0, 1, 0, 1, 1]) == 3
+    assert count_branches([1, 1, 1]) == 1
+    assert count_branches([0, 0]) == 0
+    assert trend([0, 1, 2]) == "increasing"
+    assert trend([2, 1, 1]) == "decreasing"
+    assert trend([0, 2, 1]) == "mixed"
+    assert trend([1, 1, 1]) == "constant"
+
+
+def test_conditioning_of_the_shear_bound_against_its_exact_answer():
+    """f_r = (p − 0.5)² has its minimum at t = 0.5 and range 0.25 over t ∈ [0, 1]: within
+    1.1 % of the range of the minimum from |t − 0.5| ≤ 0.0524, first grid point t = 0.45;
+    with f_z = p the largest F_z drops by (0.5 − 0.45) / 0.5 = 10 %."""
+    from magtact.optimise import shear_bound_conditioning
+    from magtact.study import load_study
+
+    ms = ModelSet.from_exprs({"B_r": q, "B_z": 1 + p, "f_r": (p - 0.5) ** 2, "f_z": p})
+    c = shear_bound_conditioning(ms, load_study("magone"), [3e-3, 6e-3], tol=0.011)
+    np.testing.assert_allclose(c.t_m, 0.5)
+    np.testing.assert_allclose(c.t_tol, 0.45)
+    np.testing.assert_allclose(c.dF_z_rel, 0.1, rtol=1e-12)
+    with pytest.raises(ValueError, match=r"tol must be in \(0, 1\)"):
+        shear_bound_conditioning(ms, load_study("magone"), 3e-3, tol=0.0)
+
+
+def test_unknown_definition_is_refused_naming_the_setting(tmp_path):
+    from magtact.study import StudyError, load_study
+
+    path = tmp_path / "s.toml"
+    path.write_text('[sensitivity]\ndefinition = "partial"\n')
+    with pytest.raises(StudyError, match=r"sensitivity\.definition.*'jacobian', 'published'"):
+        load_study(path)
+
+
+def test_cli_bad_input_for_the_seed_study(tmp_path):
+    from typer.testing import CliRunner
+
+    from magtact.cli import app
+
+    runner = CliRunner()
+    res = runner.invoke(app, ["reproduce", "--seeds", "0", "--out", str(tmp_path)])
+    assert res.exit_code == 2
+    assert "--seeds" in res.output and "at least 1" in res.output
+    res = runner.invoke(app, ["reproduce", "--definition", "partial", "--out", str(tmp_path)])
+    assert res.exit_code == 2
+    assert "[sensitivity] definition" in res.output and "partial" in res.output
+    assert "Traceback" not in res.output
+
+
+def test_cli_refuses_models_of_the_other_definition(tmp_path, capsys, monkeypatch):
+    """A folder of published-definition models given to a Jacobian study: one line."""
+    import sys
+
+    from magtact.cli import main
+
+    save_models(_published(F_B), tmp_path / "m")
+    monkeypatch.setattr(sys, "argv", ["magtact", "compare", "3,29.4", "4,29.4", "--models",
+                                      str(tmp_path / "m")])
+    with pytest.raises(SystemExit) as exc:
+        main()
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "[sensitivity] definition is 'jacobian'" in err and "Traceback" not in err

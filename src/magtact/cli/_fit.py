@@ -26,7 +26,7 @@ def fit(
         "--G-kpa", help="Shear modulus of the figures [kPa]; default: original design.")] = None,
 ) -> None:
     """Fit B_r, B_z, F_r/G, F_z/G; write model JSON files, metamodels.md and figures."""
-    from ..doe import load_bundled, load_dataset
+    from ..doe import load_bundled, load_dataset, matches_study
     from ..metamodel import write_fit_outputs
     from ..study import to_si
 
@@ -36,6 +36,11 @@ def fit(
     H = to_si(H_mm, "mm") if H_mm is not None else None
     G = to_si(G_kpa, "kPa") if G_kpa is not None else None
     ds = load_dataset(data) if data is not None else load_bundled()
+    if data is None and not matches_study(ds, s):
+        raise ValueError(f"study {s.name!r} differs from the built-in MagOne study in its "
+                         "geometry, material, levels or solver settings, so the bundled data "
+                         "set does not describe it: run `magtact doe STUDY --out DOE` and pass "
+                         "--data DOE/doe.nc")
     result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
                                       log=lambda msg: console.print(msg, highlight=False))
     tab = Table(title="held-out accuracy")

@@ -47,11 +47,16 @@ def study_models(study: Study, models: Path | None):
     from ..metamodel import fit_models, load_models
 
     if models is not None:
-        return load_models(models)
-    from ..doe import load_bundled
+        return load_models(models, definition=study.sensitivity.definition)
+    from ..doe import load_bundled, matches_study
     from ..metamodel import find_prefitted
 
     ds = load_bundled()
+    if not matches_study(ds, study):
+        raise ValueError(f"study {study.name!r} differs from the built-in MagOne study in its "
+                         "geometry, material, levels or solver settings, so the bundled data "
+                         "set does not describe it: run `magtact doe STUDY --out DOE`, then "
+                         "`magtact fit STUDY --data DOE/doe.nc --out FIT`, and pass --models FIT")
     shipped = find_prefitted(study, ds)
     if shipped is not None:
         return load_models(shipped)

@@ -75,7 +75,10 @@ def write_markdown(result: FitResult, path: str | Path, *, title: str = "Metamod
                   f"Transform: {_WHY.get(rep.transform, rep.transform)}; features "
                   f"{', '.join(rep.features)}.", "",
                   "$$", f"{k} = " + sp.latex(m.expr), "$$", "",
-                  "Text (t, theta, H in SI):", "", "```", format_expression(m.expr), "```", ""]
+                  "Text (B_r, B_z in T, p = t, q = t tan(theta), H in m):"
+                  if {s.name for s in m.expr.free_symbols} & {"B_r", "B_z"}
+                  else "Text (t, theta, H in SI):", "", "```", format_expression(m.expr), "```",
+                  ""]
     path = Path(path)
     path.write_text("\n".join(lines))
     return path

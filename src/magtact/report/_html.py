@@ -164,7 +164,23 @@ def _chosen(folder: Path) -> str:
     extra = "".join(f"<h3>{_e(k)}</h3>{_dict_table(v)}" for k, v in data.items()
                     if isinstance(v, dict))
     return (f'<h2 id="chosen">Chosen design</h2><div class="design"><table>{rows}</table>'
-            f"{extra}</div>")
+            f"{extra}{_design_rule(data)}</div>")
+
+
+def _design_rule(chosen: dict) -> str:
+    """The resolution–range trade-off of the chosen height, in words."""
+    try:
+        H, G = chosen["H_mm"], chosen["G_kPa"]
+        kz = chosen["Gamma_z_max_N_per_T"] / chosen["F_z_max_N"]
+        kr = chosen["Gamma_r_max_N_per_T"] / abs(chosen["F_r_min_N"])
+    except (KeyError, TypeError, ZeroDivisionError):
+        return ""
+    return (f"<p><b>Design rule.</b> Forces and sensitivities are both G times a function of "
+            f"H, so at H = {H:.3g} mm every newton of normal range costs {kz:.3g} N/T of "
+            f"worst normal sensitivity Γ_z,max (and every newton of shear range {kr:.3g} N/T "
+            f"of Γ_r,max), whatever G. G = {G:.3g} kPa is the softest elastomer that still "
+            "meets the force constraints; a different H changes these ratios (figure "
+            "<i>resolution–range</i> in the section on the publication).</p>")
 
 
 def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> str:
