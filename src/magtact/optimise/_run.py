@@ -13,6 +13,7 @@ import numpy as np
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study, from_si
+from ._conditioning import shear_bound_conditioning
 from ._design import DesignMaps, DesignResult, as_responses, design_maps
 from ._pareto import (
     Choice,
@@ -202,6 +203,9 @@ CAPTIONS = {
     "pareto": "NSGA-II's Pareto set (H, G, objectives, constraints).",
     "maps": "Per-design extrema on the (H, G) map grid.",
     "reduction": "Exact reduction: smallest feasible G*(H) and the objectives along it.",
+    "shear_bound": "How well-posed the stable-shear bound is, per height (G cancels): t_m "
+                   "(grid minimum of F_r), the smallest t at which F_r is within 1 % of its "
+                   "range of that minimum, and how much F_z,max drops between the two.",
 }
 
 
@@ -215,6 +219,9 @@ def write_optimise_outputs(models: Responses | ModelSet, study: Study, folder: s
     result = optimise(models, study, constraints)
     folder = Path(folder)
     result.write(folder)
+    cond = shear_bound_conditioning(models, study, np.linspace(*study.design.H, 9))
+    _csv(folder / "shear_bound.csv", ["H_mm", "t_m", "t_within_1_percent", "F_z_max_drop_percent"],
+         zip(from_si(cond.H, "mm"), cond.t_m, cond.t_tol, 100 * cond.dF_z_rel, strict=True))
     c = result.choice
     flat = {k: v for k, v in _choice_json(c).items() if k != "active_constraints"}
     flat["active_constraints"] = ", ".join(c.active) or "none"
