@@ -31,7 +31,8 @@ def label(text: str, size: int = 15) -> str:
     out = []
     for part in re.split(r"(_[A-Za-z0-9,]+)", text):
         if part.startswith("_"):
-            out.append(f'<tspan baseline-shift="sub" font-size="{round(0.7 * size)}">{part[1:]}</tspan>')
+            sub = round(0.7 * size)
+            out.append(f'<tspan baseline-shift="sub" font-size="{sub}">{part[1:]}</tspan>')
         else:
             out.append(part.replace("&", "&amp;").replace("<", "&lt;"))
     return "".join(out)
