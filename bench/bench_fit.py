@@ -1,4 +1,4 @@
-"""Benchmark of the metamodel stage on the default MagOne DOE (issue 5, acceptance 2 and 4).
+"""Benchmark of the metamodel stage on the default MagOne DOE (accuracy, Γ check).
 
 Fits B_r, B_z, f_r, f_z with the study's [metamodel] settings, records the time of each fit and
 the held-out accuracy (whole (θ, H) paths), and compares Γ of the models with Γ from finite

@@ -1,4 +1,4 @@
-"""`magtact optimise` (SPEC section 7) and `magtact compare` (two designs side by side)."""
+"""`magtact optimise` (docs/method.md §7) and `magtact compare` (two designs side by side)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""`magtact validate`: compare repeat indentation tests with the model (SPEC section 8)."""
+"""`magtact validate`: compare repeat indentation tests with the model (docs/method.md §8)."""
 
 from __future__ import annotations
 

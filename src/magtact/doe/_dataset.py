@@ -53,7 +53,7 @@ def assemble(study: Study, field_job: FieldJob, field: Entry | None, path_jobs: 
 
     Forces of a path solved at ``G_0`` (``job.G is None``) are scaled to each G level:
     F(G) = F(G_0) · G / G_0 (exact for the incompressible neo-Hookean body with Coulomb friction
-    under displacement control; SPEC section 3).
+    under displacement control; docs/method.md §3).
     """
     t, theta, H, G = study.t_levels, study.theta_levels, study.H_levels, study.G_levels
     shape3 = (len(t), len(theta), len(H))

@@ -1,6 +1,6 @@
 """The jobs of a design of experiments, their cache keys, and the functions workers run.
 
-Two kinds of job (SPEC section 4):
+Two kinds of job (docs/method.md §4):
 
 * a **path** job: one structural loading path at (θ, H) through every t level, solved at the
   reference modulus ``G_ref`` and scaled to each G level (or, with

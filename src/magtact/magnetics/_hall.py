@@ -1,4 +1,4 @@
-"""Field at the Hall sensing point along the loading path (SPEC sections 1 and 2)."""
+"""Field at the Hall sensing point along the loading path (docs/method.md §1, §2)."""
 
 from __future__ import annotations
 

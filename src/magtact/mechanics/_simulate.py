@@ -1,4 +1,4 @@
-"""One structural loading path of the sensor body (SPEC section 3)."""
+"""One structural loading path of the sensor body (docs/method.md §3)."""
 
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ def build_model(study: Study, H: float, *, G: float | None = None,
 def simulate_path(study: Study, H: float, theta: float, *, G: float | None = None,
                   mesh: str | None = None, t=None, vtu: str | Path | None = None,
                   progress: Callable[[float], None] | None = None) -> PathResult:
-    """Reaction forces of the sensor body along the loading path (θ, H) (SPEC sections 1, 3).
+    """Reaction forces of the sensor body along the loading path (θ, H) (docs/method.md §1, §3).
 
     The magnet and the upper plate move by (u_r, u_z) = ``loading_path(study, t, theta, H)``;
     the half body y ≥ 0 is solved by FElupe with adaptive load stepping and the forces are
@@ -70,7 +70,7 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
     PathResult
         Forces F = (F_r, F_z) [N] of the full body: the force that the lower support (base
         z = 0 and the lower plate) exerts on the body, twice that of the half model. Sign
-        convention (SPEC section 3): F_z > 0 in compression; F_r < 0 when the magnet moves
+        convention (docs/method.md §3): F_z > 0 in compression; F_r < 0 when the magnet moves
         along +x, the support pulling the body back.
 
     Raises

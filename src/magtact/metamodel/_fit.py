@@ -6,7 +6,7 @@ All models are built in features that are affine in the displacement u at fixed 
 smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel._symbols`).
 
 - **B_r, B_z** depend on the sensor only through the Hall point's position (X, Z) relative to the
-  magnet's centre [mm] (the body does not change the field, SPEC section 2). X = a(H) q and
+  magnet's centre [mm] (the body does not change the field, docs/method.md §2). X = a(H) q and
   Z = −c(H) − a(H) p are affine in (p, q) with coefficients from :mod:`magtact.geometry`, so the
   fit is two-dimensional and exact in H.
 - **B_r** changes sign with X and vanishes on the axis (symmetry). It is fitted as g(X, Z) and
@@ -24,7 +24,7 @@ smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel.
 If no seed of the log fit passes the guard rails, B_z falls back to the identity transform
 (``FALLBACK``). The transform used is recorded with each model.
 
-F is exactly proportional to G (SPEC section 3), so f is the mean of F / G over the G levels;
+F is exactly proportional to G (docs/method.md §3), so f is the mean of F / G over the G levels;
 the spread between levels is reported as ``G_spread`` (0 for a data set scaled in G).
 
 Held-out accuracy uses whole (θ, H) paths (all t) chosen among the interior levels, never seen
@@ -52,8 +52,8 @@ TRANSFORMS = {"B_r": "anchor_x", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor
 #: the guard rails.
 FALLBACK = {"log": "identity"}
 #: Max |error| / range on the training points that ends the seed search: 40 % of the held-out
-#: limits of issue 5 for B (1 %); the limit itself (2 %) for F, whose FE data are rough at the
-#: ~1 % level (contact events), so that a tighter target only costs refits.
+#: accuracy aimed at for B (1 % of the range); that accuracy itself (2 %) for F, whose FE data
+#: are rough at the ~1 % level (contact events), so that a tighter target only costs refits.
 TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.02, "f_z": 0.02}
 #: Fraction of max |y| below which relative errors are not reported.
 REL_FLOOR = 0.05

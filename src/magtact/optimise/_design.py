@@ -1,4 +1,4 @@
-"""Per-design extrema (SPEC section 7 (i)): stable shear bounds, then the largest F_z, Γ_r, Γ_z.
+"""Per-design extrema (docs/method.md §7.1): stable shear bounds, then the largest F_z, Γ_r, Γ_z.
 
 Every force and sensitivity is G times a function of (t, θ, H): F = G f, Γ = G γ. The stable shear
 bounds (t_m, θ_m) and the locations of the maxima therefore do not depend on G; they are computed
@@ -85,7 +85,7 @@ def _degenerate(t_m: float, theta_m: float) -> str | None:
 
 @dataclass(frozen=True)
 class DesignResult:
-    """Extrema of a design (H, G) (SPEC Eqs. 17–18), in SI units.
+    """Extrema of a design (H, G) (docs/method.md §7.1), in SI units.
 
     Attributes
     ----------
@@ -306,7 +306,7 @@ def _rows(H: np.ndarray, r, t) -> np.ndarray:
 
 @dataclass(frozen=True)
 class DesignMaps:
-    """Per-design results on a grid of (H, G) (SPEC section 7 (i)).
+    """Per-design results on a grid of (H, G) (docs/method.md §7.1).
 
     Attributes
     ----------

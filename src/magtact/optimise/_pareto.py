@@ -1,4 +1,4 @@
-"""Optimisation over designs (SPEC section 7 (ii)): constraints, NSGA-II, exact reduction, choice.
+"""Optimisation over designs (docs/method.md §7.2): constraints, NSGA-II, exact reduction, choice.
 
 Problem (published study, Eq. 19)::
 
@@ -143,7 +143,7 @@ def nondominated(objectives: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Reduction:
-    """Exact reduction of the design problem to a curve over H (SPEC section 7).
+    """Exact reduction of the design problem to a curve over H (docs/method.md §7).
 
     Attributes
     ----------

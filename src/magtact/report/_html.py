@@ -1,4 +1,4 @@
-"""The self-contained HTML report of a results folder (SPEC section 9).
+"""The self-contained HTML report of a results folder.
 
 The report is built from the files a run leaves in its folder, never from memory, so that
 ``magtact report DIR`` can rebuild it at any time and a missing stage is reported as missing:

@@ -27,7 +27,7 @@ class StudyError(ValueError):
 
 
 def magone() -> Study:
-    """The built-in MagOne study (G read as 10–50 kPa, original 29.4 kPa; SPEC section 1)."""
+    """The built-in MagOne study (G read as 10–50 kPa, original 29.4 kPa; docs/method.md §9)."""
     return load_study("magone")
 
 

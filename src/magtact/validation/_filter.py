@@ -1,4 +1,4 @@
-"""FFT band-pass filter of a signal sampled along the displacement (SPEC section 8)."""
+"""FFT band-pass filter of a signal sampled along the displacement (docs/method.md §8)."""
 
 from __future__ import annotations
 

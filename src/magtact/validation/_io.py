@@ -1,4 +1,4 @@
-"""Reading repeat indentation tests from CSV files (SPEC section 8).
+"""Reading repeat indentation tests from CSV files (docs/method.md §8).
 
 File format
 -----------

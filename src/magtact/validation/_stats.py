@@ -1,4 +1,4 @@
-"""Repeatability and model error of repeat indentation tests (SPEC section 8)."""
+"""Repeatability and model error of repeat indentation tests (docs/method.md §8)."""
 
 from __future__ import annotations
 
@@ -133,7 +133,7 @@ class Validation:
 def validate(experiment: Experiment, model: PathModel, *,
              filter: FilterSettings | None = None, n_grid: int = N_GRID,
              floor: float = FLOOR) -> Validation:
-    """Filter, resample and compare repeat tests with a model (SPEC section 8).
+    """Filter, resample and compare repeat tests with a model (docs/method.md §8).
 
     Parameters
     ----------
