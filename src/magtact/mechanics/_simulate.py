@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..geometry import body_mesh, loading_path
 from ..study import Study
 from ._model import HalfBodyModel, StepFailure, Stepping
@@ -102,14 +103,14 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
     """
     G_out = study.material.G_ref if G is None else float(G)
     if not G_out > 0:
-        raise ValueError(f"G must be positive, got {G_out}")
+        raise MagtactError(f"G must be positive, got {G_out}")
     if not H > 0:
-        raise ValueError(f"H must be positive, got {H}")
+        raise MagtactError(f"H must be positive, got {H}")
     if not 0 <= theta < np.pi / 2:
-        raise ValueError(f"theta must be in [0, pi/2), got {theta}")
+        raise MagtactError(f"theta must be in [0, pi/2), got {theta}")
     t = study.t_levels if t is None else np.atleast_1d(np.asarray(t, dtype=float))
     if t.ndim != 1 or len(t) == 0 or np.any(np.diff(t) <= 0) or t[0] < 0 or t[-1] > 1:
-        raise ValueError("t must be increasing values in [0, 1]")
+        raise MagtactError("t must be increasing values in [0, 1]")
     G_solve = study.material.G_ref if study.mechanics.scale_in_G else G_out
 
     t0 = time.perf_counter()

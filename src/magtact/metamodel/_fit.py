@@ -40,6 +40,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import sympy as sp
 
+from .._errors import MagtactError
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..study import Study
 from ._model import RESPONSES, Metamodel, ModelSet
@@ -191,7 +192,7 @@ def _table(ds):
         out[f"f_{k}"] = mean.ravel()
     for k in RESPONSES:
         if not np.all(np.isfinite(out[k])):
-            raise ValueError(f"data set has non-finite values of {k}: an incomplete DOE?")
+            raise MagtactError(f"data set has non-finite values of {k}: an incomplete DOE?")
     return out, spread, (t_, th_, H_)
 
 
@@ -207,9 +208,10 @@ def holdout_paths(theta_levels, H_levels, n: int, seed: int = 0) -> list[tuple[f
     hi = range(1, len(H_levels) - 1) if len(H_levels) > 2 else range(len(H_levels))
     pairs = [(i, j) for i in ti for j in hi]
     if n >= len(theta_levels) * len(H_levels):
-        raise ValueError(f"holdout_paths = {n} leaves no training path")
+        raise MagtactError(f"holdout_paths = {n} leaves no training path")
     if n > len(pairs):
-        raise ValueError(f"holdout_paths = {n} exceeds the {len(pairs)} interior (theta, H) paths")
+        raise MagtactError(f"holdout_paths = {n} exceeds the {len(pairs)} interior "
+                           "(theta, H) paths")
     pick = np.random.default_rng(seed).choice(len(pairs), size=n, replace=False)
     return [(float(theta_levels[pairs[k][0]]), float(H_levels[pairs[k][1]])) for k in sorted(pick)]
 

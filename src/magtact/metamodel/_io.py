@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
+from .._errors import MagtactError, MissingFileError
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
 from ._symbols import PQ_TO_TTH, TTH
@@ -55,24 +56,24 @@ def model_from_dict(data: dict, source: str = "<dict>") -> Metamodel:
 
     Raises
     ------
-    ValueError
+    MagtactError
         Wrong format tag, missing keys, an expression outside the grammar, or two expressions
         that disagree.
     """
     if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise ValueError(f"{source}: not a magtact metamodel file (expected format {FORMAT!r})")
+        raise MagtactError(f"{source}: not a magtact metamodel file (expected format {FORMAT!r})")
     for key in ("name", "units", "expression", "expression_pq"):
         if not isinstance(data.get(key), str):
-            raise ValueError(f"{source}: key {key!r} is missing or not a string")
+            raise MagtactError(f"{source}: key {key!r} is missing or not a string")
     try:
         expr = parse_expression(data["expression"], ("t", "theta", "H"))
         expr_pq = parse_expression(data["expression_pq"], ("p", "q", "H"))
     except ValueError as exc:
-        raise ValueError(f"{source}: {exc}") from None
+        raise MagtactError(f"{source}: {exc}") from None
     _check_agree(expr, expr_pq, source)
     info = data.get("info", {})
     if not isinstance(info, dict):
-        raise ValueError(f"{source}: 'info' must be an object")
+        raise MagtactError(f"{source}: 'info' must be an object")
     return Metamodel(name=data["name"], expr=expr, units=data["units"], expr_pq=expr_pq, info=info)
 
 
@@ -85,7 +86,7 @@ def _check_agree(expr, expr_pq, source, n: int = 16) -> None:
     a, b = np.broadcast_to(a, (n,)), np.broadcast_to(b, (n,))
     ok = np.isfinite(a) & np.isfinite(b)
     if not np.allclose(a[ok], b[ok], rtol=1e-9, atol=1e-12 * np.max(np.abs(a[ok]), initial=1.0)):
-        raise ValueError(f"{source}: 'expression' and 'expression_pq' describe different models")
+        raise MagtactError(f"{source}: 'expression' and 'expression_pq' describe different models")
 
 
 def save_model(model: Metamodel, path: str | Path) -> Path:
@@ -101,16 +102,16 @@ def load_model(path: str | Path) -> Metamodel:
 
     Raises
     ------
-    FileNotFoundError
+    MissingFileError
         If the file does not exist.
-    ValueError
+    MagtactError
         If it is not valid JSON or not a valid model file.
     """
     path = Path(path)
     try:
         data = json.loads(path.read_text())
     except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        raise MagtactError(f"{path}: not valid JSON ({exc})") from None
     return model_from_dict(data, str(path))
 
 
@@ -140,7 +141,7 @@ def _load_any(path: Path, name: str):
     try:
         data = json.loads(path.read_text())
     except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        raise MagtactError(f"{path}: not valid JSON ({exc})") from None
     if isinstance(data, dict) and data.get("format") == EXACT_FORMAT and name in ("B_r", "B_z"):
         import tomllib
 
@@ -150,7 +151,7 @@ def _load_any(path: Path, name: str):
         try:
             study = study_from_dict(tomllib.loads(data["study_toml"]), str(path))
         except (KeyError, TypeError, tomllib.TOMLDecodeError) as exc:
-            raise ValueError(f"{path}: exact-field file without a valid study ({exc})") from None
+            raise MagtactError(f"{path}: exact-field file without a valid study ({exc})") from None
         return ExactField(study, name)
     return model_from_dict(data, str(path))
 
@@ -167,9 +168,9 @@ def load_models(folder: str | Path, B_model=None) -> ModelSet:
 
     Raises
     ------
-    FileNotFoundError
+    MissingFileError
         If a file is missing.
-    ValueError
+    MagtactError
         If a file is not a valid model file or holds another response.
     """
     folder = Path(folder)
@@ -181,10 +182,10 @@ def load_models(folder: str | Path, B_model=None) -> ModelSet:
             continue
         path = folder / f"{k}.json"
         if not path.is_file():
-            raise FileNotFoundError(f"metamodel file not found: {path}")
+            raise MissingFileError(f"metamodel file not found: {path}")
         m = _load_any(path, k)
         if m.name != k or m.units != RESPONSES[k]:
-            raise ValueError(f"{path}: holds {m.name!r} [{m.units}], "
+            raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "
                              f"expected {k!r} [{RESPONSES[k]}]")
         models[k] = m
     return ModelSet(**models)

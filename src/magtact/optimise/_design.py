@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..metamodel import ModelSet
 from ..sensitivity import Responses, ResponsesAtH
 from ..study import Study, from_si
@@ -183,7 +184,7 @@ def per_design(models: Responses | ModelSet, H: float, G: float, study: Study) -
         If G is not positive.
     """
     if not G > 0:
-        raise ValueError(f"shear modulus G must be positive, got {G} Pa")
+        raise MagtactError(f"shear modulus G must be positive, got {G} Pa")
     return DesignResult(float(H), float(G), per_height(models, H, study))
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ._filter import FilterSettings, bandpass
 from ._io import RESPONSES, UNITS, DataError, Experiment
 from ._model import PathModel
@@ -169,11 +170,11 @@ def validate(experiment: Experiment, model: PathModel, *,
     """
     filter = FilterSettings() if filter is None else filter
     if n_grid < 2:
-        raise ValueError(f"n_grid must be at least 2, got {n_grid}")
+        raise MagtactError(f"n_grid must be at least 2, got {n_grid}")
     if not 0.0 <= floor < 1.0:
-        raise ValueError(f"floor must be in [0, 1), got {floor}")
+        raise MagtactError(f"floor must be in [0, 1), got {floor}")
     if abs(model.theta - experiment.theta) > 1e-3:
-        raise ValueError(f"the model is at theta = {model.theta:.4g} rad but the data at "
+        raise MagtactError(f"the model is at theta = {model.theta:.4g} rad but the data at "
                          f"{experiment.theta:.4g} rad: simulate the data's shear angle")
     curves = experiment.curves
     lo = max(float(c.u_z.min()) for c in curves)
