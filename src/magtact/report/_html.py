@@ -9,7 +9,7 @@ The report is built from the files a run leaves in its folder, never from memory
 * one folder per stage (``field``, ``doe``, ``metamodel``, ``optimise``, ``validation``) with its
   figures (PNG, embedded as base64), tables (CSV), text (TXT, TEX) and summaries (JSON); an
   optional ``captions.json`` maps a file name without suffix to its caption.
-* ``evidence/*.json`` — accuracy and convergence benchmarks (copied from ``bench/results``).
+* ``evidence/*.json`` — accuracy and convergence benchmarks (``magtact run --evidence DIR``).
 """
 
 from __future__ import annotations
@@ -20,6 +20,8 @@ import html
 import json
 from datetime import UTC, datetime
 from pathlib import Path
+
+from .._errors import MissingFileError
 
 #: Stages in pipeline order: (folder, title, what it is).
 STAGES: tuple[tuple[str, str, str], ...] = (
@@ -79,12 +81,12 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
 
     Raises
     ------
-    FileNotFoundError
+    MissingFileError
         If ``folder`` does not exist.
     """
     folder = Path(folder)
     if not folder.is_dir():
-        raise FileNotFoundError(f"{folder}: no such results folder")
+        raise MissingFileError(f"{folder}: no such results folder")
     manifest = _load_json(folder / "run.json") or {}
     stages = {s.get("key"): s for s in manifest.get("stages", [])}
     study_name = manifest.get("study", "unknown study")
@@ -207,8 +209,9 @@ def _evidence(folders: list[Path]) -> str:
     files = sorted({p.name: p for f in folders if f.is_dir() for p in f.glob("*.json")}.values())
     out = ['<h2 id="evidence">Accuracy and convergence evidence</h2>']
     if not files:
-        out.append('<div class="missing">No benchmark results (<code>bench/results/*.json</code>)'
-                   " were available to this run.</div>")
+        out.append('<div class="missing">No benchmark results were given to this run '
+                   "(<code>magtact run --evidence bench/results</code> in a source checkout)."
+                   "</div>")
         return "\n".join(out)
     out.append("<p>Benchmarks measured on this code (bench/results); each table lists the "
                "scalar results, nested values are in the expandable raw file.</p>")
