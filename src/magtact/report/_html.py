@@ -92,7 +92,9 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     study_name = manifest.get("study", "unknown study")
     parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
              f"<p>Results folder <code>{_e(folder.resolve())}</code>; report built "
-             f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}.</p>"]
+             f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}. The method behind every number, with "
+             "its equations and defaults: <code>docs/method.md</code> of the magtact "
+             "repository; the benchmarks' evidence: <code>docs/verification.md</code>.</p>"]
     if not manifest:
         parts.append('<div class="missing">No <code>run.json</code> in this folder: the stages '
                      "below are reported from the files present only; statuses and timings are "
