@@ -149,15 +149,17 @@ def test_library_code_does_not_read_the_repository_layout():
     assert offenders == []
 
 
-#: References to documents outside the repository or to the project's history.
-HISTORY = re.compile(r"\bSPEC\b|(?<![A-Za-z])[Ii]ssue[ _#]?\d|\bacceptance item")
+#: References to documents outside the repository or to the project's history. The words are
+#: assembled so that a plain grep of the sources does not find this file.
+_DOC, _TICKET, _ITEM = "SP" + "EC", "[Ii]" + "ssue", "accept" + "ance item"
+HISTORY = re.compile(rf"\b{_DOC}\b|(?<![A-Za-z]){_TICKET}[ _#]?\d|\b{_ITEM}")
 
 
 @pytest.mark.parametrize("folder", ["src", "tests"])
 def test_no_history_or_outside_references(folder):
     offenders = []
     for path in sorted((ROOT / folder).rglob("*")):
-        if path.suffix not in (".py", ".md", ".toml") or path.name == Path(__file__).name:
+        if path.suffix not in (".py", ".md", ".toml"):
             continue
         for n, line in enumerate(path.read_text("utf-8").splitlines(), start=1):
             if HISTORY.search(line):
@@ -166,8 +168,9 @@ def test_no_history_or_outside_references(folder):
 
 
 @pytest.mark.parametrize("text, found", [
-    ("see SPEC section 6", True), ("limits of issue 5", True), ("meets_issue_5", True),
-    ("acceptance item 1", True), ("spec = {key_of(f): f}", False), ("the tissue 3 mm", False),
+    ("see " + "SP" + "EC section 6", True), ("limits of is" + "sue 5", True),
+    ("meets_is" + "sue_5", True), ("accept" + "ance item 1", True),
+    ("spec = {key_of(f): f}", False), ("tissues of 3 mm", False), ("tissue_3", False),
 ])
 def test_history_pattern(text, found):
     assert bool(HISTORY.search(text)) is found
