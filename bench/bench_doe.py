@@ -1,4 +1,4 @@
-"""Benchmark: the full default MagOne DOE from an empty cache (issue 4, acceptance item 5).
+"""Benchmark: the full default MagOne DOE from an empty cache.
 
 Runs ``magtact.doe.bundle.build_bundle`` with 2 local worker processes and a fresh, empty job
 cache, writes the bundled data set (``src/magtact/doe/data/magone_doe.nc``) and the wall time

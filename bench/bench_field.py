@@ -1,4 +1,4 @@
-"""Benchmark of the field stage (issue 2, acceptance items 1–3).
+"""Benchmark of the field stage: accuracy, convergence and time of the FE field.
 
 Measures, for the built-in MagOne study: the exact kernel against magpylib; the FE mesh and
 solve times, element and DOF counts (fresh solves, not the per-process cache) and the FE error

@@ -1,4 +1,4 @@
-"""Benchmark of the metamodel stage on the default MagOne DOE (issue 5, acceptance 2 and 4).
+"""Benchmark of the metamodel stage on the default MagOne DOE (accuracy, Γ check).
 
 Fits B_r, B_z, f_r, f_z with the study's [metamodel] settings, records the time of each fit and
 the held-out accuracy (whole (θ, H) paths), and compares Γ of the models with Γ from finite
@@ -26,6 +26,7 @@ import numpy as np
 
 from magtact.doe import load_bundled, load_dataset
 from magtact.metamodel import write_fit_outputs
+from magtact.report import fit_figures
 from magtact.sensitivity import compare_with_data
 from magtact.study import load_study
 
@@ -62,7 +63,8 @@ def main() -> None:
     ds = load_dataset(args.data) if args.data else load_bundled()
     with tempfile.TemporaryDirectory(prefix="magtact-bench-fit-") as tmp:
         t0 = time.perf_counter()
-        res, _ = write_fit_outputs(study, ds, args.models_out or tmp, log=print)
+        res, _ = write_fit_outputs(study, ds, args.models_out or tmp, log=print,
+                                   gamma_check=compare_with_data, figures=fit_figures)
         total = time.perf_counter() - t0
     models = res.model_set(study)
     rows = {}

@@ -1,4 +1,4 @@
-"""Benchmark of the structural stage (issue 3): mesh convergence, the 25 DOE paths, solvers.
+"""Benchmark of the structural stage: mesh convergence, the 25 DOE paths, solvers.
 
 Writes ``bench/results/mechanics_<part>.json`` (after every path, so a long run can be inspected
 while it runs; ``"complete": true`` once the part has finished). The parts can run in parallel.

@@ -1,4 +1,5 @@
-"""`magtact field`: files written, field.csv against SPEC section 1 geometry, bad input."""
+"""`magtact field`: files written, field.csv against the geometry of docs/method.md §1, bad
+input."""
 
 import subprocess
 import sys

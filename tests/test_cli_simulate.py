@@ -30,7 +30,7 @@ def test_forces_csv(run):
     assert lines[0] == "t,u_r_mm,u_z_mm,F_r_N,F_z_N"
     t, u_r, u_z, F_r, F_z = np.loadtxt(run / "forces.csv", delimiter=",", skiprows=1).T
     np.testing.assert_allclose(t, [0, 0.5, 1])
-    # SPEC section 1 with the default body: u_z = t (Δz_sat + H_m − H − H_g) = −t·H, u_r = 0
+    # docs/method.md §1 with the default body: u_z = t (Δz_sat + H_m − H − H_g) = −t·H, u_r = 0
     np.testing.assert_allclose(u_z, [0.0, -2.0, -4.0], atol=1e-9)
     np.testing.assert_array_equal(u_r, 0.0)
     assert F_z[0] == 0 and np.all(np.diff(F_z) > 0)

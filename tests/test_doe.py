@@ -245,7 +245,7 @@ def test_cli_doe_writes_netcdf_and_csv(tmp_path, monkeypatch):
 
 
 def test_doe_figure_is_written(tmp_path):
-    from magtact.report._fig_doe import fig_doe
+    from magtact.report import fig_doe
 
     files = fig_doe(run(tiny()), tmp_path / "doe")
     assert [f.suffix for f in files] == [".png", ".svg"]

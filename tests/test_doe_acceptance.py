@@ -1,4 +1,4 @@
-"""DOE acceptance with the real solvers on a tiny study (issue 4).
+"""The DOE with the real solvers on a tiny study.
 
 The tiny study: coarse mesh, 3 levels of t, 2 of θ, 1 of H (3 mm), 2 of G, a short loading path
 (Δz_sat = 5.7 mm: 0.27 mm of travel, in steps of up to 0.5) and the exact field, so that each

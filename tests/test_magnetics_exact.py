@@ -14,7 +14,7 @@ R_M, H_M, M_Z = 2.5e-3, 2e-3, 1.2e6
 
 
 def acceptance_points():
-    """Points of acceptance item 1: below, above and beside the magnet (magnet frame) [m]."""
+    """Points below, above and beside the magnet (magnet frame) [m]."""
     r = np.linspace(0.0, 3e-3, 13)
     gap = np.linspace(2.97e-3, 12e-3, 20)
     rr, gg = np.meshgrid(r, gap)

@@ -1,4 +1,5 @@
-"""Field at the Hall point: SPEC section 1 geometry written out by hand, checked with magpylib."""
+"""Field at the Hall point: the geometry of docs/method.md §1 written out by hand, checked with
+magpylib."""
 
 from dataclasses import replace
 
@@ -10,12 +11,12 @@ from magtact.study import StudyError, load_study
 
 magpy = pytest.importorskip("magpylib")
 
-MU0 = 1.257e-6  # SPEC section 1
+MU0 = 1.257e-6  # docs/method.md §1
 R_M, H_M, M_Z, H_G, DZ_SAT = 2.5e-3, 2e-3, 1.2e6, 4.97e-3, 2.97e-3
 
 
 def spec_hall_field(t, theta, H, placement="covered"):
-    """B (B_x, B_z) at the Hall point (the origin) from SPEC section 1, with magpylib.
+    """B (B_x, B_z) at the Hall point (the origin) from docs/method.md §1, with magpylib.
 
     Unloaded, Δz0 = H + H_g − H_m is the height of the magnet's centre ("covered") or of its
     lower face ("flush"); the magnet moves by u_z = t (Δz_sat + H_m − H − H_g) and

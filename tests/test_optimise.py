@@ -1,4 +1,4 @@
-"""Optimisation stage (SPEC section 7) on metamodels given as known formulas.
+"""Optimisation stage (docs/method.md §7) on metamodels given as known formulas.
 
 The model set below has a stable-shear minimum f_r,min known in closed form: with c = 0.4 + 100 H,
 f_r = k_r [(p − c)² − c² + 4 (q − 0.12)² − 0.0576] (p = t, q = t tan θ) is smallest at p = c,

@@ -50,7 +50,7 @@ def shipped(tmp_path_factory):
 @pytest.mark.parametrize("name", ["B_r", "B_z", "f_r", "f_z"])
 def test_shipped_accuracy_report_is_what_the_models_give(ds, shipped, name):
     """The accuracy written into each shipped file is recomputed from its expression, and the
-    training error is within the fit's target (SPEC section 5; F data are rough at ~1 %)."""
+    training error is within the fit's target (docs/method.md §5; F data are rough at ~1 %)."""
     train, test = _errors(shipped, ds, name)
     report = getattr(shipped, name).info["accuracy"]
     assert train == pytest.approx(report["train"]["max_abs_err_over_range"], rel=1e-6)
@@ -59,6 +59,6 @@ def test_shipped_accuracy_report_is_what_the_models_give(ds, shipped, name):
 
 
 @pytest.mark.parametrize("name", ["B_r", "B_z", "f_r", "f_z"])
-def test_shipped_held_out_accuracy_meets_issue_5(ds, shipped, name):
-    """Issue 5: max |error| ≤ 1 % of range for B, ≤ 2 % for F/G on held-out (θ, H) paths."""
+def test_shipped_held_out_accuracy_within_targets(ds, shipped, name):
+    """Max |error| ≤ 1 % of range for B, ≤ 2 % for F/G on held-out (θ, H) paths."""
     assert _errors(shipped, ds, name)[1] <= (0.01 if name.startswith("B") else 0.02)

@@ -57,7 +57,7 @@ def test_loading_path_general_form():
     s = magone()
     H, t, theta = 4e-3, 0.5, 0.3
     u_r, u_z = loading_path(s, t, theta, H)
-    # SPEC section 1: u_z = t (dz_sat + H_m - H - H_g); u_r = -u_z tan(theta)
+    # docs/method.md §1: u_z = t (dz_sat + H_m - H - H_g); u_r = -u_z tan(theta)
     assert u_z == pytest.approx(0.5 * (2.97e-3 + 2e-3 - 4e-3 - 4.97e-3))
     assert u_r == pytest.approx(-u_z * math.tan(0.3))
     # with the defaults H_g = dz_sat + H_m, so the path is -t H

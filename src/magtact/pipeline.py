@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
+from ._errors import MissingFileError
 from ._versions import package_versions
 from .study import Study
 
@@ -96,6 +97,7 @@ class _Context:
 def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: bool = False,
               data: list[str | Path] | None = None, cache: str | Path | None = ".magtact-cache",
               workers: int | None = None, command: str = "",
+              evidence: str | Path | None = None,
               log: Callable[[str], None] = print) -> RunResult:
     """Run every stage of a study into ``out`` and build the HTML report.
 
@@ -121,13 +123,23 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
         DOE worker processes (default: the number of cores).
     command : str
         The command line, recorded in the report.
+    evidence : path, optional
+        Folder of benchmark results (``*.json``, e.g. ``bench/results`` of a source checkout),
+        copied into ``out/evidence`` and shown in the report. None: no evidence section content.
     log : callable
         Progress messages.
 
     Returns
     -------
     RunResult
+
+    Raises
+    ------
+    MissingFileError
+        If ``evidence`` is given but is not a folder (checked before any stage runs).
     """
+    if evidence is not None and not Path(evidence).is_dir():
+        raise MissingFileError(f"{evidence}: no such folder of benchmark results")
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
@@ -162,7 +174,8 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
         manifest["doe_source"] = ctx.doe_source
         manifest["wall_time_s"] = time.perf_counter() - start
         _write_json(folder / "run.json", manifest)
-    _copy_evidence(folder)
+    if evidence is not None:
+        _copy_evidence(Path(evidence), folder)
     manifest["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
     manifest["wall_time_s"] = time.perf_counter() - start
     _write_json(folder / "run.json", manifest)
@@ -183,9 +196,10 @@ def versions() -> dict[str, str]:
 # ---- stages ----------------------------------------------------------------------------------
 def _stage_field(ctx: _Context, rec: StageRecord) -> str:
     from .magnetics import write_field_outputs
+    from .report import field_figures
 
     files = write_field_outputs(ctx.study, ctx.folder / "field",
-                                progress=lambda m: ctx.log(f"      {m}"))
+                                progress=lambda m: ctx.log(f"      {m}"), figures=field_figures)
     return f"{len(files)} files (solver: {ctx.study.magnetics.solver})"
 
 
@@ -210,7 +224,7 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
     write_csv(ds, folder / "doe.csv")
     ctx.dataset = ds
     try:
-        from .report._fig_doe import fig_doe
+        from .report import fig_doe
 
         fig_doe(ds, folder / "doe_forces")
     except ImportError as exc:
@@ -228,8 +242,12 @@ def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
         ctx.models, _ = copy_prefitted(shipped, ctx.folder / "metamodel")
         return ("B_r, B_z, f_r, f_z: the fit shipped with magtact for this very data set and "
                 "these settings (same data SHA-256; --refit fits again)")
+    from .report import fit_figures
+    from .sensitivity import compare_with_data
+
     result, files = write_fit_outputs(ctx.study, ctx.dataset, ctx.folder / "metamodel",
-                                      log=lambda m: ctx.log(f"      {m}"))
+                                      log=lambda m: ctx.log(f"      {m}"),
+                                      gamma_check=compare_with_data, figures=fit_figures)
     ctx.models = result.model_set(ctx.study)
     worst = max((r.test.max_rel_err for r in result.reports.values() if r.test is not None),
                 default=float("nan"))
@@ -241,8 +259,10 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
     from .optimise import write_optimise_outputs
+    from .report import optimise_figures
 
-    ctx.chosen = write_optimise_outputs(ctx.models, ctx.study, ctx.folder / "optimise")
+    ctx.chosen = write_optimise_outputs(ctx.models, ctx.study, ctx.folder / "optimise",
+                                        figures=optimise_figures)
     return "design chosen"
 
 
@@ -258,7 +278,9 @@ def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
     H, G = experiment.design()
     model = PathModel.from_metamodels(ctx.models, ctx.study, H, G, experiment.theta)
     result = validate(experiment, model)
-    write_outputs(result, ctx.folder / "validation", sources=files)
+    from .report import validation_figures
+
+    write_outputs(result, ctx.folder / "validation", sources=files, figures=validation_figures)
     rec.notes.extend(result.notes)
     worst = max(result.rows(), key=lambda r: r["eps_percent"]
                 if r["eps_percent"] == r["eps_percent"] else -1.0)
@@ -277,14 +299,11 @@ STAGES: tuple[tuple[str, str, Callable], ...] = (
 
 
 # ---- helpers ---------------------------------------------------------------------------------
-def _copy_evidence(folder: Path) -> None:
-    """Copy bench/results/*.json of a source checkout into ``folder/evidence`` (if present)."""
-    root = Path(__file__).resolve().parents[2] / "bench" / "results"
-    if not root.is_dir():
-        return
+def _copy_evidence(source: Path, folder: Path) -> None:
+    """Copy ``source/*.json`` into ``folder/evidence``."""
     target = folder / "evidence"
     target.mkdir(exist_ok=True)
-    for path in sorted(root.glob("*.json")):
+    for path in sorted(source.glob("*.json")):
         shutil.copy2(path, target / path.name)
 
 

@@ -6,7 +6,7 @@ import sys
 
 from rich.markup import escape
 
-from ..study import StudyError
+from .._errors import MagtactError
 from . import (  # noqa: F401  (each module registers its command)
     _doe,
     _field,
@@ -21,8 +21,9 @@ from . import (  # noqa: F401  (each module registers its command)
 )
 from ._app import app, console
 
-#: Errors a user can fix: printed as one message, no traceback, exit status 2.
-USER_ERRORS: tuple[type[Exception], ...] = (StudyError, FileNotFoundError, ValueError)
+#: Errors a user can fix: printed as one message, no traceback, exit status 2. Any other
+#: exception is a fault of magtact or of a library and keeps its traceback.
+USER_ERRORS: tuple[type[Exception], ...] = (MagtactError,)
 
 
 def main() -> None:

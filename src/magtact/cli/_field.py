@@ -30,6 +30,7 @@ def field_command(
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from ..magnetics import write_field_outputs
+    from ..report import field_figures
 
     s = get_study(study)
     folder = out_dir(out)
@@ -38,7 +39,8 @@ def field_command(
                   console=console, transient=True) as bar:
         task = bar.add_task("field", total=None)
         files = write_field_outputs(s, folder, solver=None if solver is None else solver.value,
-                                    progress=lambda text: bar.update(task, description=text))
+                                    progress=lambda text: bar.update(task, description=text),
+                                    figures=field_figures)
     used = s.magnetics.solver if solver is None else solver.value
     console.print(f"field ({used}) of study '{s.name}': wrote "
                   + ", ".join(str(f) for f in files)

@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
+from .._errors import MagtactError
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
 
@@ -28,6 +29,8 @@ def fit(
     """Fit B_r, B_z, F_r/G, F_z/G; write model JSON files, metamodels.md and figures."""
     from ..doe import load_bundled, load_dataset, matches_study
     from ..metamodel import write_fit_outputs
+    from ..report import fit_figures
+    from ..sensitivity import compare_with_data
     from ..study import to_si
 
     s = get_study(study)
@@ -37,12 +40,13 @@ def fit(
     G = to_si(G_kpa, "kPa") if G_kpa is not None else None
     ds = load_dataset(data) if data is not None else load_bundled()
     if data is None and not matches_study(ds, s):
-        raise ValueError(f"study {s.name!r} differs from the built-in MagOne study in its "
+        raise MagtactError(f"study {s.name!r} differs from the built-in MagOne study in its "
                          "geometry, material, levels or solver settings, so the bundled data "
                          "set does not describe it: run `magtact doe STUDY --out DOE` and pass "
                          "--data DOE/doe.nc")
     result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
-                                      log=lambda msg: console.print(msg, highlight=False))
+                                      log=lambda msg: console.print(msg, highlight=False),
+                                      gamma_check=compare_with_data, figures=fit_figures)
     tab = Table(title="held-out accuracy")
     for col in ("model", "R²", "max err / range", "max rel err", "time [s]"):
         tab.add_column(col)

@@ -1,4 +1,4 @@
-"""`magtact optimise` (SPEC section 7) and `magtact compare` (two designs side by side)."""
+"""`magtact optimise` (docs/method.md §7) and `magtact compare` (two designs side by side)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from .._errors import MagtactError
 from ..study import Study, from_si, to_si
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
@@ -25,7 +26,7 @@ def parse_design(text: str, what: str) -> tuple[float, float]:
 
     Raises
     ------
-    ValueError
+    MagtactError
         If ``text`` is not two comma-separated positive numbers.
     """
     parts = text.split(",")
@@ -34,10 +35,10 @@ def parse_design(text: str, what: str) -> tuple[float, float]:
             raise ValueError
         H_mm, G_kPa = (float(p) for p in parts)
     except ValueError:
-        raise ValueError(f"{what} must be 'H_MM,G_KPA' (two numbers, e.g. 3,29.4), "
-                         f"got {text!r}") from None
+        raise MagtactError(f"{what} must be 'H_MM,G_KPA' (two numbers, e.g. 3,29.4), "
+                           f"got {text!r}") from None
     if not (H_mm > 0 and G_kPa > 0):
-        raise ValueError(f"{what}: H and G must be positive, got {text!r}")
+        raise MagtactError(f"{what}: H and G must be positive, got {text!r}")
     return to_si(H_mm, "mm"), to_si(G_kPa, "kPa")
 
 
@@ -53,7 +54,7 @@ def study_models(study: Study, models: Path | None):
 
     ds = load_bundled()
     if not matches_study(ds, study):
-        raise ValueError(f"study {study.name!r} differs from the built-in MagOne study in its "
+        raise MagtactError(f"study {study.name!r} differs from the built-in MagOne study in its "
                          "geometry, material, levels or solver settings, so the bundled data "
                          "set does not describe it: run `magtact doe STUDY --out DOE`, then "
                          "`magtact fit STUDY --data DOE/doe.nc --out FIT`, and pass --models FIT")
@@ -83,6 +84,7 @@ def optimise_command(
     Writes OUT/design.json, pareto.csv, reduction.csv, maps.csv and the figures.
     """
     from ..optimise import force_constraints, optimise
+    from ..report import optimise_figures
 
     s = get_study(study)
     reference = (parse_design(constraints_from, "--constraints-from")
@@ -92,7 +94,7 @@ def optimise_command(
     with console.status("optimising"):
         result = optimise(m, s, constraints)
     folder = out_dir(out)
-    result.write(folder)
+    result.write(folder, figures=optimise_figures)
     print_choice(result)
     console.print(f"written to {folder}", highlight=False)
 

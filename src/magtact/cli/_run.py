@@ -29,6 +29,9 @@ def run_command(
     = Path(".magtact-cache"),
     workers: Annotated[int | None, typer.Option(
         "--workers", "-j", help="DOE worker processes (default: the number of cores).")] = None,
+    evidence: Annotated[Path | None, typer.Option(
+        "--evidence", help="Folder of benchmark results (*.json, e.g. bench/results of a source "
+                           "checkout) to include in the report.")] = None,
 ) -> None:
     """Run STUDY: field, DOE, metamodels, optimisation, validation; write OUT/report.html."""
     from ..pipeline import run_study
@@ -36,6 +39,7 @@ def run_command(
     s = get_study(study)
     result = run_study(s, out_dir(out), recompute=recompute, refit=refit, data=data, cache=cache,
                        workers=workers, command="magtact " + " ".join(sys.argv[1:]),
+                       evidence=evidence,
                        log=lambda m: console.print(m, highlight=False, markup=False))
     console.print(f"report: {result.report} ({result.wall_time_s:.1f} s)", highlight=False)
     bad = [r for r in result.stages if r.status != "ok"]

@@ -8,6 +8,7 @@ from typing import Annotated
 
 import typer
 
+from .._errors import MagtactError
 from ..study import MESH_DENSITIES
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
@@ -31,7 +32,7 @@ def simulate_command(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from ..mechanics import PathFailed, simulate_path
-    from ..report._fig_mechanics import fig_deformed_body
+    from ..report import fig_deformed_body
     from ..study import from_si, to_si
 
     s = get_study(study)
@@ -49,7 +50,7 @@ def simulate_command(
                                 mesh=None if mesh is None else mesh.value,
                                 progress=lambda tt: bar.update(task, completed=tt))
         except PathFailed as exc:
-            raise ValueError(str(exc)) from exc
+            raise MagtactError(str(exc)) from exc
     with open(folder / "forces.csv", "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["t", "u_r_mm", "u_z_mm", "F_r_N", "F_z_N"])

@@ -1,4 +1,4 @@
-"""`magtact validate`: compare repeat indentation tests with the model (SPEC section 8)."""
+"""`magtact validate`: compare repeat indentation tests with the model (docs/method.md §8)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from .._errors import MagtactError
 from ..study import MESH_DENSITIES, PRESETS, Study
 from ._app import app, console, get_study, out_dir
 
@@ -37,9 +38,9 @@ def path_model(study: Study, H: float, G: float, theta: float, models_file: Path
     try:
         return PathModel.from_simulation(study, H, G, theta, solver=solver, mesh=mesh)
     except PathFailed as exc:  # a user-fixable situation: say what to try
-        raise ValueError(f"the direct simulation of the design failed ({exc}); try another "
-                         "mesh (--mesh) or validate against fitted metamodels (--models DIR)"
-                         ) from None
+        raise MagtactError(f"the direct simulation of the design failed ({exc}); try another "
+                           "mesh (--mesh) or validate against fitted metamodels (--models DIR)"
+                           ) from None
 
 
 def print_table(validation) -> None:
@@ -84,6 +85,7 @@ def validate_command(
                                          "× its largest value.")] = 0.05,
 ) -> None:
     """Validate the model of a design against repeat indentation tests: c_v, ε and figures."""
+    from ..report import validation_figures
     from ..validation import (
         FilterSettings,
         read_experiment,
@@ -102,11 +104,11 @@ def validate_command(
     H_m, G_pa = experiment.design(None if H is None else H * 1e-3,
                                   None if G is None else G * 1e3)
     if solver not in ("exact", "fe"):
-        raise ValueError(f"--solver must be 'exact' or 'fe', got {solver!r}")
+        raise MagtactError(f"--solver must be 'exact' or 'fe', got {solver!r}")
     filt = FilterSettings(f_lo=f_lo * 1e3, f_hi=f_hi * 1e3 if f_hi > 0 else None)
     model = path_model(study, H_m, G_pa, experiment.theta, models, solver, mesh)
     result = validate(experiment, model, filter=filt, n_grid=n_grid, floor=floor)
-    written = write_outputs(result, out_dir(out), sources=data)
+    written = write_outputs(result, out_dir(out), sources=data, figures=validation_figures)
     print_table(result)
     for path in written:
         console.print(f"wrote {path}", highlight=False)

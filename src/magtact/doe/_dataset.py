@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .._errors import MagtactError, MissingFileError
 from ..study import Study, from_si
 from ._cache import Entry
 from ._jobs import FieldJob, PathJob, versions
@@ -53,7 +54,7 @@ def assemble(study: Study, field_job: FieldJob, field: Entry | None, path_jobs: 
 
     Forces of a path solved at ``G_0`` (``job.G is None``) are scaled to each G level:
     F(G) = F(G_0) · G / G_0 (exact for the incompressible neo-Hookean body with Coulomb friction
-    under displacement control; SPEC section 3).
+    under displacement control; docs/method.md §3).
     """
     t, theta, H, G = study.t_levels, study.theta_levels, study.H_levels, study.G_levels
     shape3 = (len(t), len(theta), len(H))
@@ -144,23 +145,24 @@ def save_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
 def load_dataset(path: str | os.PathLike) -> xr.Dataset:
     """Read a DOE data set written by :func:`save_dataset` (fully into memory) and check it.
 
-    Raises ``FileNotFoundError`` if the file is missing and ``ValueError`` if it lacks a
+    Raises :class:`~magtact.MagtactError` if the file is missing or if it lacks a
     dimension or variable of the layout.
     """
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"DOE data set not found: {path}")
+        raise MissingFileError(f"DOE data set not found: {path}")
     with xr.open_dataset(path, engine="h5netcdf") as ds:
         ds = ds.load()
     for dim in DIMS:
         if dim not in ds.dims:
-            raise ValueError(f"{path}: not a DOE data set (no dimension {dim!r})")
+            raise MagtactError(f"{path}: not a DOE data set (no dimension {dim!r})")
     for name, (dims, units, _) in VARIABLES.items():
         if name not in ds.data_vars:
-            raise ValueError(f"{path}: not a DOE data set (no variable {name!r})")
+            raise MagtactError(f"{path}: not a DOE data set (no variable {name!r})")
         if ds[name].dims != dims or ds[name].attrs.get("units") != units:
-            raise ValueError(f"{path}: variable {name!r} should have dims {dims} and units "
-                             f"{units!r}, has {ds[name].dims} and {ds[name].attrs.get('units')!r}")
+            raise MagtactError(f"{path}: variable {name!r} should have dims {dims} and units "
+                               f"{units!r}, has {ds[name].dims} and "
+                               f"{ds[name].attrs.get('units')!r}")
     return ds
 
 

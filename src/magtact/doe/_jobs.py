@@ -1,6 +1,6 @@
 """The jobs of a design of experiments, their cache keys, and the functions workers run.
 
-Two kinds of job (SPEC section 4):
+Two kinds of job (docs/method.md §4):
 
 * a **path** job: one structural loading path at (θ, H) through every t level, solved at the
   reference modulus ``G_ref`` and scaled to each G level (or, with
@@ -29,6 +29,7 @@ import sys
 import time
 import traceback
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -47,7 +48,7 @@ FIELD_LIBS = ("numpy", "scipy", "scikit-fem", "gmsh", "magpylib")
 #: magtact sub-packages whose source code is part of a path (resp. field) job's key.
 PATH_PACKAGES = ("mechanics", "geometry")
 FIELD_PACKAGES = ("magnetics", "geometry")
-_ROOT = Path(__file__).resolve().parents[1]  # the magtact package folder
+_ROOT = Path(str(resources.files("magtact")))  # the installed magtact package folder
 
 
 @dataclass(frozen=True)

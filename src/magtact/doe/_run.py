@@ -61,7 +61,7 @@ class RunStats:
 def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: int | None = None,
             scheduler: str | None = None, console: Console | None = None,
             path_solver=None, field_solver=None) -> xr.Dataset:
-    """Compute the full-factorial design of experiments of ``study`` (SPEC section 4).
+    """Compute the full-factorial design of experiments of ``study`` (docs/method.md §4).
 
     Parameters
     ----------

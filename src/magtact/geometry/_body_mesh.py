@@ -1,4 +1,4 @@
-"""Hexahedral mesh of the half sensor body (y ≥ 0) for the structural model (SPEC section 3).
+"""Hexahedral mesh of the half sensor body (y ≥ 0) for the structural model (docs/method.md §3).
 
 The mesh is built in two parts:
 
@@ -109,7 +109,7 @@ def body_mesh(study: Study, H: float, mesh: str | None = None) -> BodyMesh:
     Parameters
     ----------
     study : Study
-        Body and magnet dimensions (SPEC section 1).
+        Body and magnet dimensions (docs/method.md §1).
     H : float
         Base height [m]; the body is a cylinder of radius R and height H + H_g.
     mesh : {"coarse", "default", "accurate", "fine"} or None

@@ -1,4 +1,4 @@
-"""Sensor geometry in the plane of shear and the loading path (SPEC section 1).
+"""Sensor geometry in the plane of shear and the loading path (docs/method.md §1).
 
 Coordinates: the Hall sensing point is the origin, on the axis at the base plane z = 0; z up;
 shear along +x (which plays the role of r in the plane of shear). All lengths in metres.
@@ -32,8 +32,9 @@ def magnet_span(study: Study, H) -> tuple[np.ndarray, np.ndarray]:
 def loading_path(study: Study, t, theta, H) -> tuple[np.ndarray, np.ndarray]:
     """Magnet displacement (u_r, u_z) [m] for load t ∈ [0, 1], shear angle θ [rad], height H [m].
 
-    SPEC Eqs. 3–6 in general form: u_z = t (Δz_sat + H_m − H − H_g) = t (Δz_sat − Δz0),
-    u_r = −u_z tan θ. u_z ≤ 0 (the magnet moves down), u_r ≥ 0 (along +x). Broadcasts.
+    The loading path of docs/method.md §1 in general form:
+    u_z = t (Δz_sat + H_m − H − H_g) = t (Δz_sat − Δz0), u_r = −u_z tan θ. u_z ≤ 0 (the magnet
+    moves down), u_r ≥ 0 (along +x). Broadcasts.
     """
     t, theta = np.asarray(t, dtype=float), np.asarray(theta, dtype=float)
     u_z = t * (study.loading.dz_sat + study.magnet.H_m - np.asarray(H) - study.body.H_g)

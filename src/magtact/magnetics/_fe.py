@@ -1,6 +1,6 @@
 """Axisymmetric finite-element field of the magnet: reduced scalar potential, P2 triangles.
 
-Coordinates (r, z) with the magnet's centre at the origin (SPEC section 2). SI units.
+Coordinates (r, z) with the magnet's centre at the origin (docs/method.md §2). SI units.
 """
 
 from __future__ import annotations
@@ -125,7 +125,7 @@ def solve_field(mesh: FieldMesh, R_m: float, H_m: float, M_z: float) -> FieldSol
 
     Notes
     -----
-    The body and the air have μr = 1 (SPEC section 2). With H = −∇V, B = μ0 H outside and
+    The body and the air have μr = 1 (docs/method.md §2). With H = −∇V, B = μ0 H outside and
     B = μ0 (H + M) inside the magnet, ∇·B = 0 in the domain and n·B = 0 on the far boundary
     (natural), the weak form over the meridian half-plane with the axisymmetric measure
     r dr dz (the 2π factor cancels) is

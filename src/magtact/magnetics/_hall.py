@@ -1,9 +1,10 @@
-"""Field at the Hall sensing point along the loading path (SPEC sections 1 and 2)."""
+"""Field at the Hall sensing point along the loading path (docs/method.md §1, §2)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..study import Study, StudyError, from_si
 from ._exact import cylinder_field
@@ -97,7 +98,7 @@ def magnet_field(study: Study, x, z, solver: str | None = None
     """
     solver = study.magnetics.solver if solver is None else solver
     if solver not in SOLVERS:
-        raise ValueError(f"field solver must be one of {SOLVERS}, got {solver!r}")
+        raise MagtactError(f"field solver must be one of {SOLVERS}, got {solver!r}")
     x, z = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(z, dtype=float))
     rho = np.abs(x)
     if solver == "exact":

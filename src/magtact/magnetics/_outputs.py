@@ -1,4 +1,4 @@
-"""Field stage outputs: the Hall-point field over the DOE grid (CSV) and the field maps."""
+"""Field stage outputs: the Hall-point field over the DOE grid (CSV), and figures if asked."""
 
 from __future__ import annotations
 
@@ -51,8 +51,9 @@ def write_field_csv(grid: dict[str, np.ndarray], path: str | Path) -> Path:
 
 
 def write_field_outputs(study: Study, folder: str | Path, *, solver: str | None = None,
-                        progress: Callable[[str], None] | None = None) -> list[Path]:
-    """Run the field stage: ``folder/field.csv`` and the B_r, B_z maps (PNG and SVG).
+                        progress: Callable[[str], None] | None = None,
+                        figures: Callable[..., list[Path]] | None = None) -> list[Path]:
+    """Run the field stage: ``folder/field.csv`` and, with ``figures``, its figures.
 
     Parameters
     ----------
@@ -64,13 +65,15 @@ def write_field_outputs(study: Study, folder: str | Path, *, solver: str | None 
         Field solver (default ``study.magnetics.solver``).
     progress : callable, optional
         Called with a short description before each step (mesh and solve, table, figures).
+    figures : callable, optional
+        ``figures(study, folder, solver)`` draws the stage's figures into ``folder`` and returns
+        the files (:func:`magtact.report.field_figures`: the B_r, B_z maps). None: no figures.
 
     Returns
     -------
     list of pathlib.Path
         The files written.
     """
-    from ..report._fig_field import fig_field
     from ._fe import solve_fe
 
     def step(text: str) -> None:
@@ -86,6 +89,7 @@ def write_field_outputs(study: Study, folder: str | Path, *, solver: str | None 
     n = study.doe.n_t * study.doe.n_theta * study.doe.n_H
     step(f"field at {n:,} Hall points")
     files = [write_field_csv(field_grid(study, solver), folder / "field.csv")]
-    step("field maps")
-    files += fig_field(study, folder / "field_maps", solver=solver)
+    if figures is not None:
+        step("figures")
+        files += figures(study, folder, solver)
     return files

@@ -1,5 +1,5 @@
 """FElupe model of the half sensor body: nearly incompressible neo-Hookean solid, rigid magnet,
-two rigid plates with Coulomb friction, adaptive load stepping (SPEC section 3)."""
+two rigid plates with Coulomb friction, adaptive load stepping (docs/method.md §3)."""
 
 from __future__ import annotations
 

@@ -29,7 +29,7 @@ class PathFailed(RuntimeError):
 
 @dataclass(frozen=True)
 class PathResult:
-    """Reaction forces of the sensor body along one loading path (SPEC section 3).
+    """Reaction forces of the sensor body along one loading path (docs/method.md §3).
 
     Attributes
     ----------

@@ -1,4 +1,4 @@
-"""One structural loading path of the sensor body (SPEC section 3)."""
+"""One structural loading path of the sensor body (docs/method.md §3)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..geometry import body_mesh, loading_path
 from ..study import Study
 from ._model import HalfBodyModel, StepFailure, Stepping
@@ -37,7 +38,7 @@ def build_model(study: Study, H: float, *, G: float | None = None,
 def simulate_path(study: Study, H: float, theta: float, *, G: float | None = None,
                   mesh: str | None = None, t=None, vtu: str | Path | None = None,
                   progress: Callable[[float], None] | None = None) -> PathResult:
-    """Reaction forces of the sensor body along the loading path (θ, H) (SPEC sections 1, 3).
+    """Reaction forces of the sensor body along the loading path (θ, H) (docs/method.md §1, §3).
 
     The magnet and the upper plate move by (u_r, u_z) = ``loading_path(study, t, theta, H)``;
     the half body y ≥ 0 is solved by FElupe with adaptive load stepping and the forces are
@@ -70,7 +71,7 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
     PathResult
         Forces F = (F_r, F_z) [N] of the full body: the force that the lower support (base
         z = 0 and the lower plate) exerts on the body, twice that of the half model. Sign
-        convention (SPEC section 3): F_z > 0 in compression; F_r < 0 when the magnet moves
+        convention (docs/method.md §3): F_z > 0 in compression; F_r < 0 when the magnet moves
         along +x, the support pulling the body back.
 
     Raises
@@ -102,14 +103,14 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
     """
     G_out = study.material.G_ref if G is None else float(G)
     if not G_out > 0:
-        raise ValueError(f"G must be positive, got {G_out}")
+        raise MagtactError(f"G must be positive, got {G_out}")
     if not H > 0:
-        raise ValueError(f"H must be positive, got {H}")
+        raise MagtactError(f"H must be positive, got {H}")
     if not 0 <= theta < np.pi / 2:
-        raise ValueError(f"theta must be in [0, pi/2), got {theta}")
+        raise MagtactError(f"theta must be in [0, pi/2), got {theta}")
     t = study.t_levels if t is None else np.atleast_1d(np.asarray(t, dtype=float))
     if t.ndim != 1 or len(t) == 0 or np.any(np.diff(t) <= 0) or t[0] < 0 or t[-1] > 1:
-        raise ValueError("t must be increasing values in [0, 1]")
+        raise MagtactError("t must be increasing values in [0, 1]")
     G_solve = study.material.G_ref if study.mechanics.scale_in_G else G_out
 
     t0 = time.perf_counter()

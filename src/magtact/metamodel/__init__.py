@@ -1,4 +1,4 @@
-"""Closed-form metamodels of the study's responses by genetic programming (SPEC section 5)."""
+"""Closed-form metamodels of the study's responses by genetic programming (docs/method.md §5)."""
 
 from ._exact_field import ExactField
 from ._field_force import ComposedForce, FieldForceModel

@@ -1,7 +1,7 @@
 """Force models of the published sensitivity definition: F / G as a function of field and load.
 
 de Boer et al. (Sensors 2017, Eq. 15) fit the force as f(B_r, B_z, t, θ, H) and take the
-sensitivity as its partial derivative in B at fixed (t, θ, H) (docs/method.md, sensitivity).
+sensitivity as its partial derivative in B at fixed (t, θ, H) (docs/method.md §6).
 Here the same model is written in the features (p, q) = (t, t tan θ) instead of (t, θ): at
 t > 0 the two sets determine each other, so "fixed (t, θ)" and "fixed (p, q)" are the same
 partial derivative, and the features keep the expression smooth at t = 0.

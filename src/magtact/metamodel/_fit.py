@@ -6,7 +6,7 @@ All models are built in features that are affine in the displacement u at fixed 
 smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel._symbols`).
 
 - **B_r, B_z** depend on the sensor only through the Hall point's position (X, Z) relative to the
-  magnet's centre [mm] (the body does not change the field, SPEC section 2). X = a(H) q and
+  magnet's centre [mm] (the body does not change the field, docs/method.md §2). X = a(H) q and
   Z = −c(H) − a(H) p are affine in (p, q) with coefficients from :mod:`magtact.geometry`, so the
   fit is two-dimensional and exact in H.
 - **B_r** changes sign with X and vanishes on the axis (symmetry). It is fitted as g(X, Z) and
@@ -24,7 +24,7 @@ smooth in u and the sensitivity is finite at t = 0 (see :mod:`magtact.metamodel.
 If no seed of the log fit passes the guard rails, B_z falls back to the identity transform
 (``FALLBACK``). The transform used is recorded with each model.
 
-F is exactly proportional to G (SPEC section 3), so f is the mean of F / G over the G levels;
+F is exactly proportional to G (docs/method.md §3), so f is the mean of F / G over the G levels;
 the spread between levels is reported as ``G_spread`` (0 for a data set scaled in G).
 
 Held-out accuracy uses whole (θ, H) paths (all t) chosen among the interior levels, never seen
@@ -40,6 +40,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import sympy as sp
 
+from .._errors import MagtactError
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..study import Study
 from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
@@ -53,8 +54,8 @@ TRANSFORMS = {"B_r": "anchor_x", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor
 #: the guard rails.
 FALLBACK = {"log": "identity"}
 #: Max |error| / range on the training points that ends the seed search: 40 % of the held-out
-#: limits of issue 5 for B (1 %); the limit itself (2 %) for F, whose FE data are rough at the
-#: ~1 % level (contact events), so that a tighter target only costs refits.
+#: accuracy aimed at for B (1 % of the range); that accuracy itself (2 %) for F, whose FE data
+#: are rough at the ~1 % level (contact events), so that a tighter target only costs refits.
 TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.02, "f_z": 0.02}
 #: Fraction of max |y| below which relative errors are not reported.
 REL_FLOOR = 0.05
@@ -198,7 +199,7 @@ def _table(ds):
         out[f"f_{k}"] = mean.ravel()
     for k in RESPONSES:
         if not np.all(np.isfinite(out[k])):
-            raise ValueError(f"data set has non-finite values of {k}: an incomplete DOE?")
+            raise MagtactError(f"data set has non-finite values of {k}: an incomplete DOE?")
     return out, spread, (t_, th_, H_)
 
 
@@ -214,9 +215,10 @@ def holdout_paths(theta_levels, H_levels, n: int, seed: int = 0) -> list[tuple[f
     hi = range(1, len(H_levels) - 1) if len(H_levels) > 2 else range(len(H_levels))
     pairs = [(i, j) for i in ti for j in hi]
     if n >= len(theta_levels) * len(H_levels):
-        raise ValueError(f"holdout_paths = {n} leaves no training path")
+        raise MagtactError(f"holdout_paths = {n} leaves no training path")
     if n > len(pairs):
-        raise ValueError(f"holdout_paths = {n} exceeds the {len(pairs)} interior (theta, H) paths")
+        raise MagtactError(f"holdout_paths = {n} exceeds the {len(pairs)} interior "
+                           "(theta, H) paths")
     pick = np.random.default_rng(seed).choice(len(pairs), size=n, replace=False)
     return [(float(theta_levels[pairs[k][0]]), float(H_levels[pairs[k][1]])) for k in sorted(pick)]
 
@@ -437,7 +439,7 @@ def fit_models(ds, study: Study, *, settings=None, names=None, log=None,
     cfg = settings or study.metamodel
     definition = definition or study.sensitivity.definition
     if definition not in ("jacobian", "published"):
-        raise ValueError(f"[sensitivity] definition must be 'jacobian' or 'published', "
+        raise MagtactError(f"[sensitivity] definition must be 'jacobian' or 'published', "
                          f"got {definition!r}")
     if names is None:
         names = (("f_r", "f_z") if cfg.b_model == "exact" or field_models is not None

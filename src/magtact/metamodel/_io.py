@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
+from .._errors import MagtactError, MissingFileError
 from ._field_force import FIELD_SYMBOLS, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
@@ -65,24 +66,24 @@ def model_from_dict(data: dict, source: str = "<dict>") -> Metamodel:
 
     Raises
     ------
-    ValueError
+    MagtactError
         Wrong format tag, missing keys, an expression outside the grammar, or two expressions
         that disagree.
     """
     if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise ValueError(f"{source}: not a magtact metamodel file (expected format {FORMAT!r})")
+        raise MagtactError(f"{source}: not a magtact metamodel file (expected format {FORMAT!r})")
     for key in ("name", "units", "expression", "expression_pq"):
         if not isinstance(data.get(key), str):
-            raise ValueError(f"{source}: key {key!r} is missing or not a string")
+            raise MagtactError(f"{source}: key {key!r} is missing or not a string")
     try:
         expr = parse_expression(data["expression"], ("t", "theta", "H"))
         expr_pq = parse_expression(data["expression_pq"], ("p", "q", "H"))
     except ValueError as exc:
-        raise ValueError(f"{source}: {exc}") from None
+        raise MagtactError(f"{source}: {exc}") from None
     _check_agree(expr, expr_pq, source)
     info = data.get("info", {})
     if not isinstance(info, dict):
-        raise ValueError(f"{source}: 'info' must be an object")
+        raise MagtactError(f"{source}: 'info' must be an object")
     return Metamodel(name=data["name"], expr=expr, units=data["units"], expr_pq=expr_pq, info=info)
 
 
@@ -95,7 +96,7 @@ def _check_agree(expr, expr_pq, source, n: int = 16) -> None:
     a, b = np.broadcast_to(a, (n,)), np.broadcast_to(b, (n,))
     ok = np.isfinite(a) & np.isfinite(b)
     if not np.allclose(a[ok], b[ok], rtol=1e-9, atol=1e-12 * np.max(np.abs(a[ok]), initial=1.0)):
-        raise ValueError(f"{source}: 'expression' and 'expression_pq' describe different models")
+        raise MagtactError(f"{source}: 'expression' and 'expression_pq' describe different models")
 
 
 def field_force_to_dict(model: FieldForceModel) -> dict:
@@ -121,18 +122,18 @@ def field_force_from_dict(data: dict, source: str = "<dict>") -> FieldForceModel
         Wrong format tag, missing keys, or an expression outside the grammar.
     """
     if not isinstance(data, dict) or data.get("format") != FIELD_FORCE_FORMAT:
-        raise ValueError(f"{source}: not a field-force model file "
+        raise MagtactError(f"{source}: not a field-force model file "
                          f"(expected format {FIELD_FORCE_FORMAT!r})")
     for key in ("name", "units", "expression"):
         if not isinstance(data.get(key), str):
-            raise ValueError(f"{source}: key {key!r} is missing or not a string")
+            raise MagtactError(f"{source}: key {key!r} is missing or not a string")
     try:
         expr = parse_expression(data["expression"], FIELD_SYMBOLS)
     except ValueError as exc:
-        raise ValueError(f"{source}: {exc}") from None
+        raise MagtactError(f"{source}: {exc}") from None
     info = data.get("info", {})
     if not isinstance(info, dict):
-        raise ValueError(f"{source}: 'info' must be an object")
+        raise MagtactError(f"{source}: 'info' must be an object")
     return FieldForceModel(name=data["name"], expr=expr, units=data["units"], info=info)
 
 
@@ -151,16 +152,16 @@ def load_model(path: str | Path) -> Metamodel:
 
     Raises
     ------
-    FileNotFoundError
+    MissingFileError
         If the file does not exist.
-    ValueError
+    MagtactError
         If it is not valid JSON or not a valid model file.
     """
     path = Path(path)
     try:
         data = json.loads(path.read_text())
     except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        raise MagtactError(f"{path}: not valid JSON ({exc})") from None
     return model_from_dict(data, str(path))
 
 
@@ -192,7 +193,7 @@ def _load_any(path: Path, name: str):
     try:
         data = json.loads(path.read_text())
     except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        raise MagtactError(f"{path}: not valid JSON ({exc})") from None
     if isinstance(data, dict) and data.get("format") == EXACT_FORMAT and name in ("B_r", "B_z"):
         import tomllib
 
@@ -202,7 +203,7 @@ def _load_any(path: Path, name: str):
         try:
             study = study_from_dict(tomllib.loads(data["study_toml"]), str(path))
         except (KeyError, TypeError, tomllib.TOMLDecodeError) as exc:
-            raise ValueError(f"{path}: exact-field file without a valid study ({exc})") from None
+            raise MagtactError(f"{path}: exact-field file without a valid study ({exc})") from None
         return ExactField(study, name)
     if isinstance(data, dict) and data.get("format") == FIELD_FORCE_FORMAT:
         return field_force_from_dict(data, str(path))
@@ -225,7 +226,7 @@ def load_field_models(folder: str | Path) -> tuple:
             raise FileNotFoundError(f"metamodel file not found: {path}")
         m = _load_any(path, k)
         if m.name != k or m.units != RESPONSES[k]:
-            raise ValueError(f"{path}: holds {m.name!r} [{m.units}], "
+            raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "
                              f"expected {k!r} [{RESPONSES[k]}]")
         out.append(m)
     return tuple(out)
@@ -245,9 +246,9 @@ def load_models(folder: str | Path, B_model=None, definition: str | None = None)
 
     Raises
     ------
-    FileNotFoundError
+    MissingFileError
         If a file is missing.
-    ValueError
+    MagtactError
         If a file is not a valid model file, holds another response, or serves another
         sensitivity definition than ``definition``.
     """
@@ -260,10 +261,10 @@ def load_models(folder: str | Path, B_model=None, definition: str | None = None)
             continue
         path = folder / f"{k}.json"
         if not path.is_file():
-            raise FileNotFoundError(f"metamodel file not found: {path}")
+            raise MissingFileError(f"metamodel file not found: {path}")
         m = _load_any(path, k)
         if m.name != k or m.units != RESPONSES[k]:
-            raise ValueError(f"{path}: holds {m.name!r} [{m.units}], "
+            raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "
                              f"expected {k!r} [{RESPONSES[k]}]")
         models[k] = m
     for k in ("f_r", "f_z"):
@@ -271,7 +272,7 @@ def load_models(folder: str | Path, B_model=None, definition: str | None = None)
             models[k] = ComposedForce(models[k], models["B_r"], models["B_z"])
     out = ModelSet(**models)
     if definition is not None and out.definition != definition:
-        raise ValueError(
+        raise MagtactError(
             f"{folder}: the force models serve the {out.definition!r} sensitivity definition, "
             f"but the study's [sensitivity] definition is {definition!r}: fit models for it "
             f"(magtact fit) or set definition = {out.definition!r}")

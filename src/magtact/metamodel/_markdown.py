@@ -27,7 +27,7 @@ def write_markdown(result: FitResult, path: str | Path, *, title: str = "Metamod
                    gamma_check: dict | None = None, exact_B: bool = False) -> Path:
     """Write the metamodel report (markdown with LaTeX) to ``path`` and return it."""
     lines = [f"# {title}", "",
-             "Symbolic-regression models (SPEC section 5). Variables: load t [-], shear angle "
+             "Symbolic-regression models (docs/method.md §5). Variables: load t [-], shear angle "
              "θ [rad], base height H [m]; features p = t, q = t tan θ, h = H in mm, and the Hall "
              "point relative to the magnet's centre (X, Z) in mm. f = F / G [N/Pa].", "",
              f"Training data SHA-256: `{result.data_hash}`.", "",

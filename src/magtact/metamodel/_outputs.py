@@ -1,7 +1,8 @@
-"""Everything ``magtact fit`` writes: model files, ``metamodels.md``, figures."""
+"""Everything ``magtact fit`` writes: model files, ``metamodels.md`` and, if asked, figures."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 from ..study import Study
@@ -11,21 +12,40 @@ from ._markdown import write_markdown
 
 
 def write_fit_outputs(study: Study, ds, folder: str | Path, *, H: float | None = None,
-                      G: float | None = None, log=None) -> tuple[FitResult, list[Path]]:
-    """Fit the study's metamodels to ``ds`` and write them with their report and figures.
+                      G: float | None = None, log=None,
+                      gamma_check: Callable[..., dict] | None = None,
+                      figures: Callable[..., list[Path]] | None = None
+                      ) -> tuple[FitResult, list[Path]]:
+    """Fit the study's metamodels to ``ds`` and write them with their report.
 
-    Writes ``<name>.json`` per response, ``metamodels.md`` (expressions, accuracy, Γ check
-    against the data) and the figures ``force_map``, ``gamma`` (at design H [m], G [Pa];
-    default: the original design) and ``parity`` (PNG and SVG).
+    Writes ``<name>.json`` per response and ``metamodels.md`` (expressions, accuracy and,
+    with ``gamma_check``, Γ against the data).
+
+    Parameters
+    ----------
+    study : Study
+    ds : xarray.Dataset
+        The DOE data set.
+    folder : path
+        Output folder (created).
+    H, G : float, optional
+        Design [m], [Pa] of the figures; default: the original design.
+    log : callable, optional
+        Progress messages of the fit.
+    gamma_check : callable, optional
+        ``gamma_check(models, ds)`` compares the models' Γ with the data's
+        (:func:`magtact.sensitivity.compare_with_data`); its result goes into
+        ``metamodels.md``. None: no check.
+    figures : callable, optional
+        ``figures(study, models, table, test_mask, folder, H, G)`` draws the stage's figures
+        (:func:`magtact.report.fit_figures`: ``force_map``, ``gamma``, ``parity``). None: no
+        figures.
 
     Returns
     -------
     (FitResult, list of Path)
         The fit and the files written.
     """
-    from ..report._fig_metamodel import fig_force_map, fig_gamma, fig_parity
-    from ..sensitivity import compare_with_data
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     H = study.design.H_original if H is None else H
@@ -33,12 +53,11 @@ def write_fit_outputs(study: Study, ds, folder: str | Path, *, H: float | None =
     result = fit_models(ds, study, log=log)
     models = result.model_set(study)
     files = save_models(models, folder)
-    check = compare_with_data(models, ds)
+    check = None if gamma_check is None else gamma_check(models, ds)
     files.append(write_markdown(result, folder / "metamodels.md",
                                 title=f"Metamodels: {study.name}", gamma_check=check,
                                 exact_B=study.metamodel.b_model == "exact"))
-    table, _, _ = _table(ds)
-    files += fig_force_map(models, study, H, G, folder / "force_map")
-    files += fig_gamma(models, study, H, G, folder / "gamma")
-    files += fig_parity(models, table, holdout_mask(table, result.holdout), folder / "parity")
+    if figures is not None:
+        table, _, _ = _table(ds)
+        files += figures(study, models, table, holdout_mask(table, result.holdout), folder, H, G)
     return result, files

@@ -1,12 +1,12 @@
 """The symbols of every metamodel and the features they are built on.
 
-Responses are functions of the load t, shear angle θ and base height H (SPEC section 1). The map
+Responses are functions of the load t, shear angle θ and base height H (docs/method.md §1). The map
 (t, θ) → u = (u_r, u_z) is singular at t = 0, so fitted models are built in the *features*
 
     p = t,   q = t tan θ,   H
 
 which are linear in u at fixed H (u_z = a p, u_r = −a q with a = Δz_sat − Δz0(H) < 0). A model
-that is smooth in (p, q, H) is smooth in u, and the sensitivity (SPEC section 6) computed with
+that is smooth in (p, q, H) is smooth in u, and the sensitivity (docs/method.md §6) computed with
 derivatives in (p, q) is finite at t = 0 by construction. The same model in (t, θ, H) follows by
 substituting p = t, q = t tan θ.
 """

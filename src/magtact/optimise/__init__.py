@@ -1,4 +1,4 @@
-"""Sensitivity-optimal design (SPEC section 7).
+"""Sensitivity-optimal design (docs/method.md §7).
 
 Per design (H, G): stable shear bounds and the largest F_z, Γ_r, Γ_z (:func:`per_design`); maps
 over (H, G) (:func:`design_maps`); over designs: NSGA-II (:func:`pareto_nsga2`), the exact

@@ -3,8 +3,8 @@
 Two methods:
 
 - :func:`box_optimum` (one problem): a seeded genetic algorithm (pymoo ``GA``) finds the basin,
-  SciPy ``trust-constr`` with the exact gradient and Hessian refines it. The method of SPEC
-  section 7 (i), used for every per-design result.
+  SciPy ``trust-constr`` with the exact gradient and Hessian refines it. The method of
+  docs/method.md §7.1, used for every per-design result.
 - :func:`batch_optimum` (many problems at once, one box per row): the best point of a regular
   start grid, refined by a vectorised projected Newton method with an active set. Used where
   thousands of heights are needed (NSGA-II, the exact reduction); checked against

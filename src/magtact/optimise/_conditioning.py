@@ -1,6 +1,6 @@
 """How well-posed the stable-shear bound is: the move of t_m and F_z,max under a small F_r change.
 
-The stable shear bounds (t_m, θ_m) are where F_r is smallest (docs/method.md, optimisation).
+The stable shear bounds (t_m, θ_m) are where F_r is smallest (docs/method.md §7.1).
 Where that minimum is flat, a change of F_r far below the metamodels' error moves t_m a long
 way, and F_z,max, the largest F_z for t ≤ t_m, follows. This module measures it per height on a
 dense (t, θ) grid: t_tol is the smallest t at which F_r comes within ``tol`` of its range of the

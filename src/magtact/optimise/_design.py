@@ -1,4 +1,4 @@
-"""Per-design extrema (SPEC section 7 (i)): stable shear bounds, then the largest F_z, Γ_r, Γ_z.
+"""Per-design extrema (docs/method.md §7.1): stable shear bounds, then the largest F_z, Γ_r, Γ_z.
 
 Every force and sensitivity is G times a function of (t, θ, H): F = G f, Γ = G γ. The stable shear
 bounds (t_m, θ_m) and the locations of the maxima therefore do not depend on G; they are computed
@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..metamodel import ModelSet
 from ..sensitivity import Responses, ResponsesAtH
 from ..study import Study, from_si
@@ -85,7 +86,7 @@ def _degenerate(t_m: float, theta_m: float) -> str | None:
 
 @dataclass(frozen=True)
 class DesignResult:
-    """Extrema of a design (H, G) (SPEC Eqs. 17–18), in SI units.
+    """Extrema of a design (H, G) (docs/method.md §7.1), in SI units.
 
     Attributes
     ----------
@@ -183,7 +184,7 @@ def per_design(models: Responses | ModelSet, H: float, G: float, study: Study) -
         If G is not positive.
     """
     if not G > 0:
-        raise ValueError(f"shear modulus G must be positive, got {G} Pa")
+        raise MagtactError(f"shear modulus G must be positive, got {G} Pa")
     return DesignResult(float(H), float(G), per_height(models, H, study))
 
 
@@ -306,7 +307,7 @@ def _rows(H: np.ndarray, r, t) -> np.ndarray:
 
 @dataclass(frozen=True)
 class DesignMaps:
-    """Per-design results on a grid of (H, G) (SPEC section 7 (i)).
+    """Per-design results on a grid of (H, G) (docs/method.md §7.1).
 
     Attributes
     ----------

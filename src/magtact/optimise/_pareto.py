@@ -1,4 +1,4 @@
-"""Optimisation over designs (SPEC section 7 (ii)): constraints, NSGA-II, exact reduction, choice.
+"""Optimisation over designs (docs/method.md §7.2): constraints, NSGA-II, exact reduction, choice.
 
 Problem (published study, Eq. 19)::
 
@@ -13,13 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study, from_si
 from ._design import DesignResult, HeightTable, as_responses, heights_batch, per_design
 
 
-class InfeasibleError(ValueError):
+class InfeasibleError(MagtactError):
     """No design within the bounds satisfies the force constraints."""
 
 
@@ -60,12 +61,12 @@ def force_constraints(models: Responses | ModelSet, study: Study, *, F_r_c: floa
 
     Raises
     ------
-    ValueError
+    MagtactError
         If both numbers and a reference design are given.
     """
     given = F_r_c is not None or F_z_c is not None
     if given and reference is not None:
-        raise ValueError("give either constraint values (F_r_c, F_z_c) or a reference design, "
+        raise MagtactError("give either constraint values (F_r_c, F_z_c) or a reference design, "
                          "not both")
     c = study.constraints
     if reference is None and not given and c.source == "reference":
@@ -143,7 +144,7 @@ def nondominated(objectives: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Reduction:
-    """Exact reduction of the design problem to a curve over H (SPEC section 7).
+    """Exact reduction of the design problem to a curve over H (docs/method.md §7).
 
     Attributes
     ----------

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -77,20 +78,21 @@ class Optimisation:
     gap: float
     timings: Timings
 
-    def write(self, out: str | Path, figures: bool = True) -> list[Path]:
-        """Write ``design.json``, ``pareto.csv``, ``reduction.csv``, ``maps.csv`` and figures.
+    def write(self, out: str | Path,
+              figures: Callable[..., list[Path]] | None = None) -> list[Path]:
+        """Write ``design.json``, ``pareto.csv``, ``reduction.csv``, ``maps.csv`` and, with
+        ``figures``, the figures.
 
-        Returns the files written. Tables are in user units (mm, kPa, N, N/T).
+        ``figures(optimisation, out)`` draws them and returns the files
+        (:func:`magtact.report.optimise_figures`). Returns the files written. Tables are in user
+        units (mm, kPa, N, N/T).
         """
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         files = [self._write_json(out / "design.json"), self._write_pareto(out / "pareto.csv"),
                  self._write_reduction(out / "reduction.csv"), self.maps.to_csv(out / "maps.csv")]
-        if figures:
-            from ..report._fig_optimise import fig_maps, fig_pareto
-
-            files += fig_maps(self.maps, self.constraints, out)
-            files += fig_pareto(self, out / "pareto_set")
+        if figures is not None:
+            files += figures(self, out)
         return files
 
     def _write_json(self, path: Path) -> Path:
@@ -210,15 +212,16 @@ CAPTIONS = {
 
 
 def write_optimise_outputs(models: Responses | ModelSet, study: Study, folder: str | Path,
-                           constraints: ForceConstraints | None = None) -> Choice:
+                           constraints: ForceConstraints | None = None, *,
+                           figures: Callable[..., list[Path]] | None = None) -> Choice:
     """Run :func:`optimise` and write its files into ``folder``; return the chosen design.
 
-    Besides :meth:`Optimisation.write`, writes ``chosen.json`` (the chosen design as flat
-    values in user units, for the report) and ``captions.json``.
+    Besides :meth:`Optimisation.write` (which receives ``figures``), writes ``chosen.json``
+    (the chosen design as flat values in user units, for the report) and ``captions.json``.
     """
     result = optimise(models, study, constraints)
     folder = Path(folder)
-    result.write(folder)
+    result.write(folder, figures=figures)
     cond = shear_bound_conditioning(models, study, np.linspace(*study.design.H, 9))
     _csv(folder / "shear_bound.csv", ["H_mm", "t_m", "t_within_1_percent", "F_z_max_drop_percent"],
          zip(from_si(cond.H, "mm"), cond.t_m, cond.t_tol, 100 * cond.dF_z_rel, strict=True))

@@ -4,7 +4,7 @@ Every force and sensitivity is G times a function of the geometry, so a reading 
 k times another's scales G*, Γ and F by k at the same H and leaves H*, ratios such as
 Γ_z/Γ_r and F_r,min/F_z,max, trends and the Pareto set's shape unchanged: those rows are
 "scale-free" and are the ones a comparison across readings can argue from. The reading "as
-printed" is the study's own divided by ten (docs/method.md, the reading of G); under it the
+printed" is the study's own divided by ten (docs/method.md §9); under it the
 default force constraints need a G outside the printed range.
 """
 

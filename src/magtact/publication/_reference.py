@@ -2,7 +2,7 @@
 
 de Boer et al., "Design Optimisation of a Magnetic Field Based Soft Tactile Sensor", Sensors 17
 (2017) 2539. G as printed in the publication (kPa); the
-`magone` preset reads it ten times larger (docs/method.md, the reading of G).
+`magone` preset reads it ten times larger (docs/method.md §9).
 """
 
 from __future__ import annotations

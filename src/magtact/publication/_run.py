@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from tempfile import mkdtemp
 
+from .._errors import MagtactError
 from ..study import Study
 from ._compare import FIGURES, cell_text, comparison, spread
 from ._seeds import DEFINITIONS, seed_study
@@ -110,11 +111,11 @@ def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
     from ..metamodel import save_model as save_models_field
 
     if not isinstance(seeds, int) or seeds < 1:
-        raise ValueError(f"--seeds must be a whole number of at least 1, got {seeds!r}")
+        raise MagtactError(f"--seeds must be a whole number of at least 1, got {seeds!r}")
     t0 = time.perf_counter()
     ds = load_dataset(data) if data is not None else load_bundled()
     if data is None and not matches_study(ds, study):
-        raise ValueError("the bundled DOE data set belongs to the built-in MagOne study, whose "
+        raise MagtactError("the bundled DOE data set belongs to the built-in MagOne study, whose "
                          "geometry, material or levels differ from this study's: give the "
                          "study's own data set with --data (from `magtact doe`)")
     if models is None:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..study import Study, from_si, study_from_dict
 
 #: Sensitivity definitions compared.
@@ -67,10 +68,10 @@ def seed_study(study: Study, ds, models_dir: str | Path, *, seeds: Sequence[int]
     """
     seeds = [int(s) for s in seeds]
     if not seeds:
-        raise ValueError("--seeds must be at least 1")
+        raise MagtactError("--seeds must be at least 1")
     for d in definitions:
         if d not in DEFINITIONS:
-            raise ValueError(f"[sensitivity] definition must be one of {list(DEFINITIONS)}, "
+            raise MagtactError(f"[sensitivity] definition must be one of {list(DEFINITIONS)}, "
                              f"got {d!r}")
     jobs = [(d, s) for d in definitions for s in seeds]
     args = dict(study_toml=study.to_toml(), models_dir=str(models_dir),

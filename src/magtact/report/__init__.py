@@ -1,13 +1,24 @@
 """Figures and the HTML report.
 
-Stage figure functions live in ``_fig_<stage>.py`` and are imported from there by their stage
-(importing them here would make ``magtact.report`` depend on every stage).
+``fig_<name>`` draw one figure each; ``<stage>_figures`` draw all the figures of a stage and are
+what the stages' writers accept as their ``figures`` argument (the stages themselves draw
+nothing). :func:`build_report` turns a results folder into one self-contained HTML file.
 """
 
+from ._fig_doe import fig_doe
+from ._fig_field import fig_field
+from ._fig_mechanics import fig_deformed_body
+from ._fig_metamodel import fig_force_map, fig_gamma, fig_parity
+from ._fig_optimise import fig_maps, fig_pareto
 from ._fig_validation import fig_validation
 from ._html import build_report
 from ._publication import publication_figures
+from ._stages import field_figures, fit_figures, optimise_figures, validation_figures
 from ._style import CMAP_DIV, CMAP_SEQ, save, style
 
-__all__ = ["CMAP_DIV", "CMAP_SEQ", "build_report", "fig_validation", "publication_figures",
-           "save", "style"]
+__all__ = [
+    "CMAP_DIV", "CMAP_SEQ", "build_report", "fig_deformed_body", "fig_doe", "fig_field",
+    "fig_force_map", "fig_gamma", "fig_maps", "fig_parity", "fig_pareto", "fig_validation",
+    "field_figures", "fit_figures", "optimise_figures", "publication_figures", "save", "style",
+    "validation_figures",
+]

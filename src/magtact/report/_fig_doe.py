@@ -4,12 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import xarray as xr
 
 from ..study import from_si
-from ._style import CMAP_SEQ, save, style
+from ._style import CMAP_SEQ, colormap, save, style, subplots
 
 
 def fig_doe(ds: xr.Dataset, path: str | Path, *, G: float | None = None) -> list[Path]:
@@ -31,11 +30,11 @@ def fig_doe(ds: xr.Dataset, path: str | Path, *, G: float | None = None) -> list
     """
     g = ds.G.values[len(ds.G) // 2] if G is None else G
     forces = ds.sel(G=g, method="nearest")
-    colours = plt.get_cmap(CMAP_SEQ)(np.linspace(0.0, 0.85, ds.sizes["H"]))
+    colours = colormap(CMAP_SEQ)(np.linspace(0.0, 0.85, ds.sizes["H"]))
     panels = [("F_z", 0, "$F_z$ [N]", 1.0), ("F_r", -1, "$F_r$ [N]", 1.0),
               ("B_z", 0, "$B_z$ [mT]", 1e3), ("B_r", -1, "$B_r$ [mT]", 1e3)]
     with style():
-        fig, axes = plt.subplots(2, 2, figsize=(6.6, 4.8), sharex=True)
+        fig, axes = subplots(2, 2, figsize=(6.6, 4.8), sharex=True)
         for ax, (name, i_theta, label, factor) in zip(axes.flat, panels, strict=True):
             da = (forces if name.startswith("F") else ds)[name].isel(theta=i_theta)
             for k, colour in enumerate(colours):

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import SymLogNorm
 from matplotlib.patches import Rectangle
 
 from ..study import MU0, Study, from_si
-from ._style import CMAP_DIV, save, style
+from ._style import CMAP_DIV, save, style, subplots
 
 #: Half-decade colour levels of |B| [mT] below the magnet's polarisation.
 _DECADES = np.array([1.0, 2.0, 5.0])
@@ -70,7 +69,7 @@ def fig_field(study: Study, path: str | Path, *, solver: str | None = None,
         return from_si(np.asarray(v), "mm")
 
     with style():
-        fig, axes = plt.subplots(1, 2, figsize=(6.6, 3.9), sharey=True)
+        fig, axes = subplots(1, 2, figsize=(6.6, 3.9), sharey=True)
         for ax, B, title in ((axes[0], B_x, "$B_r$ (along $x$)"), (axes[1], B_z, "$B_z$")):
             values = np.clip(np.nan_to_num(from_si(B, "mT"), nan=0.0), -J, J)
             cs = ax.contourf(mm(X), mm(Z), values, levels=levels, norm=norm, cmap=CMAP_DIV)

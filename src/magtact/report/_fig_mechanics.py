@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib import cm, colors
+from matplotlib.figure import Figure
 from matplotlib.tri import Triangulation
 
-from ._style import CMAP_SEQ, save, style
+from ._style import CMAP_SEQ, colormap, save, style
 
 _FACES = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6],
                    [3, 0, 4, 7]])
@@ -53,13 +53,13 @@ def fig_deformed_body(points: np.ndarray, cells: np.ndarray, displacement: np.nd
     x = (points + displacement) * 1e3  # mm
     mag = np.linalg.norm(displacement, axis=1) * 1e3
     norm = colors.Normalize(vmin=0.0, vmax=max(float(mag.max()), 1e-12))
-    cmap = plt.get_cmap(CMAP_SEQ)
+    cmap = colormap(CMAP_SEQ)
     faces = _boundary_faces(cells)
     tol = 1e-9 * np.ptp(points[:, 2])
     on_sym = np.all(np.abs(points[faces, 1]) < tol, axis=1)
 
     with style():
-        fig = plt.figure(figsize=(6.8, 3.1))
+        fig = Figure(figsize=(6.8, 3.1))
         ax3 = fig.add_subplot(1, 2, 1, projection="3d")
         from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from ..geometry import loading_path
 from ..study import Study, kpa, mm
-from ._style import CMAP_DIV, CMAP_SEQ, save, style
+from ._style import CMAP_DIV, CMAP_SEQ, save, style, subplots
 
 
 def _grid(study: Study, n: int = 121):
@@ -36,7 +35,7 @@ def fig_force_map(models, study: Study, H: float, G: float, path: str | Path) ->
     u_r, u_z = loading_path(study, T, TH, H)
     lim = np.max(np.abs(F_r))
     with style():
-        fig, axes = plt.subplots(1, 2, figsize=(7.0, 3.0))
+        fig, axes = subplots(1, 2, figsize=(7.0, 3.0))
         for ax, (x, y, xl, yl) in zip(axes, [
                 (T, np.degrees(TH), "load $t$ [-]", r"shear angle $\theta$ [deg]"),
                 (mm(u_r), mm(u_z), "$u_r$ [mm]", "$u_z$ [mm]")], strict=True):
@@ -64,7 +63,7 @@ def fig_gamma(models, study: Study, H: float, G: float, path: str | Path) -> lis
     T, TH = _grid(study)
     gr, gz = gamma(models, T, TH, H, G)
     with style():
-        fig, axes = plt.subplots(1, 2, figsize=(7.0, 3.0))
+        fig, axes = subplots(1, 2, figsize=(7.0, 3.0))
         for ax, g, lab in zip(axes, (gr, gz), (r"$\Gamma_r$", r"$\Gamma_z$"), strict=True):
             cs = ax.contourf(T, np.degrees(TH), g, levels=21, cmap=CMAP_SEQ)
             ax.contour(T, np.degrees(TH), g, levels=cs.levels[::4], colors="k", linewidths=0.4)
@@ -81,7 +80,7 @@ def fig_parity(models, table: dict, test_mask: np.ndarray, path: str | Path) -> 
     names = [("B_r", "mT", 1e3), ("B_z", "mT", 1e3), ("f_r", "N/kPa", 1e3), ("f_z", "N/kPa", 1e3)]
     label = {"B_r": "$B_r$", "B_z": "$B_z$", "f_r": "$f_r = F_r/G$", "f_z": "$f_z = F_z/G$"}
     with style():
-        fig, axes = plt.subplots(1, 4, figsize=(7.2, 2.1))
+        fig, axes = subplots(1, 4, figsize=(7.2, 2.1))
         for ax, (k, unit, s) in zip(axes, names, strict=True):
             y = table[k] * s
             y_hat = models[k].value(table["t"], table["theta"], table["H"]) * s

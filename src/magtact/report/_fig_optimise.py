@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from ..study import kpa, mm
-from ._style import save, style
+from ._style import save, style, subplots
 
 GR, GZ = r"$\Gamma_{r,\max}$", r"$\Gamma_{z,\max}$"
 FR, FZ = r"$F_{r,\min}$", r"$F_{z,\max}$"
@@ -31,14 +30,14 @@ def fig_maps(maps, constraints, out_dir: str | Path) -> list[Path]:
     X, Y = np.meshgrid(mm(maps.H), kpa(maps.G), indexing="ij")
     files = []
     with style():
-        fig, ax = plt.subplots(figsize=(3.4, 2.8))
+        fig, ax = subplots(figsize=(3.4, 2.8))
         _contours(ax, X, Y, maps.Gamma_r_max, "C0", "solid", GR + " [N/T]")
         _contours(ax, X, Y, maps.Gamma_z_max, "C3", "dashed", GZ + " [N/T]")
         ax.set(xlabel="H [mm]", ylabel="G [kPa]")
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, frameon=False)
         files += save(fig, out_dir / "maps_objectives")
 
-        fig, ax = plt.subplots(figsize=(3.4, 2.8))
+        fig, ax = subplots(figsize=(3.4, 2.8))
         _contours(ax, X, Y, maps.F_r_min, "C0", "solid", FR + " [N]")
         _contours(ax, X, Y, maps.F_z_max, "C3", "dashed", FZ + " [N]")
         for Z, level, color, ls in ((maps.F_r_min, constraints.F_r_c, "C0", "solid"),
@@ -63,7 +62,7 @@ def fig_pareto(opt, path: str | Path) -> list[Path]:
     front = r.front
     chosen = opt.choice.design
     with style():
-        fig, axs = plt.subplots(1, 3, figsize=(7.0, 2.4))
+        fig, axs = subplots(1, 3, figsize=(7.0, 2.4))
         for ax in axs:
             ax.ticklabel_format(useOffset=False)
         ax = axs[0]

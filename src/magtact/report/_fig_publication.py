@@ -5,11 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 from ..study import from_si
-from ._style import save, style
+from ._style import colormap, save, style, subplots
 
 #: Colour and marker of each sensitivity definition.
 LOOK = {"jacobian": ("C0", "o"), "published": ("C3", "s")}
@@ -27,7 +26,7 @@ def fig_seed_spread(records: list[dict], path: str | Path) -> list[Path]:
     """Γ_r,max and Γ_z,max of the original design and H* for every seed, per definition."""
     groups = _by_definition(records)
     with style():
-        fig, axes = plt.subplots(1, 3, figsize=(7.0, 2.5))
+        fig, axes = subplots(1, 3, figsize=(7.0, 2.5))
         for k, (key, label, log) in enumerate((
                 ("original.Gamma_r_max", r"$\Gamma_{r,\max}$ original [N/T]", True),
                 ("original.Gamma_z_max", r"$\Gamma_{z,\max}$ original [N/T]", True),
@@ -51,7 +50,7 @@ def fig_gamma_z_along_t(records: list[dict], path: str | Path) -> list[Path]:
     """Γ_z along t at the largest H and θ_max, one line per seed, one panel per definition."""
     groups = _by_definition(records)
     with style():
-        fig, axes = plt.subplots(1, max(len(groups), 1), figsize=(7.0, 2.6), squeeze=False)
+        fig, axes = subplots(1, max(len(groups), 1), figsize=(7.0, 2.6), squeeze=False)
         for ax, (d, recs) in zip(axes[0], groups.items(), strict=False):
             color, _ = LOOK.get(d, ("k", "x"))
             for r in recs:
@@ -68,7 +67,7 @@ def fig_gamma_over_H(records: list[dict], G: float, path: str | Path) -> list[Pa
     """Γ_r,max(H) and Γ_z,max(H) at shear modulus G [Pa], one line per seed and definition."""
     groups = _by_definition(records)
     with style():
-        fig, axes = plt.subplots(1, 2, figsize=(7.0, 2.6))
+        fig, axes = subplots(1, 2, figsize=(7.0, 2.6))
         for d, recs in groups.items():
             color, _ = LOOK.get(d, ("k", "x"))
             for n, r in enumerate(recs):
@@ -95,9 +94,9 @@ def fig_resolution_range(sweep: dict, G_range: tuple[float, float], path: str | 
     idx = np.unique(np.linspace(0, H.size - 1, n_lines).round().astype(int))
     G = np.linspace(0.0, G_range[1], 50)
     inside = G >= G_range[0]
-    cmap = plt.get_cmap("viridis")
+    cmap = colormap("viridis")
     with style():
-        fig, axes = plt.subplots(1, 2, figsize=(7.0, 2.8))
+        fig, axes = subplots(1, 2, figsize=(7.0, 2.8))
         for n, i in enumerate(idx):
             color = cmap(n / max(len(idx) - 1, 1))
             for ax, g, f in ((axes[0], "gamma_z_max", "f_z_max"),
@@ -116,7 +115,7 @@ def fig_resolution_range(sweep: dict, G_range: tuple[float, float], path: str | 
 def fig_conditioning(cond: dict, path: str | Path) -> list[Path]:
     """t_m and t_tol over H, and the relative drop of F_z,max between them."""
     with style():
-        fig, axes = plt.subplots(1, 2, figsize=(7.0, 2.5))
+        fig, axes = subplots(1, 2, figsize=(7.0, 2.5))
         H = cond["H_mm"]
         axes[0].plot(H, cond["t_m"], "C0-", label=r"$t_m$ (minimum of $F_r$)")
         axes[0].plot(H, cond["t_tol"], "C1--",

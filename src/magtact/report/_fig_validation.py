@@ -4,10 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
-from ._style import save, style
+from ._style import save, style, subplots
 
 #: (response, abscissa, scale to plot units, unit label) of the four panels.
 PANELS = (("B_r", "u_r", 1e3, "mT"), ("B_z", "u_z", 1e3, "mT"),
@@ -30,7 +29,7 @@ def fig_validation(validation, path: str | Path) -> list[Path]:
         The files written.
     """
     with style():
-        fig, axes = plt.subplots(2, 2, figsize=(6.8, 5.0))
+        fig, axes = subplots(2, 2, figsize=(6.8, 5.0))
         for ax, (name, x_name, scale, unit) in zip(axes.flat, PANELS, strict=True):
             s = validation.stats[name]
             x = (validation.u_r if x_name == "u_r" else validation.u_z) * 1e3

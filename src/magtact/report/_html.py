@@ -1,4 +1,4 @@
-"""The self-contained HTML report of a results folder (SPEC section 9).
+"""The self-contained HTML report of a results folder.
 
 The report is built from the files a run leaves in its folder, never from memory, so that
 ``magtact report DIR`` can rebuild it at any time and a missing stage is reported as missing:
@@ -9,7 +9,7 @@ The report is built from the files a run leaves in its folder, never from memory
 * one folder per stage (``field``, ``doe``, ``metamodel``, ``optimise``, ``validation``) with its
   figures (PNG, embedded as base64), tables (CSV), text (TXT, TEX) and summaries (JSON); an
   optional ``captions.json`` maps a file name without suffix to its caption.
-* ``evidence/*.json`` — accuracy and convergence benchmarks (copied from ``bench/results``).
+* ``evidence/*.json`` — accuracy and convergence benchmarks (``magtact run --evidence DIR``).
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ import json
 from datetime import UTC, datetime
 from pathlib import Path
 
+from .._errors import MissingFileError
 from ._publication import publication_section
 
 #: Stages in pipeline order: (folder, title, what it is).
@@ -81,18 +82,20 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
 
     Raises
     ------
-    FileNotFoundError
+    MissingFileError
         If ``folder`` does not exist.
     """
     folder = Path(folder)
     if not folder.is_dir():
-        raise FileNotFoundError(f"{folder}: no such results folder")
+        raise MissingFileError(f"{folder}: no such results folder")
     manifest = _load_json(folder / "run.json") or {}
     stages = {s.get("key"): s for s in manifest.get("stages", [])}
     study_name = manifest.get("study", "unknown study")
     parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
              f"<p>Results folder <code>{_e(folder.resolve())}</code>; report built "
-             f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}.</p>"]
+             f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}. The method behind every number, with "
+             "its equations and defaults: <code>docs/method.md</code> of the magtact "
+             "repository; the benchmarks' evidence: <code>docs/verification.md</code>.</p>"]
     if not manifest:
         parts.append('<div class="missing">No <code>run.json</code> in this folder: the stages '
                      "below are reported from the files present only; statuses and timings are "
@@ -233,8 +236,9 @@ def _evidence(folders: list[Path]) -> str:
     files = sorted({p.name: p for f in folders if f.is_dir() for p in f.glob("*.json")}.values())
     out = ['<h2 id="evidence">Accuracy and convergence evidence</h2>']
     if not files:
-        out.append('<div class="missing">No benchmark results (<code>bench/results/*.json</code>)'
-                   " were available to this run.</div>")
+        out.append('<div class="missing">No benchmark results were given to this run '
+                   "(<code>magtact run --evidence bench/results</code> in a source checkout)."
+                   "</div>")
         return "\n".join(out)
     out.append("<p>Benchmarks measured on this code (bench/results); each table lists the "
                "scalar results, nested values are in the expandable raw file.</p>")

@@ -71,7 +71,7 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
             "defined as the partial derivative of a fitted force expression "
             "F(B_r, B_z, t, θ, H) in B at fixed (t, θ, H); magtact's default is the Jacobian "
             "∂F/∂B = (∂F/∂u)(∂B/∂u)⁻¹ through the magnet's displacement, a property of the "
-            "sensor (docs/method.md, sensitivity). The publication prints G in 1–5 kPa; "
+            "sensor (docs/method.md §6). The publication prints G in 1–5 kPa; "
             "<code>magone</code> reads it as 10–50 kPa. "
             + (f"This run used the <b>{_e(run_definition)}</b> definition. "
                if run_definition else "") + "</p>")

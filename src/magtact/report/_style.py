@@ -1,4 +1,8 @@
-"""Shared figure style: journal-like, readable when printed at one column width."""
+"""Shared figure style: journal-like, readable when printed at one column width.
+
+Figures are :class:`matplotlib.figure.Figure` objects made without pyplot, so drawing them
+neither needs nor changes the user's matplotlib backend (a notebook keeps its inline plots).
+"""
 
 from __future__ import annotations
 
@@ -6,9 +10,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.figure import Figure
 
 RC = {
     "font.size": 9,
@@ -37,12 +39,29 @@ CMAP_DIV = "RdBu_r"
 @contextmanager
 def style():
     """Context manager applying the magtact figure style."""
-    with plt.rc_context(RC):
+    with matplotlib.rc_context(RC):
         yield
 
 
+def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float], **kwargs):
+    """A new figure and its axes, like :func:`matplotlib.pyplot.subplots` but without pyplot.
+
+    Returns
+    -------
+    (matplotlib.figure.Figure, axes)
+        ``axes`` as :meth:`matplotlib.figure.Figure.subplots` returns them.
+    """
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
+
+
+def colormap(name: str):
+    """The registered colour map ``name``."""
+    return matplotlib.colormaps[name]
+
+
 def save(fig, path: str | Path, formats: tuple[str, ...] = ("png", "svg")) -> list[Path]:
-    """Save ``fig`` as ``path`` with each suffix in ``formats``; close it; return the files."""
+    """Save ``fig`` as ``path`` with each suffix in ``formats``; return the files."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     written = []
@@ -50,5 +69,4 @@ def save(fig, path: str | Path, formats: tuple[str, ...] = ("png", "svg")) -> li
         target = path.with_suffix("." + fmt)
         fig.savefig(target)
         written.append(target)
-    plt.close(fig)
     return written

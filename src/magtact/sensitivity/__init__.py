@@ -1,4 +1,4 @@
-"""Sensitivity of force to field, Γ = |∂F/∂B| (SPEC section 6), from closed-form metamodels."""
+"""Sensitivity of force to field, Γ = |∂F/∂B| (docs/method.md §6), from closed-form metamodels."""
 
 from ._check import compare_with_data, gamma_from_data
 from ._gamma import NAMES, PublishedResponsesAtH, Responses, ResponsesAtH, dF_dB, gamma

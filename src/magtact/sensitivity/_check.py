@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..metamodel import ModelSet
 from ._gamma import gamma
 
@@ -30,7 +31,7 @@ def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
     """
     t_, th_ = (np.asarray(ds[k].values, dtype=float) for k in ("t", "theta"))
     if len(t_) < 3 or len(th_) < 3:
-        raise ValueError("finite-difference Γ needs at least 3 levels of t and of theta")
+        raise MagtactError("finite-difference Γ needs at least 3 levels of t and of theta")
     G = np.asarray(ds["G"].values, dtype=float)
 
     def arr(name):

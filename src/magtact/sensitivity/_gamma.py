@@ -1,4 +1,4 @@
-"""Sensitivity of force to field, Γ (SPEC section 6), and its derivatives for the optimiser.
+"""Sensitivity of force to field, Γ (docs/method.md §6), and its derivatives for the optimiser.
 
 Derivation
 ----------
@@ -94,8 +94,8 @@ def dF_dB(models: ModelSet, t, theta, H, G=1.0) -> np.ndarray:
 def gamma(models: ModelSet, t, theta, H, G) -> tuple[np.ndarray, np.ndarray]:
     """Sensitivities Γ_r, Γ_z [N/T] at (t, θ, H, G) (broadcast).
 
-    Γ_r = |∂F_r/∂B|, Γ_z = |∂F_z/∂B| (docs/method.md, sensitivity) under the model set's
-    definition (see :func:`dF_dB`); finite at t = 0 (see the module notes).
+    Γ_r = |∂F_r/∂B|, Γ_z = |∂F_z/∂B| (docs/method.md §6) under the model set's definition
+    (see :func:`dF_dB`); finite at t = 0 (see the module notes).
     """
     S = dF_dB(models, t, theta, H, G)
     return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])

@@ -37,7 +37,7 @@ MESH_DENSITIES = ("coarse", "default", "accurate", "fine")
 
 @dataclass(frozen=True)
 class Body:
-    """Elastomer body: one cylinder of radius R and height H + H_g (SPEC section 1)."""
+    """Elastomer body: one cylinder of radius R and height H + H_g (docs/method.md §1)."""
 
     R: float = setting(6e-3, "mm", positive=True, doc="body radius")
     H_g: float = setting(4.97e-3, "mm", positive=True, doc="upper part height")
@@ -60,7 +60,7 @@ class Magnet:
 
 @dataclass(frozen=True)
 class Loading:
-    """Loading path, friction and Hall saturation (SPEC section 1)."""
+    """Loading path, friction and Hall saturation (docs/method.md §1)."""
 
     dz_sat: float = setting(2.97e-3, "mm", positive=True,
                             doc="magnet–sensor distance at which the Hall reading saturates")
@@ -91,7 +91,7 @@ class Design:
 
 @dataclass(frozen=True)
 class DOE:
-    """Full-factorial levels (SPEC section 4)."""
+    """Full-factorial levels (docs/method.md §4)."""
 
     n_t: int = setting(21, integer=True, minimum=2, doc="levels of the non-dimensional load t")
     n_theta: int = setting(5, integer=True, minimum=1, doc="levels of the shear angle")
@@ -101,7 +101,7 @@ class DOE:
 
 @dataclass(frozen=True)
 class Magnetics:
-    """Field solver settings (SPEC section 2)."""
+    """Field solver settings (docs/method.md §2)."""
 
     solver: str = setting("fe", choices=("fe", "exact"), doc="field solver")
     h_magnet: float = setting(0.1e-3, "mm", positive=True,
@@ -119,7 +119,7 @@ class Magnetics:
 
 @dataclass(frozen=True)
 class Mechanics:
-    """Structural solver settings (SPEC section 3)."""
+    """Structural solver settings (docs/method.md §3)."""
 
     mesh: str = setting("default", choices=MESH_DENSITIES,
                         doc="named mesh density of the hexahedral half body")
@@ -145,7 +145,7 @@ class Mechanics:
 
 @dataclass(frozen=True)
 class Constraints:
-    """Force constraints of the design optimisation (SPEC section 7)."""
+    """Force constraints of the design optimisation (docs/method.md §7)."""
 
     F_r_c: float = setting(-0.25, "N", doc="F_r,min must be at most this (shear capacity)")
     F_z_c: float = setting(5.0, "N", positive=True, doc="F_z,max must be at least this")
@@ -155,7 +155,8 @@ class Constraints:
 
 @dataclass(frozen=True)
 class Metamodel:
-    """Genetic-programming metamodels (SPEC section 5); fixed generations and seed: reproducible."""
+    """Genetic-programming metamodels (docs/method.md §5); fixed generations and seed:
+    reproducible."""
 
     generations: int = setting(100, integer=True, minimum=1, doc="GP generations per fit")
     population: int = setting(600, integer=True, minimum=10, doc="GP population size")
@@ -175,7 +176,7 @@ class Metamodel:
     threads: int = setting(2, integer=True, minimum=1, doc="threads of the GP")
 
 
-#: Definitions of the sensitivity Γ (docs/method.md, sensitivity): "jacobian", the total
+#: Definitions of the sensitivity Γ (docs/method.md §6): "jacobian", the total
 #: derivative ∂F/∂B through the magnet's displacement, a property of the sensor; "published",
 #: the partial derivative in B of a force model F(B_r, B_z, t, θ, H) at fixed (t, θ, H), as in
 #: de Boer et al. (Sensors 2017), a property of the fitted expression as much as of the sensor.
@@ -184,7 +185,7 @@ SENSITIVITY_DEFINITIONS = ("jacobian", "published")
 
 @dataclass(frozen=True)
 class Sensitivity:
-    """How the sensitivity Γ = |∂F/∂B| is defined (docs/method.md, sensitivity)."""
+    """How the sensitivity Γ = |∂F/∂B| is defined (docs/method.md §6)."""
 
     definition: str = setting("jacobian", choices=SENSITIVITY_DEFINITIONS,
                               doc="'jacobian': dF/dB through the magnet displacement (default); "
@@ -194,7 +195,7 @@ class Sensitivity:
 
 @dataclass(frozen=True)
 class Optimise:
-    """Design optimisation (SPEC section 7): per-design extrema, maps, NSGA-II, reduction."""
+    """Design optimisation (docs/method.md §7): per-design extrema, maps, NSGA-II, reduction."""
 
     population: int = setting(200, integer=True, minimum=4,
                               doc="population of the per-design GA and of NSGA-II")

@@ -23,7 +23,7 @@ SCALE: dict[str, tuple[int, int]] = {
 #: Printable form of each unit suffix.
 LABEL: dict[str, str] = {"A_per_m": "A/m", "": "-"}
 
-#: Permeability of free space used throughout [T·m/A] (SPEC section 1).
+#: Permeability of free space used throughout [T·m/A] (docs/method.md §1).
 MU0 = 1.257e-6
 
 

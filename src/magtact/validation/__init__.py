@@ -1,4 +1,4 @@
-"""Validation against repeat indentation tests (SPEC section 8).
+"""Validation against repeat indentation tests (docs/method.md §8).
 
 Read tests from CSV (:func:`read_experiment`; the format is documented in ``_io``), compare them
 with a :class:`PathModel` (metamodels, direct simulation, samples or any function) by

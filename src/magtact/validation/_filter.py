@@ -1,10 +1,12 @@
-"""FFT band-pass filter of a signal sampled along the displacement (SPEC section 8)."""
+"""FFT band-pass filter of a signal sampled along the displacement (docs/method.md §8)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+
+from .._errors import MagtactError
 
 
 @dataclass(frozen=True)
@@ -29,9 +31,9 @@ class FilterSettings:
 
     def __post_init__(self):
         if not self.f_lo >= 0.0:
-            raise ValueError(f"filter: f_lo must be >= 0, got {self.f_lo}")
+            raise MagtactError(f"filter: f_lo must be >= 0, got {self.f_lo}")
         if self.f_hi is not None and not self.f_hi > self.f_lo:
-            raise ValueError(f"filter: f_hi ({self.f_hi} 1/m) must exceed f_lo ({self.f_lo} 1/m)")
+            raise MagtactError(f"filter: f_hi ({self.f_hi} 1/m) must exceed f_lo ({self.f_lo} 1/m)")
 
     @property
     def active(self) -> bool:

@@ -1,4 +1,4 @@
-"""Reading repeat indentation tests from CSV files (SPEC section 8).
+"""Reading repeat indentation tests from CSV files (docs/method.md §8).
 
 File format
 -----------
@@ -33,6 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError, MissingFileError
+
 #: The measured responses and the unit suffix of their columns.
 RESPONSES: tuple[str, ...] = ("B_r", "B_z", "F_r", "F_z")
 UNITS: dict[str, str] = {"B_r": "T", "B_z": "T", "F_r": "N", "F_z": "N"}
@@ -45,7 +47,7 @@ MIN_SAMPLES = 4
 THETA_TOL = 1e-6
 
 
-class DataError(ValueError):
+class DataError(MagtactError):
     """Malformed validation data; the message names the file, line and column."""
 
 
@@ -108,7 +110,7 @@ class Experiment:
 
         Raises
         ------
-        ValueError
+        MagtactError
             If a value is neither given nor in the metadata, or the metadata is not a number.
         """
         return (H if H is not None else self._meta_si("design_h_mm", 1e-3, "H"),
@@ -117,12 +119,12 @@ class Experiment:
     def _meta_si(self, key: str, factor: float, name: str) -> float:
         where = self.sources[0] if self.curves else "the data"
         if key not in self.metadata:
-            raise ValueError(f"give the design's {name} (--{name}): {where} has no metadata "
+            raise MagtactError(f"give the design's {name} (--{name}): {where} has no metadata "
                              f"'{key}'")
         try:
             return float(self.metadata[key]) * factor
         except ValueError:
-            raise ValueError(f"{where}: metadata '{key}' is not a number: "
+            raise MagtactError(f"{where}: metadata '{key}' is not a number: "
                              f"{self.metadata[key]!r}") from None
 
     @property
@@ -149,7 +151,7 @@ def read_experiment(paths) -> Experiment:
     DataError
         On malformed input, naming the file, the line (1-based, as in a text editor) and the
         column.
-    FileNotFoundError
+    MissingFileError
         If a file does not exist.
     """
     if isinstance(paths, (str, Path)):
@@ -192,7 +194,7 @@ def read_experiment(paths) -> Experiment:
 def _read_file(path: Path):
     """Parse one file → (curves, theta, where theta was read, metadata)."""
     if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such data file")
+        raise MissingFileError(f"{path}: no such data file")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -96,7 +96,7 @@ class PathModel:
 
         Notes
         -----
-        u_z = t (Δz_sat + H_m − H − H_g) (SPEC section 1), so t = u_z / u_z(t = 1); F = G f.
+        u_z = t (Δz_sat + H_m − H − H_g) (docs/method.md §1), so t = u_z / u_z(t = 1); F = G f.
         """
         u_z1 = float(loading_path(study, 1.0, theta, H)[1])
 

@@ -1,16 +1,19 @@
-"""Files of a validation: the c_v / ε table (CSV, JSON) and the figure."""
+"""Files of a validation: the c_v / ε table (CSV, JSON) and, if asked, the figure."""
 
 from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 from ._stats import Validation
 
 
-def write_outputs(validation: Validation, out: str | Path, *, sources=()) -> list[Path]:
-    """Write ``validation[_synthetic].csv``, ``.json`` and the figure (PNG, SVG) into ``out``.
+def write_outputs(validation: Validation, out: str | Path, *, sources=(),
+                  figures: Callable[..., list[Path]] | None = None) -> list[Path]:
+    """Write ``validation[_synthetic].csv``, ``.json`` and, with ``figures``, the figure into
+    ``out``.
 
     The names carry ``_synthetic`` for generated data, and so do the table's ``data`` column
     and the figure's title.
@@ -23,14 +26,16 @@ def write_outputs(validation: Validation, out: str | Path, *, sources=()) -> lis
         Output folder (created).
     sources : sequence of path
         Data files, recorded in the JSON.
+    figures : callable, optional
+        ``figures(validation, path)`` draws the figure at ``path`` (``out/validation[_synthetic]``
+        without suffix) and returns the files (:func:`magtact.report.validation_figures`).
+        None: no figure.
 
     Returns
     -------
     list of Path
         Files written.
     """
-    from ..report._fig_validation import fig_validation
-
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     stem = "validation_synthetic" if validation.synthetic else "validation"
@@ -56,5 +61,6 @@ def write_outputs(validation: Validation, out: str | Path, *, sources=()) -> lis
     path = out / f"{stem}.json"
     path.write_text(json.dumps(summary, indent=2, ensure_ascii=False), encoding="utf-8")
     written.append(path)
-    written += fig_validation(validation, out / stem)
+    if figures is not None:
+        written += figures(validation, out / stem)
     return written

@@ -1,4 +1,4 @@
-"""Repeatability and model error of repeat indentation tests (SPEC section 8)."""
+"""Repeatability and model error of repeat indentation tests (docs/method.md §8)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ._filter import FilterSettings, bandpass
 from ._io import RESPONSES, UNITS, DataError, Experiment
 from ._model import PathModel
@@ -133,7 +134,7 @@ class Validation:
 def validate(experiment: Experiment, model: PathModel, *,
              filter: FilterSettings | None = None, n_grid: int = N_GRID,
              floor: float = FLOOR) -> Validation:
-    """Filter, resample and compare repeat tests with a model (SPEC section 8).
+    """Filter, resample and compare repeat tests with a model (docs/method.md §8).
 
     Parameters
     ----------
@@ -169,11 +170,11 @@ def validate(experiment: Experiment, model: PathModel, *,
     """
     filter = FilterSettings() if filter is None else filter
     if n_grid < 2:
-        raise ValueError(f"n_grid must be at least 2, got {n_grid}")
+        raise MagtactError(f"n_grid must be at least 2, got {n_grid}")
     if not 0.0 <= floor < 1.0:
-        raise ValueError(f"floor must be in [0, 1), got {floor}")
+        raise MagtactError(f"floor must be in [0, 1), got {floor}")
     if abs(model.theta - experiment.theta) > 1e-3:
-        raise ValueError(f"the model is at theta = {model.theta:.4g} rad but the data at "
+        raise MagtactError(f"the model is at theta = {model.theta:.4g} rad but the data at "
                          f"{experiment.theta:.4g} rad: simulate the data's shear angle")
     curves = experiment.curves
     lo = max(float(c.u_z.min()) for c in curves)

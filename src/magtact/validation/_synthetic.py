@@ -1,4 +1,4 @@
-"""The SYNTHETIC example data set shipped with magtact (SPEC section 8).
+"""The SYNTHETIC example data set shipped with magtact (docs/method.md §8).
 
 It is generated, not measured: 4 sensors × 2 repeats of the fabricated design (H = 4.1 mm,
 G = 29.4 kPa) at θ = θ_max, from the model (exact field of the magnet, FE forces of one direct

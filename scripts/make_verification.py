@@ -1,0 +1,310 @@
+"""Write docs/verification.md from the benchmark results in bench/results/*.json.
+
+Every number in the document is read from those files (or computed from numbers read there);
+the text around them says what was measured and how to read it. Rerun after a benchmark::
+
+    python scripts/make_verification.py [--results bench/results] [--out docs/verification.md]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def pct(x: float, digits: int = 1) -> str:
+    """A fraction as a percentage with a sign only where it is negative."""
+    return f"{100 * x:.{digits}f} %"
+
+
+def spct(x: float, digits: int = 1) -> str:
+    """A relative change as a signed percentage."""
+    return f"{100 * x:+.{digits}f} %"
+
+
+def rel(a: float, b: float) -> float:
+    """Relative change (a − b) / |b|."""
+    return (a - b) / abs(b)
+
+
+def table(header: list[str], rows: list[list[str]]) -> list[str]:
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return out + [""]
+
+
+class Results:
+    """The JSON files of a results folder, by stem."""
+
+    def __init__(self, folder: Path):
+        self.folder = folder
+        self.files = {p.stem: json.loads(p.read_text("utf-8"))
+                      for p in sorted(folder.glob("*.json"))}
+
+    def __getitem__(self, stem: str) -> dict:
+        return self.files[stem]
+
+    def source(self, stem: str) -> str:
+        return f"`bench/results/{stem}.json`"
+
+
+def field_section(r: Results) -> list[str]:
+    f = r["field"]
+    ex, fe = f["exact_vs_magpylib_max_rel"], f["fe_vs_exact_max_rel"]
+    mesh = f["fe_mesh"]
+    out = ["## Magnetic field", "",
+           f"Source: {r.source('field')} (`bench/bench_field.py`), docs/method.md §2.", "",
+           "**Exact field against magpylib.** Largest relative difference of the closed-form "
+           f"cylinder field: {ex['below']:.1e} below the magnet, {ex['above']:.1e} above, "
+           f"{ex['beside']:.1e} beside (round-off).", "",
+           f"**Finite elements against the exact field** (default mesh: {mesh['triangles']:,} "
+           f"triangles, {mesh['dofs_P2']:,} P2 unknowns; mesh and solve in "
+           f"{f['fe_timing']['median_total_s']:.1f} s, median of "
+           f"{len(f['fe_timing']['runs'])} runs): largest relative difference "
+           f"{pct(fe['below'], 2)} below the magnet, {pct(fe['above'], 2)} above, "
+           f"{pct(fe['beside'], 2)} beside, and {pct(f['fe_vs_exact_hall_points_max_rel'], 2)} "
+           "over the Hall points of the DOE.", "",
+           "**Convergence** on uniformly refined meshes below the magnet, for two far boxes "
+           "(the far boundary does not limit the accuracy):", ""]
+    rows = [[f"{c['far_r']:g} R_m × ±{c['far_z']:g} H_m", f"{c['size_factor']:g}",
+             f"{c['triangles']:,}", pct(c["max_rel"], 3), pct(c["rms_rel"], 3),
+             f"{c['rms_rate']:.2f}" if "rms_rate" in c else "–"]
+            for c in f["refinement_below_magnet"]]
+    out += table(["far box", "element size factor", "triangles", "max rel. error",
+                  "rms rel. error", "rms rate"], rows)
+    return out
+
+
+def _case(path: dict) -> dict:
+    return path
+
+
+def mechanics_section(r: Results) -> list[str]:
+    out = ["## Structural mechanics", "",
+           "Sources: `bench/results/mechanics_*.json` (`bench/bench_mechanics.py`), "
+           "docs/method.md §3. All paths at θ = θ_max, the hardest case; forces at t = 1 and "
+           "the minimum of F_r along the path.", ""]
+    cases = [r[f"mechanics_convergence_H{H}"]["cases"][0] for H in (3, 7)]
+    met = all(c["below_2_percent"] for c in cases)
+    out += ["### Default mesh against the `fine` mesh", "",
+            "`fine` has twice the default's cells in every direction. The target of a change "
+            f"below 2 % is {'met' if met else '**not** met'} by the default mesh:", ""]
+    rows = []
+    for c in cases:
+        d, f = c["default"], c["fine"]
+        rows.append([f"{c['H_mm']:g}", f"{d['n_dofs']:,} / {f['n_dofs']:,}",
+                     f"{d['wall_time_s']:.0f} / {f['wall_time_s']:.0f}",
+                     f"{d['F_z_t1_N']:.3f} / {f['F_z_t1_N']:.3f}", pct(c["change_F_z_t1"]),
+                     f"{d['F_r_min_N']:.4f} / {f['F_r_min_N']:.4f}", pct(c["change_F_r_min"]),
+                     "yes" if c["below_2_percent"] else "no"])
+    out += table(["H [mm]", "DOFs default / fine", "time per path [s]", "F_z(t=1) [N]",
+                  "change", "min F_r [N]", "change", "< 2 %"], rows)
+
+    out += ["### Where the discretisation error sits", "",
+            "Doubling the default's cells in one direction at a time: change of F_z(t = 1) "
+            "and of min F_r against the default mesh (negative: the doubled mesh gives less).",
+            ""]
+    rows = []
+    for H in (3, 7):
+        default = r[f"mechanics_convergence_H{H}"]["cases"][0]["default"]
+        for c in r[f"mechanics_directions_H{H}"]["cases"]:
+            rows.append([f"{c['H_mm']:g}", c["doubled"].replace("_", " "), f"{c['n_dofs']:,}",
+                         spct(rel(c["F_z_t1_N"], default["F_z_t1_N"]), 2),
+                         spct(rel(abs(c["F_r_min_N"]), abs(default["F_r_min_N"])), 2)])
+    out += table(["H [mm]", "cells doubled", "DOFs", "F_z(t=1)", "magnitude of min F_r"], rows)
+
+    out += ["### Meshes between default and fine", "",
+            "`accurate` (twice the default's cells in z and radially) and a mesh with 1.5 times "
+            "the default's cells per direction, against `fine`:", ""]
+    rows = []
+    for c in r["mechanics_accurate"]["cases"]:
+        rows.append([f"{c['H_mm']:g}", c["mesh"].replace("_", " "), f"{c['n_dofs']:,}",
+                     f"{c['wall_time_s']:.0f}", pct(c["change_vs_fine_F_z_t1"], 2),
+                     pct(c["change_vs_fine_F_r_min"], 2)])
+    for c in r["mechanics_order"]["cases"]:
+        rows.append([f"{c['H_mm']:g}", c["mesh"].replace("_", " "), f"{c['n_dofs']:,}",
+                     f"{c['wall_time_s']:.0f}", pct(c["change_vs_fine_F_z_t1"], 2),
+                     pct(c["change_vs_fine_F_r_min"], 2)])
+    out += table(["H [mm]", "mesh", "DOFs", "time per path [s]", "F_z(t=1) vs fine",
+                  "min F_r vs fine"], rows)
+    orders = []
+    for c in r["mechanics_order"]["cases"]:
+        o = c["order"]["F_z_t1_nominal"]
+        orders.append(f"H = {c['H_mm']:g} mm: order {o['order']:.2f}, predicted change of the "
+                      f"default against its doubled mesh {pct(o['predicted_change_default_vs_x2'])}"
+                      f", cells per direction for 2 %: {o['k_min_for_0.02']:.2f} × the default's")
+    out += ["**Order of convergence** of F_z(t = 1) from the three meshes (refinements 1 : 1.5 : 2 "
+            "taken as nominal; with the cube roots of the cell counts no order fits): "
+            + "; ".join(orders) + ". min F_r is not in the asymptotic range.", ""]
+
+    g = r["mechanics_grid"]["summary"]
+    s = r["mechanics_solver"]
+    out += ["### The 25 DOE paths and the linear solver", "",
+            f"Default mesh ({r.source('mechanics_grid')}): {g['completed']} of {g['total']} paths "
+            f"completed, {g['wall_time_s']['mean']:.0f} s per path on average (largest "
+            f"{g['wall_time_s']['max']:.0f} s), {g['newton_iterations_mean']:.0f} Newton "
+            f"iterations per path on average, {g['cutbacks_total']} step cut-backs in all. Time "
+            f"split: factorisation {pct(g['time_share']['factorization'], 0)}, solid assembly "
+            f"{pct(g['time_share']['solid'], 0)}, solves {pct(g['time_share']['solve'], 0)}, "
+            f"contact {pct(g['time_share']['contact'], 0)}.", "",
+            f"Factorisation of one tangent ({s['n']:,} unknowns, {s['nnz']:,} non-zeros; "
+            f"{r.source('mechanics_solver')}): PARDISO "
+            f"{statistics.median(s['pardiso']['factorize_s']):.2f} s, SciPy SuperLU "
+            f"{statistics.median(s['superlu']['factorize_s']):.2f} s (medians of "
+            f"{len(s['pardiso']['factorize_s'])}).", ""]
+    return out
+
+
+def fit_section(r: Results) -> list[str]:
+    out = ["## Metamodels", "",
+           f"Sources: {r.source('fit')} (bundled DOE) and {r.source('fit_accurate')} (the DOE "
+           "on the `accurate` mesh), `bench/bench_fit.py`; docs/method.md §5. Held-out: whole "
+           "(θ, H) paths never seen by the fit.", ""]
+    rows = []
+    for stem, label in (("fit", "bundled (default mesh)"), ("fit_accurate", "accurate mesh")):
+        for name, m in r[stem]["models"].items():
+            te = m["test"]
+            rows.append([label, name, f"{te['r2']:.6f}", pct(te["max_abs_err_over_range"], 2),
+                         pct(te["max_rel_err"], 1), pct(m["limit_max_abs_err_over_range"], 0),
+                         f"{m['fit_time_s']:.0f}"])
+    out += table(["data", "model", "held-out R²", "max error / range", "max rel. error",
+                  "limit (error / range)", "fit time [s]"], rows)
+    rough = [[label, *(pct(r[stem]["data_roughness_per_path_poly6"][k], 2)
+                       for k in ("B_r", "B_z", "f_r", "f_z"))]
+             for stem, label in (("fit", "bundled (default mesh)"),
+                                 ("fit_accurate", "accurate mesh"))]
+    out += ["**Roughness of the data** along each path (largest residual of a degree-6 "
+            "polynomial in t, over the range of the response): the FE forces are not smooth "
+            "(contact events), which bounds what any smooth fit can reproduce.", ""]
+    out += table(["data", "B_r", "B_z", "f_r", "f_z"], rough)
+    return out
+
+
+def gamma_section(r: Results) -> list[str]:
+    out = ["## Γ against the data", "",
+           "The models' Γ against Γ from finite differences of the DOE data alone "
+           "(docs/method.md §6), at t ≥ 0.2 and where Γ exceeds 5 % of its maximum:", ""]
+    rows = []
+    for stem, label in (("fit", "bundled (default mesh)"), ("fit_accurate", "accurate mesh")):
+        for name in ("gamma_r", "gamma_z"):
+            g = r[stem]["gamma_vs_data_fd"][name]
+            rows.append([label, name.replace("gamma_", "Γ_"), f"{g['n_points_above_floor']}",
+                         pct(g["within_5_percent_above_floor"]), pct(g["median_above_floor"], 2),
+                         pct(g["p95_above_floor"], 1), pct(g["max_above_floor"], 0),
+                         pct(g["max_abs_over_max"], 1)])
+    out += table(["data", "Γ", "points", "within 5 %", "median difference", "95th percentile",
+                  "largest", "largest / max Γ"], rows)
+    b = r["fit"]["gamma_vs_data_fd"]["gamma_r"]["within_5_percent_above_floor"]
+    a = r["fit_accurate"]["gamma_vs_data_fd"]["gamma_r"]["within_5_percent_above_floor"]
+    out += [f"Γ_r agrees within 5 % at {pct(b)} of the points on the bundled data and at "
+            f"{pct(a)} on the data of the `accurate` mesh, whose f_r is smoother (table above): "
+            "Γ_r depends on small differences of F_r, where the roughness of the structural "
+            "data matters.", ""]
+    return out
+
+
+def mesh_effect_section(r: Results) -> list[str]:
+    m = r["mesh_effect"]
+    c = m["change_default_vs_finer"]
+    d, f, ch = (m["chosen_design"]["default"], m["chosen_design"]["finer"],
+                m["chosen_design_change"])
+    out = ["## What the mesh error does to the answer", "",
+           f"Source: {r.source('mesh_effect')} (`bench/bench_mesh_effect.py`): the whole DOE on "
+           f"the `{m['mesh']['finer']}` mesh against the bundled DOE on the "
+           f"`{m['mesh']['default']}` mesh, each fitted and optimised with the default settings.",
+           "",
+           f"The default mesh's F_z(t = 1) is {pct(c['F_z_t1_range'][0])} to "
+           f"{pct(c['F_z_t1_range'][1])} higher on every path; its min F_r differs by "
+           f"{spct(c['F_r_min_theta_gt_0_range'][0])} to {spct(c['F_r_min_theta_gt_0_range'][1])}"
+           " in magnitude (θ > 0). The chosen design:", ""]
+    rows = [["H [mm]", f"{d['H_mm']:.3f}", f"{f['H_mm']:.3f}", spct(ch["H_mm"])],
+            ["G [kPa]", f"{d['G_kPa']:.2f}", f"{f['G_kPa']:.2f}", spct(ch["G_kPa"])],
+            ["Γ_r,max [N/T]", f"{d['Gamma_r_max_N_per_T']:.2f}",
+             f"{f['Gamma_r_max_N_per_T']:.2f}", spct(ch["Gamma_r_max_N_per_T"])],
+            ["Γ_z,max [N/T]", f"{d['Gamma_z_max_N_per_T']:.2f}",
+             f"{f['Gamma_z_max_N_per_T']:.2f}", spct(ch["Gamma_z_max_N_per_T"])],
+            ["F_z,max [N]", f"{d['F_z_max_N']:.3f}", f"{f['F_z_max_N']:.3f}",
+             spct(ch["F_z_max_N"])]]
+    out += table(["", m["mesh"]["default"], m["mesh"]["finer"], "change"], rows)
+    return out
+
+
+def optimise_section(r: Results) -> list[str]:
+    o = r["optimise"]
+    d, ref = o["default_constraints"], o["reference_constraints"]
+    bf = o["brute_force"]
+    out = ["## Optimisation", "",
+           f"Source: {r.source('optimise')} (`bench/bench_optimise.py`), with the shipped "
+           "metamodels; docs/method.md §7.", "",
+           f"**Default constraints** (F_r,c = {d['constraints']['F_r_c_N']:g} N, "
+           f"F_z,c = {d['constraints']['F_z_c_N']:g} N): chosen H = {d['H_mm']:.3f} mm, "
+           f"G = {d['G_kPa']:.2f} kPa, Γ_r,max = {d['Gamma_r_max_N_per_T']:.2f} N/T, "
+           f"Γ_z,max = {d['Gamma_z_max_N_per_T']:.2f} N/T, active: "
+           f"{', '.join(d['active_constraints']) or 'none'}. The exact reduction chooses "
+           f"G = {d['exact_reduction_choice']['G_kPa']:.2f} kPa; NSGA-II's set lies within "
+           f"{d['gap_to_exact_front']:.1e} (relative) of the exact front.", "",
+           f"**Constraints of the original design** (H = {ref['reference_design']['H_mm']:g} mm,"
+           f" G = {ref['reference_design']['G_kPa']:g} kPa): chosen H = {ref['H_mm']:.3f} mm, "
+           f"G = {ref['G_kPa']:.2f} kPa, gap to the exact front "
+           f"{ref['gap_to_exact_front']:.1e}.", "",
+           f"**Against brute force** on a {bf['grid'][0]} × {bf['grid'][1]} grid of (t, θ) at "
+           f"{len(bf['heights'])} heights: largest relative difference of the per-design "
+           f"extrema {bf['max_rel_diff']:.1e}; the optimiser is never worse than the grid: "
+           f"{'yes' if bf['optimiser_never_worse'] else 'no'}.", ""]
+    return out
+
+
+def timing_section(r: Results) -> list[str]:
+    d, run = r["doe"], r["run"]
+    p = d["path_job_wall_time_s"]
+    out = ["## Timings", "",
+           f"On the {d['machine']['cpus']}-core development machine "
+           "(other work on the machine shows in the load averages the files record).", "",
+           f"**Full DOE from an empty cache** ({r.source('doe')}): {d['n_paths']} structural "
+           f"paths with {d['workers']} workers in {d['wall_time_s']:.0f} s (parallel efficiency "
+           f"{pct(d['parallel_efficiency'], 0)}); per path {p['min']:.0f}–{p['max']:.0f} s, "
+           f"{p['mean']:.0f} s on average; field job {d['field_job_wall_time_s']:.1f} s.", "",
+           f"**`magtact run`** ({r.source('run')}):", ""]
+    rows = []
+    for key, label in (("bundled", "bundled data"), ("recompute", "--recompute --refit")):
+        s = run[key]
+        rows.append([label, f"{s['wall_time_s']:.0f}",
+                     *(f"{s['stages'][k]['wall_time_s']:.1f}"
+                       for k in ("field", "doe", "metamodel", "optimise", "validation"))])
+    out += table(["run", "total [s]", "field", "DOE", "metamodels", "optimisation",
+                  "validation"], rows)
+    return out
+
+
+def document(folder: Path) -> str:
+    r = Results(folder)
+    lines = ["# Verification of magtact", "",
+             "<!-- Generated by scripts/make_verification.py from bench/results/*.json; "
+             "do not edit by hand. -->", "",
+             "What the benchmarks in `bench/` measured: accuracy of the field, convergence of "
+             "the structural model, accuracy of the metamodels, Γ against the data, the effect "
+             "of the mesh on the chosen design, the optimiser against brute force, and timings. "
+             "The method is in [method.md](method.md). Every number below is read from "
+             "`bench/results`; rerun a benchmark, then `python scripts/make_verification.py`.",
+             ""]
+    for section in (field_section, mechanics_section, fit_section, gamma_section,
+                    mesh_effect_section, optimise_section, timing_section):
+        lines += section(r)
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--results", type=Path, default=ROOT / "bench" / "results")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "verification.md")
+    args = ap.parse_args()
+    args.out.write_text(document(args.results), encoding="utf-8")
+    print(args.out)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,185 @@
+"""The package's structure: import graph between sub-packages, private modules, repository
+layout, and no history or external-document references in code and tests.
+
+The import graph is read from the source (``ast``), so it holds every import, also those inside
+functions, which a run-time check would miss until the function runs.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "src" / "magtact"
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _imports(path: Path) -> list[tuple[str, int]]:
+    """Absolute names of the magtact modules ``path`` imports, with their line numbers."""
+    module = _module_name(path)
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text("utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names if a.name.startswith("magtact")]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - node.level + 1]
+                name = ".".join(base + ([node.module] if node.module else []))
+            else:
+                name = node.module or ""
+            if name.startswith("magtact"):
+                # "from . import x" / "from .report import fig_doe": the names may be modules
+                out += [(f"{name}.{a.name}", node.lineno) for a in node.names]
+                out.append((name, node.lineno))
+    return out
+
+
+def _unit(module: str) -> str | None:
+    """The sub-package (or top-level module) of ``magtact`` that ``module`` belongs to."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def _sources() -> list[Path]:
+    return sorted(PACKAGE.rglob("*.py"))
+
+
+def import_graph() -> dict[str, dict[str, list[str]]]:
+    """unit → imported unit → ["file:line", ...] over the whole package."""
+    units = {p.name if p.is_dir() else p.stem for p in PACKAGE.iterdir()
+             if (p.is_dir() and (p / "__init__.py").is_file()) or p.suffix == ".py"}
+    graph: dict[str, dict[str, list[str]]] = {}
+    for path in _sources():
+        src = _unit(_module_name(path))
+        if src is None or src == "__init__":
+            continue
+        for name, line in _imports(path):
+            dst = _unit(name)
+            if dst is None or dst == src or dst not in units:
+                continue
+            where = f"{path.relative_to(ROOT)}:{line}"
+            sites = graph.setdefault(src, {}).setdefault(dst, [])
+            if where not in sites:
+                sites.append(where)
+    return graph
+
+
+def find_cycle(graph: dict[str, dict[str, list[str]]]) -> list[str] | None:
+    """One cycle of ``graph`` as a list of units (first = last), or None."""
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(u: str) -> list[str] | None:
+        state[u] = 1
+        stack.append(u)
+        for v in sorted(graph.get(u, {})):
+            if state.get(v) == 1:
+                return stack[stack.index(v):] + [v]
+            if v not in state and (cycle := visit(v)):
+                return cycle
+        stack.pop()
+        state[u] = 2
+        return None
+
+    for u in sorted(graph):
+        if u not in state and (cycle := visit(u)):
+            return cycle
+    return None
+
+
+def test_find_cycle_finds_a_cycle_and_only_a_cycle():
+    assert find_cycle({"a": {"b": []}, "b": {"c": []}, "c": {"a": []}}) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": {"b": [], "c": []}, "b": {"c": []}}) is None
+
+
+def test_relative_imports_resolve_to_absolute_module_names():
+    imports = dict(_imports(PACKAGE / "optimise" / "_run.py"))
+    assert "magtact.metamodel" in imports and "magtact.optimise._design" in imports
+
+
+def test_no_import_cycle_between_sub_packages():
+    graph = import_graph()
+    assert "report" in graph and "pipeline" in graph  # the graph was read
+    cycle = find_cycle(graph)
+    assert cycle is None, "import cycle " + " -> ".join(cycle) + ": " + "; ".join(
+        f"{a} -> {b} at {', '.join(graph[a][b])}" for a, b in zip(cycle, cycle[1:], strict=False))
+
+
+def test_stages_do_not_import_the_report():
+    """Stages return data; figures come from ``magtact.report`` through the callers."""
+    graph = import_graph()
+    stages = ("study", "geometry", "magnetics", "mechanics", "doe", "metamodel", "sensitivity",
+              "optimise", "validation")
+    offenders = {s: graph[s]["report"] for s in stages if "report" in graph.get(s, {})}
+    assert offenders == {}
+
+
+def test_private_figure_modules_are_imported_only_inside_report():
+    pattern = re.compile(r"report\._fig_|from \._fig_")
+    offenders = []
+    for path in _sources() + sorted((ROOT / "tests").glob("*.py")):
+        if path.parent.name == "report" and path.is_relative_to(PACKAGE):
+            continue
+        for name, line in (_imports(path) if path.is_relative_to(PACKAGE) else []):
+            if "._fig_" in name:
+                offenders.append(f"{path.relative_to(ROOT)}:{line}")
+        if not path.is_relative_to(PACKAGE) and path.name != Path(__file__).name:
+            text = path.read_text("utf-8")
+            offenders += [f"{path.relative_to(ROOT)}:{text[:m.start()].count(chr(10)) + 1}"
+                          for m in pattern.finditer(text)]
+    assert offenders == []
+
+
+def test_library_code_does_not_read_the_repository_layout():
+    offenders = [f"{p.relative_to(ROOT)}:{n}" for p in _sources()
+                 for n, line in enumerate(p.read_text("utf-8").splitlines(), start=1)
+                 if "parents[" in line]
+    assert offenders == []
+
+
+#: References to documents outside the repository or to the project's history. The words are
+#: assembled so that a plain grep of the sources does not find this file.
+_DOC, _TICKET, _ITEM = "SP" + "EC", "[Ii]" + "ssue", "accept" + "ance item"
+HISTORY = re.compile(rf"\b{_DOC}\b|(?<![A-Za-z]){_TICKET}[ _#]?\d|\b{_ITEM}")
+
+
+@pytest.mark.parametrize("folder", ["src", "tests"])
+def test_no_history_or_outside_references(folder):
+    offenders = []
+    for path in sorted((ROOT / folder).rglob("*")):
+        if path.suffix not in (".py", ".md", ".toml"):
+            continue
+        for n, line in enumerate(path.read_text("utf-8").splitlines(), start=1):
+            if HISTORY.search(line):
+                offenders.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
+    assert offenders == []
+
+
+@pytest.mark.parametrize("text, found", [
+    ("see " + "SP" + "EC section 6", True), ("limits of is" + "sue 5", True),
+    ("meets_is" + "sue_5", True), ("accept" + "ance item 1", True),
+    ("spec = {key_of(f): f}", False), ("tissues of 3 mm", False), ("tissue_3", False),
+])
+def test_history_pattern(text, found):
+    assert bool(HISTORY.search(text)) is found
+
+
+def test_no_backend_is_chosen_at_import():
+    """Library code draws on Figure objects; it never selects a matplotlib backend."""
+    offenders = [f"{p.relative_to(ROOT)}:{n}" for p in _sources()
+                 for n, line in enumerate(p.read_text("utf-8").splitlines(), start=1)
+                 if re.search(r"matplotlib\.use\(|import matplotlib\.pyplot|"
+                              r"from matplotlib import pyplot", line)]
+    assert offenders == []
