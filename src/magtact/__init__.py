@@ -1,12 +1,39 @@
-"""magtact: design magnetic soft tactile sensors by simulation, metamodels and optimisation."""
+"""magtact: design magnetic soft tactile sensors by simulation, metamodels and optimisation.
+
+The front door::
+
+    import magtact
+    study = magtact.load("magone")          # a preset, a study file, or either with changes
+    result = magtact.design(study)          # chosen design: bundled data and shipped fit
+    print(result.chosen)                    # H [mm], G [kPa], Γ [N/T], forces [N]
+
+``magtact.run`` runs every stage into a results folder with an HTML report; the stages are
+sub-packages (``magtact.study``, ``magnetics``, ``mechanics``, ``doe``, ``metamodel``,
+``sensitivity``, ``optimise``, ``validation``, ``publication``, ``report``). The method:
+docs/method.md.
+"""
 
 from importlib.metadata import PackageNotFoundError, version
 
 from ._errors import MagtactError
+from ._front import Design, DesignSummary, design, load
+from .study import Study
 
 try:
     __version__ = version("magtact")
 except PackageNotFoundError:  # running from a source tree without installation
     __version__ = "0.0.0"
 
-__all__ = ["MagtactError", "__version__"]
+
+def run(study: Study | str | None = None, out: str = "results", **options):
+    """Every stage of ``study`` into the folder ``out`` with its HTML report
+    (:func:`magtact.pipeline.run_study`; options as there). Returns its ``RunResult``."""
+    from .pipeline import run_study
+
+    if not isinstance(study, Study):
+        study = load(study)
+    return run_study(study, out, **options)
+
+
+__all__ = ["Design", "DesignSummary", "MagtactError", "Study", "__version__", "design", "load",
+           "run"]

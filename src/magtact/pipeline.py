@@ -235,19 +235,20 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
 def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
     if ctx.dataset is None:
         raise StageSkipped("needs the DOE data set, which is missing")
-    from .metamodel import copy_prefitted, find_prefitted, write_fit_outputs
+    from .metamodel import copy_prefitted, select_metamodels, write_fit_outputs
 
-    shipped = None if ctx.refit else find_prefitted(ctx.study, ctx.dataset)
-    if shipped is not None:
-        ctx.models, _ = copy_prefitted(shipped, ctx.folder / "metamodel")
+    chosen = select_metamodels(ctx.study, ctx.dataset, refit=ctx.refit,
+                               log=lambda m: ctx.log(f"      {m}"))
+    if chosen.shipped is not None:
+        ctx.models, _ = copy_prefitted(chosen.shipped, ctx.folder / "metamodel")
         return ("B_r, B_z, f_r, f_z: the fit shipped with magtact for this very data set and "
                 "these settings (same data SHA-256; --refit fits again)")
     from .report import fit_figures
     from .sensitivity import compare_with_data
 
     result, files = write_fit_outputs(ctx.study, ctx.dataset, ctx.folder / "metamodel",
-                                      log=lambda m: ctx.log(f"      {m}"),
-                                      gamma_check=compare_with_data, figures=fit_figures)
+                                      gamma_check=compare_with_data, figures=fit_figures,
+                                      result=chosen.fit)
     ctx.models = result.model_set(ctx.study)
     worst = max((r.test.max_rel_err for r in result.reports.values() if r.test is not None),
                 default=float("nan"))

@@ -45,12 +45,12 @@ def parse_design(text: str, what: str) -> tuple[float, float]:
 def study_models(study: Study, models: Path | None):
     """The metamodels: from ``models`` (a ``magtact fit`` output folder) if given, else the fit
     shipped for the bundled DOE data set (when the study's fit settings match), else fitted."""
-    from ..metamodel import fit_models, load_models
+    from ..metamodel import load_models
 
     if models is not None:
         return load_models(models, definition=study.sensitivity.definition)
     from ..doe import load_bundled, matches_study
-    from ..metamodel import find_prefitted
+    from ..metamodel import select_metamodels
 
     ds = load_bundled()
     if not matches_study(ds, study):
@@ -58,12 +58,8 @@ def study_models(study: Study, models: Path | None):
                          "geometry, material, levels or solver settings, so the bundled data "
                          "set does not describe it: run `magtact doe STUDY --out DOE`, then "
                          "`magtact fit STUDY --data DOE/doe.nc --out FIT`, and pass --models FIT")
-    shipped = find_prefitted(study, ds)
-    if shipped is not None:
-        return load_models(shipped)
-    console.print("fitting metamodels to the bundled DOE data set (give --models DIR to reuse "
-                  "fitted ones)", highlight=False)
-    return fit_models(ds, study).model_set(study)
+    return select_metamodels(study, ds,
+                             log=lambda m: console.print(m, highlight=False)).models
 
 
 @app.command("optimise")

@@ -14,8 +14,8 @@ from ._markdown import write_markdown
 def write_fit_outputs(study: Study, ds, folder: str | Path, *, H: float | None = None,
                       G: float | None = None, log=None,
                       gamma_check: Callable[..., dict] | None = None,
-                      figures: Callable[..., list[Path]] | None = None
-                      ) -> tuple[FitResult, list[Path]]:
+                      figures: Callable[..., list[Path]] | None = None,
+                      result: FitResult | None = None) -> tuple[FitResult, list[Path]]:
     """Fit the study's metamodels to ``ds`` and write them with their report.
 
     Writes ``<name>.json`` per response and ``metamodels.md`` (expressions, accuracy and,
@@ -36,6 +36,8 @@ def write_fit_outputs(study: Study, ds, folder: str | Path, *, H: float | None =
         ``gamma_check(models, ds)`` compares the models' Γ with the data's
         (:func:`magtact.sensitivity.compare_with_data`); its result goes into
         ``metamodels.md``. None: no check.
+    result : FitResult, optional
+        A fit of ``ds`` already made (written, not fitted again).
     figures : callable, optional
         ``figures(study, models, table, test_mask, folder, H, G)`` draws the stage's figures
         (:func:`magtact.report.fit_figures`: ``force_map``, ``gamma``, ``parity``). None: no
@@ -50,7 +52,7 @@ def write_fit_outputs(study: Study, ds, folder: str | Path, *, H: float | None =
     folder.mkdir(parents=True, exist_ok=True)
     H = study.design.H_original if H is None else H
     G = study.design.G_original if G is None else G
-    result = fit_models(ds, study, log=log)
+    result = fit_models(ds, study, log=log) if result is None else result
     models = result.model_set(study)
     files = save_models(models, folder)
     check = None if gamma_check is None else gamma_check(models, ds)
