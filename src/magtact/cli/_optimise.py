@@ -99,7 +99,8 @@ def print_choice(result, stdout: Console | None = None) -> None:
     """Print the chosen design and the constraints used (rich table on standard output)."""
     c, ch = result.constraints, result.choice
     d = ch.design
-    table = Table(title=f"Chosen design ({result.study.name})",
+    table = Table(title=f"Chosen design ({result.study.name}; "
+                        f"{result.study.sensitivity.definition} Γ)",
                   caption=f"constraints ({c.source}): F_r,min <= {c.F_r_c:.4g} N, "
                           f"F_z,max >= {c.F_z_c:.4g} N; active: {', '.join(ch.active) or 'none'}")
     table.add_column("quantity", justify="left")

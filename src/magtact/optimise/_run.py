@@ -228,6 +228,7 @@ def write_optimise_outputs(models: Responses | ModelSet, study: Study, folder: s
     c = result.choice
     flat = {k: v for k, v in _choice_json(c).items() if k != "active_constraints"}
     flat["active_constraints"] = ", ".join(c.active) or "none"
+    flat["sensitivity_definition"] = study.sensitivity.definition
     flat["constraints"] = {"F_r_c_N": result.constraints.F_r_c,
                            "F_z_c_N": result.constraints.F_z_c,
                            "source": result.constraints.source}
