@@ -6,6 +6,8 @@ differently give the same Jacobian Γ (a property of the sensor) and different p
 property of the expression).
 """
 
+import json
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -237,3 +239,30 @@ def test_cli_refuses_models_of_the_other_definition(tmp_path, capsys, monkeypatc
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "[sensitivity] definition is 'jacobian'" in err and "Traceback" not in err
+
+
+def test_seed_study_keeps_each_record_and_resumes(tmp_path):
+    """A second run of the same seed study reads every record back instead of refitting."""
+    from magtact.doe import load_bundled
+    from magtact.metamodel import prefitted_dir
+    from magtact.publication import seed_study
+    from magtact.study import load_study
+
+    study = _tiny(load_study("magone"))
+    kw = dict(seeds=[0], definitions=("jacobian", "published"), workers=1, sweep_n=21,
+              cache=tmp_path / "fits")
+    first = seed_study(study, load_bundled(), prefitted_dir(), **kw)
+    assert [r["definition"] for r in first] == ["jacobian", "published"]
+    assert len(list((tmp_path / "fits").glob("*.json"))) == 2
+    lines = []
+    again = seed_study(study, load_bundled(), prefitted_dir(), log=lines.append, **kw)
+    assert again == json.loads(json.dumps(first))
+    assert lines == [f"2 of 2 fits from {tmp_path / 'fits'}"]
+    other = _tiny(load_study("magone"))
+    from dataclasses import replace
+
+    other = replace(other, metamodel=replace(other.metamodel, generations=4))
+    lines = []
+    seed_study(other, load_bundled(), prefitted_dir(), log=lines.append,
+               **(kw | {"definitions": ("jacobian",)}))
+    assert not any("from" in m for m in lines)  # other settings: nothing reused

@@ -41,10 +41,10 @@ def reproduce_command(
                 f"unknown sensitivity definition {d!r} ([sensitivity] definition): choose "
                 f"from {', '.join(DEFINITIONS)}", param_hint="--definition")
     s = get_study(study)
-    result = reproduce(s, seeds=seeds, workers=workers, data=data,
+    folder = out_dir(out) / "publication"
+    result = reproduce(s, seeds=seeds, workers=workers, data=data, cache=folder / "fits",
                        definitions=tuple(definition) if definition else DEFINITIONS,
                        log=lambda m: console.print(m, highlight=False, markup=False))
-    folder = out_dir(out) / "publication"
     files = result.write(folder)
     files += publication_figures(folder)
     report = build_report(out)

@@ -50,8 +50,10 @@ class ShearBoundConditioning:
 
     @property
     def dF_z_rel(self) -> np.ndarray:
-        """(F_z,max(t_m) − F_z,max(t_tol)) / F_z,max(t_m) [-]."""
-        return (self.f_z_max_m - self.f_z_max_tol) / self.f_z_max_m
+        """(F_z,max(t_m) − F_z,max(t_tol)) / F_z,max(t_m) [-] (NaN where F_z,max(t_m) = 0)."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(self.f_z_max_m != 0,
+                            (self.f_z_max_m - self.f_z_max_tol) / self.f_z_max_m, np.nan)
 
 
 def shear_bound_conditioning(models: Responses | ModelSet, study: Study, H, *,

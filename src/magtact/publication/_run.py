@@ -78,7 +78,7 @@ class Reproduction:
 
 def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
               data: str | Path | None = None, models: str | Path | None = None,
-              definitions=DEFINITIONS, sweep_n: int = 201,
+              definitions=DEFINITIONS, sweep_n: int = 201, cache: str | Path | None = None,
               log: Callable[[str], None] | None = None) -> Reproduction:
     """Refit the force models with ``seeds`` seeds under each definition and compare.
 
@@ -98,6 +98,8 @@ def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
     definitions : sequence of str
     sweep_n : int
         Heights of each fit's exact-reduction sweep.
+    cache : path, optional
+        Folder of finished records (see :func:`magtact.publication.seed_study`).
     log : callable, optional
 
     Raises
@@ -132,7 +134,8 @@ def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
     chosen = tuple(range(first, first + seeds))
     n_workers = max(1, min(workers or os.cpu_count() or 1, seeds * len(definitions)))
     records = seed_study(study, ds, models, seeds=chosen, definitions=definitions,
-                         workers=n_workers, data_path=data, sweep_n=sweep_n, log=log)
+                         workers=n_workers, data_path=data, sweep_n=sweep_n, cache=cache,
+                         log=log)
     return Reproduction(study, chosen, records, spread(records), comparison(records),
                         time.perf_counter() - t0, n_workers)
 

@@ -10,6 +10,8 @@ worker processes, one (definition, seed) each.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import time
 import tomllib
@@ -34,6 +36,7 @@ N_T_CURVE = 41
 def seed_study(study: Study, ds, models_dir: str | Path, *, seeds: Sequence[int],
                definitions: Sequence[str] = DEFINITIONS, workers: int | None = None,
                data_path: str | Path | None = None, sweep_n: int = 201,
+               cache: str | Path | None = None,
                log: Callable[[str], None] | None = None) -> list[dict]:
     """Refit the force models with every seed under every definition and measure each fit.
 
@@ -53,6 +56,9 @@ def seed_study(study: Study, ds, models_dir: str | Path, *, seeds: Sequence[int]
         The data set file the workers load; None: the bundled MagOne data set.
     sweep_n : int
         Heights of the exact reduction's sweep per fit.
+    cache : path, optional
+        Folder where each finished record is kept (keyed by the study, data, field models and
+        settings), so that an interrupted study resumes and a repeated one is instant.
     log : callable, optional
         Progress messages (one per finished fit).
 
@@ -76,22 +82,78 @@ def seed_study(study: Study, ds, models_dir: str | Path, *, seeds: Sequence[int]
     jobs = [(d, s) for d in definitions for s in seeds]
     args = dict(study_toml=study.to_toml(), models_dir=str(models_dir),
                 data_path=None if data_path is None else str(data_path), sweep_n=sweep_n)
-    workers = max(1, min(workers or os.cpu_count() or 1, len(jobs)))
+    key = _key(args, ds, models_dir)
     records: dict[tuple[str, int], dict] = {}
+    for d, s in jobs:  # records of an earlier, possibly interrupted, run of the same study
+        rec = _cached(cache, key, d, s)
+        if rec is not None:
+            records[(d, s)] = rec
+    todo = [j for j in jobs if j not in records]
+    if log and records:
+        log(f"{len(records)} of {len(jobs)} fits from {cache}")
+
+    def done(job, rec):
+        records[job] = rec
+        _store(cache, key, *job, rec)
+        if log:
+            log(_line(rec, len(records), len(jobs)))
+
+    workers = max(1, min(workers or os.cpu_count() or 1, max(len(todo), 1)))
     if workers == 1:
-        for d, s in jobs:
-            records[(d, s)] = _measure(definition=d, seed=s, **args)
-            if log:
-                log(_line(records[(d, s)], len(records), len(jobs)))
-    else:
+        for d, s in todo:
+            done((d, s), _measure(definition=d, seed=s, **args))
+    elif todo:
         with ProcessPoolExecutor(max_workers=workers) as pool:
             futures = {pool.submit(_measure, definition=d, seed=s, **args): (d, s)
-                       for d, s in jobs}
+                       for d, s in todo}
             for fut in as_completed(futures):
-                records[futures[fut]] = fut.result()
-                if log:
-                    log(_line(records[futures[fut]], len(records), len(jobs)))
+                done(futures[fut], fut.result())
     return [records[j] for j in jobs]
+
+
+#: Version of a seed-study record; bump it when what a record holds or how it is measured
+#: changes, so that cached records of the old kind are not reused.
+RECORD_VERSION = 1
+
+
+def _key(args: dict, ds, models_dir) -> str:
+    """Hash of everything a record depends on: study, data, field models, settings."""
+    from ..metamodel import data_hash
+
+    h = hashlib.sha256()
+    h.update(json.dumps({k: v for k, v in args.items() if k != "models_dir"},
+                        sort_keys=True).encode())
+    h.update(data_hash(ds).encode())
+    for name in ("B_r.json", "B_z.json"):
+        h.update((Path(models_dir) / name).read_bytes())
+    h.update(str(RECORD_VERSION).encode())
+    return h.hexdigest()[:16]
+
+
+def _cache_file(cache, key: str, definition: str, seed: int) -> Path:
+    return Path(cache) / f"{definition}-{seed}-{key}.json"
+
+
+def _cached(cache, key, definition, seed) -> dict | None:
+    if cache is None:
+        return None
+    path = _cache_file(cache, key, definition, seed)
+    try:
+        rec = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    ok = isinstance(rec, dict) and rec.get("definition") == definition and rec.get("seed") == seed
+    return rec if ok else None
+
+
+def _store(cache, key, definition, seed, rec) -> None:
+    if cache is None:
+        return
+    path = _cache_file(cache, key, definition, seed)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(rec, allow_nan=True), encoding="utf-8")
+    tmp.replace(path)
 
 
 def _line(rec: dict, done: int, total: int) -> str:
