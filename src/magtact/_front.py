@@ -158,18 +158,13 @@ def design(study: Study | str | Path | None = None, *, data: str | Path | None =
     >>> result = magtact.design("magone")                      # doctest: +SKIP
     >>> result.chosen.H_mm, result.chosen.G_kPa                 # doctest: +SKIP
     """
-    from .doe import load_bundled, load_dataset, matches_study
+    from .doe import bundled_for, load_dataset
     from .metamodel import select_metamodels
     from .optimise import optimise, per_design
 
     if not isinstance(study, Study):
         study = load_study(study)
-    ds = load_dataset(data) if data is not None else load_bundled()
-    if data is None and not matches_study(ds, study):
-        raise MagtactError(f"study {study.name!r} differs from the built-in MagOne study in its "
-                           "geometry, material, levels or solver settings, so the bundled data "
-                           "set does not describe it: compute its DOE (magtact doe STUDY --out "
-                           "DOE) and pass data='DOE/doe.nc'")
+    ds = load_dataset(data) if data is not None else bundled_for(study)
     selection = select_metamodels(study, ds, refit=refit, log=log)
     opt = optimise(selection.models, study)
     definition = study.sensitivity.definition

@@ -9,7 +9,6 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from .._errors import MagtactError
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
 
@@ -27,7 +26,7 @@ def fit(
         "--G-kpa", help="Shear modulus of the figures [kPa]; default: original design.")] = None,
 ) -> None:
     """Fit B_r, B_z, F_r/G, F_z/G; write model JSON files, metamodels.md and figures."""
-    from ..doe import load_bundled, load_dataset, matches_study
+    from ..doe import bundled_for, load_dataset
     from ..metamodel import write_fit_outputs
     from ..report import fit_figures
     from ..sensitivity import compare_with_data
@@ -38,12 +37,7 @@ def fit(
         s = replace(s, metamodel=replace(s.metamodel, generations=generations))
     H = to_si(H_mm, "mm") if H_mm is not None else None
     G = to_si(G_kpa, "kPa") if G_kpa is not None else None
-    ds = load_dataset(data) if data is not None else load_bundled()
-    if data is None and not matches_study(ds, s):
-        raise MagtactError(f"study {s.name!r} differs from the built-in MagOne study in its "
-                         "geometry, material, levels or solver settings, so the bundled data "
-                         "set does not describe it: run `magtact doe STUDY --out DOE` and pass "
-                         "--data DOE/doe.nc")
+    ds = load_dataset(data) if data is not None else bundled_for(s)
     result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
                                       log=lambda msg: console.print(msg, highlight=False),
                                       gamma_check=compare_with_data, figures=fit_figures)

@@ -49,15 +49,10 @@ def study_models(study: Study, models: Path | None):
 
     if models is not None:
         return load_models(models, definition=study.sensitivity.definition)
-    from ..doe import load_bundled, matches_study
+    from ..doe import bundled_for
     from ..metamodel import select_metamodels
 
-    ds = load_bundled()
-    if not matches_study(ds, study):
-        raise MagtactError(f"study {study.name!r} differs from the built-in MagOne study in its "
-                         "geometry, material, levels or solver settings, so the bundled data "
-                         "set does not describe it: run `magtact doe STUDY --out DOE`, then "
-                         "`magtact fit STUDY --data DOE/doe.nc --out FIT`, and pass --models FIT")
+    ds = bundled_for(study)
     return select_metamodels(study, ds,
                              log=lambda m: console.print(m, highlight=False)).models
 

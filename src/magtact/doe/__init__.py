@@ -3,6 +3,7 @@
 from ._cache import CacheCorruptWarning, JobCache
 from ._dataset import (
     DOE_SECTIONS,
+    bundled_for,
     bundled_path,
     load_bundled,
     load_dataset,
@@ -15,6 +16,6 @@ from ._run import DOEFailed, JobFailure, RunStats, run_doe
 
 __all__ = [
     "DOE_SECTIONS", "CacheCorruptWarning", "DOEFailed", "JobCache", "JobFailure", "RunStats",
-    "bundled_path", "default_workers", "load_bundled", "load_dataset", "matches_study",
-    "run_doe", "save_dataset", "write_csv",
+    "bundled_for", "bundled_path", "default_workers", "load_bundled", "load_dataset",
+    "matches_study", "run_doe", "save_dataset", "write_csv",
 ]

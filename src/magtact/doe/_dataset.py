@@ -223,3 +223,22 @@ def matches_study(ds, study) -> bool:
     except Exception:  # a data set whose study no longer loads belongs to no study of today
         return False
     return all(getattr(other, name) == getattr(study, name) for name in DOE_SECTIONS)
+
+
+def bundled_for(study):
+    """The bundled MagOne data set, if it describes ``study`` (:func:`matches_study`).
+
+    Raises
+    ------
+    MagtactError
+        Naming what to run instead: the study's own DOE.
+    """
+    from .._errors import MagtactError
+
+    ds = load_bundled()
+    if not matches_study(ds, study):
+        raise MagtactError(f"study {study.name!r} differs from the built-in MagOne study in its "
+                           "geometry, material, levels or solver settings, so the data set "
+                           "bundled with magtact does not describe it: compute its own "
+                           "(magtact doe STUDY --out DOE) and pass DOE/doe.nc as its data")
+    return ds

@@ -210,26 +210,27 @@ def _load_any(path: Path, name: str):
     return model_from_dict(data, str(path))
 
 
+def _read_response(folder: Path, k: str):
+    """The model of response ``k`` from ``folder/<k>.json``, checked to hold that response."""
+    path = folder / f"{k}.json"
+    if not path.is_file():
+        raise MissingFileError(f"metamodel file not found: {path}")
+    m = _load_any(path, k)
+    if m.name != k or m.units != RESPONSES[k]:
+        raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "
+                           f"expected {k!r} [{RESPONSES[k]}]")
+    return m
+
+
 def load_field_models(folder: str | Path) -> tuple:
     """Read only ``B_r.json`` and ``B_z.json`` of a model folder (fitted or exact field).
 
     Raises
     ------
-    FileNotFoundError, ValueError
+    MissingFileError, MagtactError
         As :func:`load_models`.
     """
-    folder = Path(folder)
-    out = []
-    for k in ("B_r", "B_z"):
-        path = folder / f"{k}.json"
-        if not path.is_file():
-            raise FileNotFoundError(f"metamodel file not found: {path}")
-        m = _load_any(path, k)
-        if m.name != k or m.units != RESPONSES[k]:
-            raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "
-                             f"expected {k!r} [{RESPONSES[k]}]")
-        out.append(m)
-    return tuple(out)
+    return tuple(_read_response(Path(folder), k) for k in ("B_r", "B_z"))
 
 
 def load_models(folder: str | Path, B_model=None, definition: str | None = None) -> ModelSet:
@@ -257,16 +258,8 @@ def load_models(folder: str | Path, B_model=None, definition: str | None = None)
     if B_model is not None:
         models["B_r"], models["B_z"] = B_model
     for k in RESPONSES:
-        if k in models:
-            continue
-        path = folder / f"{k}.json"
-        if not path.is_file():
-            raise MissingFileError(f"metamodel file not found: {path}")
-        m = _load_any(path, k)
-        if m.name != k or m.units != RESPONSES[k]:
-            raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "
-                             f"expected {k!r} [{RESPONSES[k]}]")
-        models[k] = m
+        if k not in models:
+            models[k] = _read_response(folder, k)
     for k in ("f_r", "f_z"):
         if isinstance(models[k], FieldForceModel):
             models[k] = ComposedForce(models[k], models["B_r"], models["B_z"])

@@ -108,18 +108,14 @@ def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
         ``seeds`` < 1, an unknown definition, or the bundled data set with a study it was not
         computed for.
     """
-    from ..doe import load_bundled, load_dataset, matches_study
+    from ..doe import bundled_for, load_dataset
     from ..metamodel import fit_models, prefitted_dir
     from ..metamodel import save_model as save_models_field
 
     if not isinstance(seeds, int) or seeds < 1:
         raise MagtactError(f"--seeds must be a whole number of at least 1, got {seeds!r}")
     t0 = time.perf_counter()
-    ds = load_dataset(data) if data is not None else load_bundled()
-    if data is None and not matches_study(ds, study):
-        raise MagtactError("the bundled DOE data set belongs to the built-in MagOne study, whose "
-                         "geometry, material or levels differ from this study's: give the "
-                         "study's own data set with --data (from `magtact doe`)")
+    ds = load_dataset(data) if data is not None else bundled_for(study)
     if models is None:
         if data is None and study.metamodel.b_model == "fit":
             models = prefitted_dir()  # fitted to this very data set
