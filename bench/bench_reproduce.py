@@ -18,7 +18,14 @@ import os
 import platform
 from pathlib import Path
 
-from magtact.publication import cell_text, reproduce
+from magtact.publication import (
+    Reproduction,
+    cell_text,
+    comparison,
+    publication_text,
+    reproduce,
+    spread,
+)
 from magtact.report import publication_figures
 from magtact.study import load_study
 
@@ -29,9 +36,21 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--cache", default=None,
+                        help="folder of finished records (default: none, every fit is timed)")
+    parser.add_argument("--summarise", action="store_true",
+                        help="rebuild the summaries from the records of the last run's "
+                             "publication.json (no fitting; its wall time is kept)")
     args = parser.parse_args()
     study = load_study("magone")
-    result = reproduce(study, seeds=args.seeds, workers=args.workers, log=print)
+    if args.summarise:
+        doc = json.loads((RESULTS / "reproduce" / "publication.json").read_text())
+        recs = doc["records"]
+        result = Reproduction(study, tuple(doc["seeds"]), recs, spread(recs), comparison(recs),
+                              doc["wall_time_s"], doc["workers"])
+    else:
+        result = reproduce(study, seeds=args.seeds, workers=args.workers, cache=args.cache,
+                           log=print)
     folder = RESULTS / "reproduce"
     result.write(folder)
     publication_figures(folder)
@@ -46,7 +65,8 @@ def main() -> None:
                                                                 if "counts" in v else {})
                        for k, v in figs.items()} for d, figs in result.spread.items()},
         "comparison": [{"quantity": r["quantity"], "unit": r["unit"],
-                        "scale_free": r["scale_free"], "publication": r["publication"]}
+                        "scale_free": r["scale_free"],
+                        "publication": publication_text(r["publication"])}
                        | {k: cell_text(v) for k, v in r.items() if "/" in k}
                        for r in result.comparison],
     }

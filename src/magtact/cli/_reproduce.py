@@ -30,7 +30,7 @@ def reproduce_command(
 ) -> None:
     """Refit the force models with N seeds under the Jacobian and the published definition of
     Γ, rerun the optimisation, and compare with the publication (CSV, JSON, figures, report)."""
-    from ..publication import DEFINITIONS, cell_text, reproduce
+    from ..publication import DEFINITIONS, cell_text, publication_text, reproduce
     from ..report import build_report, publication_figures
 
     if seeds < 1:
@@ -55,7 +55,8 @@ def reproduce_command(
         table.add_column(c, justify="left" if c == "quantity" else "right")
     for r in result.comparison:
         table.add_row(escape(f"{r['quantity']} [{r['unit']}]"),
-                      "yes" if r["scale_free"] else "no", f"{r['publication']:.3g}",
+                      "yes" if r["scale_free"] else "no",
+                      escape(publication_text(r["publication"])),
                       *(escape(cell_text(r[c])) for c in cols))
     console.print(table)
     console.print(f"{len(files)} files in {folder}; report {report} "

@@ -2,9 +2,9 @@
 sensitivity definitions, the side-by-side table, and the publication's own numbers."""
 
 from . import _reference as reference
-from ._compare import cell_text, comparison, spread
+from ._compare import cell_text, comparison, publication_text, spread
 from ._run import Reproduction, reproduce
 from ._seeds import DEFINITIONS, count_branches, seed_study, trend
 
 __all__ = ["DEFINITIONS", "Reproduction", "cell_text", "comparison", "count_branches",
-           "reference", "reproduce", "seed_study", "spread", "trend"]
+           "publication_text", "reference", "reproduce", "seed_study", "spread", "trend"]

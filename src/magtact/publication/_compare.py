@@ -62,7 +62,8 @@ def spread(records: list[dict]) -> dict[str, dict[str, dict]]:
             hi = float(ok.max()) if ok.size else math.nan
             figs[key] = {"label": label, "unit": unit, "values": vals.tolist(), "n": int(ok.size),
                          "min": lo, "max": hi,
-                         "max_over_min": hi / lo if ok.size and lo != 0 else math.nan}
+                         "max_over_min": (hi / lo if lo != 0 else math.inf if hi > 0 else 1.0)
+                         if ok.size else math.nan}
         trends = [r.get("gamma_z_trend", "?") for r in recs]
         figs["gamma_z_trend"] = {"label": "Γ_z along t at the largest H, θ_max", "unit": "-",
                                  "values": trends,
@@ -72,6 +73,17 @@ def spread(records: list[dict]) -> dict[str, dict[str, dict]]:
                                      if r["definition"] == d and not r["ok"]]}
         out[d] = figs
     return out
+
+
+def _curve(rec: dict) -> list:
+    c = rec.get("gamma_z_curve") or {}
+    return c.get("Gamma_z") or [math.nan]
+
+
+def _argmin_t(rec: dict) -> float:
+    c = rec.get("gamma_z_curve") or {}
+    g = np.asarray(c.get("Gamma_z", []), dtype=float)
+    return float(np.asarray(c["t"])[np.argmin(g)]) if g.size and np.ptp(g) > 0 else math.nan
 
 
 def _ratio(a, b) -> float:
@@ -152,6 +164,10 @@ def comparison(records: list[dict]) -> list[dict]:
         lambda r: _get(r, "chosen_reference.G_kPa"), True)
     row("Γ_z increasing along t at the largest H, θ_max (fraction of seeds)", "-", True, 1.0,
         lambda r: float(r.get("gamma_z_trend") == "increasing"), False)
+    row("Γ_z(t = 1) / Γ_z(t = 0) at the largest H, θ_max", "-", True, "> 1 (increasing)",
+        lambda r: _ratio(_curve(r)[-1], _curve(r)[0]), False)
+    row("t where Γ_z is smallest along the path at the largest H, θ_max", "-", True,
+        "0 (increasing)", lambda r: _argmin_t(r), False)
     _printed_feasibility(rows, records)
     return rows
 
@@ -167,10 +183,9 @@ def _printed_feasibility(rows: list[dict], records: list[dict]) -> None:
                 d = key.split("/")[0]
                 G = [_get(r, "chosen.G_kPa") for r in records if r["definition"] == d and r["ok"]]
                 G = [g for g in G if np.isfinite(_num(g))]
-                if G:
-                    row[key] = {"text": f"infeasible: needs G ≥ {min(G) * PRINTED:.3g} kPa "
-                                        f"as printed, above the printed range "
-                                        f"({_printed_range()})"}
+                if G:  # the constraints are in N: the same G in Pa under either reading
+                    row[key] = {"text": f"infeasible: needs G ≥ {min(G):.3g} kPa, above the "
+                                        f"printed range ({_printed_range()})"}
 
 
 def _printed_range() -> str:
@@ -178,6 +193,11 @@ def _printed_range() -> str:
 
     lo, hi = from_si(magone_printed().design.G, "kPa")
     return f"{lo:g}–{hi:g} kPa"
+
+
+def publication_text(value) -> str:
+    """The publication's cell: a number or a statement."""
+    return f"{value:.3g}" if isinstance(value, int | float) else str(value)
 
 
 def cell_text(cell: dict, digits: int = 3) -> str:

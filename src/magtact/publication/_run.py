@@ -14,7 +14,7 @@ from tempfile import mkdtemp
 
 from .._errors import MagtactError
 from ..study import Study
-from ._compare import FIGURES, cell_text, comparison, spread
+from ._compare import FIGURES, cell_text, comparison, publication_text, spread
 from ._seeds import DEFINITIONS, seed_study
 
 
@@ -69,7 +69,7 @@ class Reproduction:
                                                "max", "max_over_min"], rows))
         cols = [k for k in self.comparison[0] if "/" in k] if self.comparison else []
         rows = [[r["quantity"], r["unit"], "yes" if r["scale_free"] else "no",
-                 _fmt(r["publication"])] + [cell_text(r[c]) for c in cols]
+                 publication_text(r["publication"])] + [cell_text(r[c]) for c in cols]
                 for r in self.comparison]
         files.append(_csv(out / "comparison.csv", ["quantity", "unit", "scale_free",
                                                    "publication"] + cols, rows))

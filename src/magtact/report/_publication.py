@@ -19,7 +19,8 @@ CAPTIONS = {
     "seed_spread": "Γ_r,max and Γ_z,max of the original design and the chosen height H* for "
                    "every GP seed, per sensitivity definition (log scale for Γ). The Jacobian "
                    "is a property of the sensor; the published partial derivative is a "
-                   "property of the fitted expression.",
+                   "property of the fitted expression; a seed whose expression does not use "
+                   "B has Γ = 0, below the log scale.",
     "gamma_z_along_t": "Γ_z along the loading path at the largest H and θ_max, one line per "
                        "seed; the publication reports Γ_z increasing monotonically with t.",
     "gamma_over_H": "Γ_r,max and Γ_z,max over H at the original design's G, one line per seed "
@@ -81,11 +82,12 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
                 "<code>magtact reproduce --out FOLDER</code> (about ten minutes on two cores) "
                 "to add the side-by-side table and its figures.</div>")
     cols = [k for k in doc["comparison"][0] if "/" in k] if doc["comparison"] else []
-    from ..publication import cell_text
+    from ..publication import cell_text, publication_text
 
     rows = "".join(
         f'<tr><td class="l">{_e(r["quantity"])}</td><td>{_e(r["unit"])}</td>'
-        f'<td>{"yes" if r["scale_free"] else "no"}</td><td>{r["publication"]:.3g}</td>'
+        f'<td>{"yes" if r["scale_free"] else "no"}</td>'
+        f'<td>{_e(publication_text(r["publication"]))}</td>'
         + "".join(f"<td>{_e(cell_text(r[c]))}</td>" for c in cols) + "</tr>"
         for r in doc["comparison"])
     labels = "".join(f"<th>magtact, {_e(c.split('/')[0])}, G "
