@@ -38,13 +38,14 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--cache", default=None,
                         help="folder of finished records (default: none, every fit is timed)")
-    parser.add_argument("--summarise", action="store_true",
-                        help="rebuild the summaries from the records of the last run's "
-                             "publication.json (no fitting; its wall time is kept)")
+    parser.add_argument("--summarise", metavar="FOLDER", default=None,
+                        help="rebuild the summaries from FOLDER/publication.json of an earlier "
+                             "run (e.g. of `magtact reproduce`; no fitting, its wall time is "
+                             "kept)")
     args = parser.parse_args()
     study = load_study("magone")
     if args.summarise:
-        doc = json.loads((RESULTS / "reproduce" / "publication.json").read_text())
+        doc = json.loads((Path(args.summarise) / "publication.json").read_text())
         recs = doc["records"]
         result = Reproduction(study, tuple(doc["seeds"]), recs, spread(recs), comparison(recs),
                               doc["wall_time_s"], doc["workers"])

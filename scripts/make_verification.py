@@ -258,6 +258,32 @@ def optimise_section(r: Results) -> list[str]:
     return out
 
 
+def publication_section(r: Results) -> list[str]:
+    if "reproduce" not in r.files:
+        return []
+    p = r["reproduce"]
+    out = ["## The seed study against the publication", "",
+           f"Source: {r.source('reproduce')} (`bench/bench_reproduce.py`, "
+           "`magtact reproduce`); docs/method.md §6. The force models refitted with "
+           f"{len(p['seeds'])} GP seeds under each definition of Γ on the bundled DOE, "
+           f"{p['workers']} workers, {p['wall_time_s']:.0f} s.", "",
+           "Spread across seeds (max / min):", ""]
+    rows = []
+    for d, figs in p["spread"].items():
+        for f in figs.values():
+            if "min" in f and f.get("min") is not None:
+                mm = f.get("max_over_min")
+                rows.append([d, f["label"], f["unit"], f"{f['min']:.4g}", f"{f['max']:.4g}",
+                             "∞" if mm is None or mm == float("inf") else f"{mm:.3g}"])
+    out += table(["definition", "figure", "unit", "min", "max", "max / min"], rows)
+    out += ["Beside the publication (median [min, max] over seeds; G as magone reads it):", ""]
+    cols = [k for k in p["comparison"][0] if k.endswith("/study")]
+    out += table(["quantity", "unit", "scale-free", "publication", *cols],
+                 [[c["quantity"], c["unit"], "yes" if c["scale_free"] else "no",
+                   c["publication"], *(c[k] for k in cols)] for c in p["comparison"]])
+    return out
+
+
 def timing_section(r: Results) -> list[str]:
     d, run = r["doe"], r["run"]
     p = d["path_job_wall_time_s"]
@@ -292,7 +318,7 @@ def document(folder: Path) -> str:
              "`bench/results`; rerun a benchmark, then `python scripts/make_verification.py`.",
              ""]
     for section in (field_section, mechanics_section, fit_section, gamma_section,
-                    mesh_effect_section, optimise_section, timing_section):
+                    mesh_effect_section, optimise_section, publication_section, timing_section):
         lines += section(r)
     return "\n".join(lines).rstrip() + "\n"
 

@@ -32,8 +32,8 @@ def _get(rec: dict, path: str):
 
 #: Per-seed figures whose spread is reported: key, label, unit, path in the record.
 FIGURES: tuple[tuple[str, str, str, str], ...] = (
-    ("acc_f_r", "held-out max |error| / range of F_r", "-", "accuracy.f_r.test_max_err_over_range"),
-    ("acc_f_z", "held-out max |error| / range of F_z", "-", "accuracy.f_z.test_max_err_over_range"),
+    ("acc_f_r", "held-out max error / range of F_r", "-", "accuracy.f_r.test_max_err_over_range"),
+    ("acc_f_z", "held-out max error / range of F_z", "-", "accuracy.f_z.test_max_err_over_range"),
     ("Gamma_r_orig", "Γ_r,max at the original design", "N/T", "original.Gamma_r_max"),
     ("Gamma_z_orig", "Γ_z,max at the original design", "N/T", "original.Gamma_z_max"),
     ("H_star", "H* (default constraints)", "mm", "chosen.H_mm"),
