@@ -88,7 +88,7 @@ def main() -> None:
         "dataset": str(path) if path else "not written (failed paths)",
         "versions": json.loads(ds.attrs["versions"]),
         "source_revision": ds.attrs["source_revision"],
-        "path_solver_code_sha256": ds.attrs["path_solver_code_sha256"],
+        "path_model_version": ds.attrs.get("path_model_version"),
     }
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")

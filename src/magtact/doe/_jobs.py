@@ -9,9 +9,10 @@ Two kinds of job (docs/method.md §4):
   on the deformation, so it is one cheap job).
 
 A job's key is the SHA-256 of a canonical JSON text of every input that can change its result:
-the study settings it reads (in SI), its own levels, the identity and source code of the solver
-(a hash of the source files of the solver's sub-packages and of the geometry) and the versions of
-the numerical libraries. Settings a job does not read (the other levels, the design ranges, the
+the study settings it reads (in SI), its own levels, the solver's name and model version
+(``magtact.mechanics.MODEL_VERSION``, ``magtact.magnetics.MODEL_VERSION``, bumped by hand when a
+change alters results; editing a comment does not invalidate the cache) and the versions of the
+numerical libraries. Settings a job does not read (the other levels, the design ranges, the
 constraints, ``theta_max`` and, for path jobs, the G levels) are left out, so changing them reuses
 the cached jobs.
 
@@ -22,15 +23,11 @@ dask); they never raise for a failed solve but return a :class:`Outcome` holding
 from __future__ import annotations
 
 import dataclasses
-import functools
 import hashlib
 import json
-import sys
 import time
 import traceback
 from dataclasses import dataclass
-from importlib import resources
-from pathlib import Path
 
 import numpy as np
 
@@ -45,10 +42,9 @@ PATH_SCALARS = ("G", "newton_iterations", "cutbacks", "wall_time", "n_dofs", "n_
 #: Libraries whose version is part of a path (resp. field) job's key.
 PATH_LIBS = ("numpy", "scipy", "felupe", "gmsh", "pypardiso")
 FIELD_LIBS = ("numpy", "scipy", "scikit-fem", "gmsh", "magpylib")
-#: magtact sub-packages whose source code is part of a path (resp. field) job's key.
-PATH_PACKAGES = ("mechanics", "geometry")
-FIELD_PACKAGES = ("magnetics", "geometry")
-_ROOT = Path(str(resources.files("magtact")))  # the installed magtact package folder
+#: magtact sub-package whose MODEL_VERSION is part of a path (resp. field) job's key.
+PATH_MODEL = "mechanics"
+FIELD_MODEL = "magnetics"
 
 
 @dataclass(frozen=True)
@@ -104,32 +100,20 @@ class Outcome:
 
 
 # ---- keys ---------------------------------------------------------------------------------------
-@functools.cache
-def source_fingerprint(*parts: str) -> str:
-    """SHA-256 of the ``.py`` sources under the given magtact sub-packages or files.
+def solver_identity(func, package: str) -> dict:
+    """Name and model version of a solver function.
 
-    ``parts`` are paths relative to the magtact package folder (``"mechanics"``) or absolute
-    file paths. A missing part contributes its name only.
+    The version is the function's own ``model_version`` attribute if it has one, else the
+    ``MODEL_VERSION`` of the magtact sub-package ``package`` when the function belongs to it;
+    a solver from elsewhere is identified by its name (and ``model_version`` if it sets one).
     """
-    h = hashlib.sha256()
-    for part in parts:
-        p = Path(part) if Path(part).is_absolute() else _ROOT / part
-        files = sorted(p.rglob("*.py")) if p.is_dir() else [p] if p.is_file() else []
-        h.update(f"<{part}:{len(files)}>".encode())
-        for f in files:
-            h.update(str(f.relative_to(p) if p.is_dir() else f.name).encode())
-            h.update(f.read_bytes())
-    return h.hexdigest()
+    import importlib
 
-
-def solver_identity(func, packages: tuple[str, ...]) -> dict:
-    """Name and source fingerprint of a solver function and the sub-packages it relies on."""
-    module = sys.modules.get(func.__module__)
-    extra = getattr(module, "__file__", None)
-    parts = packages + ((str(Path(extra).resolve()),) if extra else ())
-    return {"name": f"{func.__module__}.{func.__qualname__}", "code": source_fingerprint(*parts)}
-
-
+    name = f"{func.__module__}.{func.__qualname__}"
+    version = getattr(func, "model_version", None)
+    if version is None and func.__module__.startswith(f"magtact.{package}"):
+        version = importlib.import_module(f"magtact.{package}").MODEL_VERSION
+    return {"name": name, "model_version": version}
 
 
 def digest(payload: dict) -> str:
@@ -175,7 +159,7 @@ def plan(study: Study, path_solver, field_solver) -> tuple[FieldJob, list[PathJo
     t = tuple(float(x) for x in study.t_levels)
     thetas = tuple(float(x) for x in study.theta_levels)
     Hs = tuple(float(x) for x in study.H_levels)
-    p_inputs = path_key_inputs(study, solver_identity(path_solver, PATH_PACKAGES))
+    p_inputs = path_key_inputs(study, solver_identity(path_solver, PATH_MODEL))
     Gs: tuple[float | None, ...] = (
         (None,) if study.mechanics.scale_in_G else tuple(float(x) for x in study.G_levels))
     paths = []
@@ -185,7 +169,7 @@ def plan(study: Study, path_solver, field_solver) -> tuple[FieldJob, list[PathJo
                 key = digest({**p_inputs, "theta": theta, "H": H, "G": G, "t": t})
                 paths.append(PathJob(study, theta, H, G, t, key))
     solver = study.magnetics.solver
-    f_inputs = field_key_inputs(study, solver_identity(field_solver, FIELD_PACKAGES))
+    f_inputs = field_key_inputs(study, solver_identity(field_solver, FIELD_MODEL))
     fkey = digest({**f_inputs, "solver_name": solver, "t": t, "theta": thetas, "H": Hs})
     return FieldJob(study, t, thetas, Hs, solver, fkey), paths
 

@@ -15,7 +15,7 @@ from ..study import Study
 from ._cache import JobCache
 from ._dataset import assemble
 from ._executor import Task, default_workers, execute
-from ._jobs import FIELD_PACKAGES, PATH_PACKAGES, plan, run_field, run_path, solver_identity
+from ._jobs import FIELD_MODEL, PATH_MODEL, plan, run_field, run_path, solver_identity
 from ._progress import Display
 
 
@@ -161,15 +161,17 @@ def _executor_name(workers: int | None, scheduler: str | None) -> str:
 
 
 def _code_attrs(path_solver, field_solver) -> dict:
-    """Solver names, the source hashes that enter the cache keys, and the source revision."""
-    path = solver_identity(path_solver, PATH_PACKAGES)
-    field = solver_identity(field_solver, FIELD_PACKAGES)
+    """Solver names, the model versions that enter the cache keys, and the source revision."""
+    path = solver_identity(path_solver, PATH_MODEL)
+    field = solver_identity(field_solver, FIELD_MODEL)
     try:
         rev = subprocess.run(["git", "describe", "--always", "--dirty", "--abbrev=12"],
                              cwd=Path(__file__).parent, capture_output=True, text=True,
                              timeout=10).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         rev = ""
-    return {"path_solver_function": path["name"], "path_solver_code_sha256": path["code"],
-            "field_solver_function": field["name"], "field_solver_code_sha256": field["code"],
+    return {"path_solver_function": path["name"],
+            "path_model_version": str(path["model_version"]),
+            "field_solver_function": field["name"],
+            "field_model_version": str(field["model_version"]),
             "source_revision": rev or "unknown (not a git checkout)"}

@@ -1,11 +1,17 @@
 """Magnetic field of the magnet: exact closed form, axisymmetric FE, field at the Hall point."""
 
-from ._exact import cel, cylinder_field
-from ._fe import FieldSolution, solve_fe, solve_field
-from ._hall import SOLVERS, hall_field, magnet_field
-from ._outputs import CSV_COLUMNS, field_grid, write_field_csv, write_field_outputs
+#: Version of the field model as the DOE cache keys see it. Bump it when a change makes the
+#: field at the Hall point differ: the FE mesh or formulation, the exact kernel, the Hall point's
+#: position (magtact.geometry). Comments, refactoring and speed-ups leave it alone.
+MODEL_VERSION = 1
+
+from ._exact import cel, cylinder_field  # noqa: E402
+from ._fe import FieldSolution, solve_fe, solve_field  # noqa: E402
+from ._hall import SOLVERS, hall_field, magnet_field  # noqa: E402
+from ._outputs import CSV_COLUMNS, field_grid, write_field_csv, write_field_outputs  # noqa: E402
 
 __all__ = [
-    "CSV_COLUMNS", "SOLVERS", "FieldSolution", "cel", "cylinder_field", "field_grid", "hall_field",
-    "magnet_field", "solve_fe", "solve_field", "write_field_csv", "write_field_outputs",
+    "CSV_COLUMNS", "MODEL_VERSION", "SOLVERS", "FieldSolution", "cel", "cylinder_field",
+    "field_grid", "hall_field", "magnet_field", "solve_fe", "solve_field", "write_field_csv",
+    "write_field_outputs",
 ]
