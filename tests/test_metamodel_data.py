@@ -44,4 +44,4 @@ def synthetic_doe(study, n_t: int = 11) -> xr.Dataset:
          "F_r": (d4, fr[..., None] * G, {"units": "N"}),
          "F_z": (d4, fz[..., None] * G, {"units": "N"})},
         coords={"t": t, "theta": th, "H": H, "G": G},
-        attrs={"synthetic": "analytic test stand-in"})
+        attrs={"synthetic": "analytic test stand-in", "study_toml": study.to_toml()})

@@ -241,6 +241,7 @@ def test_cli_refuses_models_of_the_other_definition(tmp_path, capsys, monkeypatc
     assert "[sensitivity] definition is 'jacobian'" in err and "Traceback" not in err
 
 
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # the tiny GP's models are rough
 def test_seed_study_keeps_each_record_and_resumes(tmp_path):
     """A second run of the same seed study reads every record back instead of refitting."""
     from magtact.doe import load_bundled
