@@ -13,12 +13,13 @@ reads back to the same double, so ``parse_expression(format_expression(e)) == e`
 
 from __future__ import annotations
 
+import ast
 import io
+import math
 import token
 import tokenize
 
 import sympy as sp
-from sympy.parsing.sympy_parser import auto_number, parse_expr
 from sympy.printing.str import StrPrinter
 
 from ._symbols import SYMBOLS
@@ -33,7 +34,16 @@ CONSTANTS: dict[str, sp.Expr] = {"E": sp.E, "pi": sp.pi}
 #: Operator tokens a model expression may contain (``^`` is read as ``**``, as Operon writes it).
 OPERATORS = frozenset({"+", "-", "*", "/", "**", "^", "(", ")"})
 
-_MAX_CHARS = 200_000
+#: Longest expression text [characters].
+MAX_CHARS = 100_000
+#: Most tokens (numbers, names, operators) in one expression.
+MAX_TOKENS = 20_000
+#: Deepest nesting of the expression tree (parentheses, operators, function calls).
+MAX_DEPTH = 200
+#: Largest magnitude of a constant exponent.
+MAX_EXPONENT = 100
+
+_BINARY = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
 
 
 def parse_expression(text: str, allowed_symbols=None) -> sp.Expr:
@@ -60,8 +70,9 @@ def parse_expression(text: str, allowed_symbols=None) -> sp.Expr:
         raise ValueError(f"model expression must be a string, got {type(text).__name__}")
     if not text.strip():
         raise ValueError("model expression is empty")
-    if len(text) > _MAX_CHARS:
-        raise ValueError(f"model expression longer than {_MAX_CHARS} characters")
+    if len(text) > MAX_CHARS:
+        raise ValueError(f"model expression has {len(text)} characters; at most {MAX_CHARS} "
+                         "are read")
     if isinstance(allowed_symbols, dict):
         symbols = dict(allowed_symbols)
     else:
@@ -69,40 +80,137 @@ def parse_expression(text: str, allowed_symbols=None) -> sp.Expr:
     names = set(symbols)
     local = symbols | FUNCTIONS | CONSTANTS
     pieces = []
+    depth = 0
     try:
-        tokens = list(tokenize.generate_tokens(io.StringIO(text).readline))
+        tokens = tokenize.generate_tokens(io.StringIO(text).readline)
+        for tok in tokens:
+            kind, s = tok.type, tok.string
+            if kind in (token.NEWLINE, token.NL, token.ENDMARKER, token.INDENT, token.DEDENT):
+                continue
+            if kind == token.NUMBER:
+                if any(c in s.lower() for c in "jx_") or s.lower().startswith(("0o", "0b")):
+                    raise ValueError(f"model expression: number {s!r} is not allowed")
+                if not math.isfinite(float(s)):
+                    raise ValueError(f"model expression: number {_short(s, 40)} is outside the "
+                                     "range of a double")
+            elif kind == token.NAME:
+                if s not in local:
+                    raise ValueError(f"model expression: name {s!r} is not allowed (allowed: "
+                                     f"symbols {sorted(names)}, functions {sorted(FUNCTIONS)}, "
+                                     f"constants {sorted(CONSTANTS)})")
+            elif kind == token.OP:
+                if s not in OPERATORS:
+                    raise ValueError(f"model expression: operator {s!r} is not allowed")
+                s = "**" if s == "^" else s
+                depth += (s == "(") - (s == ")")
+                if depth > MAX_DEPTH:
+                    raise ValueError(f"model expression nests parentheses deeper than "
+                                     f"{MAX_DEPTH} levels")
+            else:
+                raise ValueError(f"model expression: token {s!r} is not allowed")
+            pieces.append(s)
+            if len(pieces) > MAX_TOKENS:
+                raise ValueError(f"model expression has more than {MAX_TOKENS} tokens")
     except (tokenize.TokenError, IndentationError, SyntaxError) as exc:
         raise ValueError(f"model expression is not well formed: {exc}") from None
-    for tok in tokens:
-        kind, s = tok.type, tok.string
-        if kind in (token.NEWLINE, token.NL, token.ENDMARKER, token.INDENT, token.DEDENT):
-            continue
-        if kind == token.NUMBER:
-            if any(c in s.lower() for c in "jx_") or s.lower().startswith(("0o", "0b")):
-                raise ValueError(f"model expression: number {s!r} is not allowed")
-        elif kind == token.NAME:
-            if s not in local:
-                raise ValueError(f"model expression: name {s!r} is not allowed (allowed: "
-                                 f"symbols {sorted(names)}, functions {sorted(FUNCTIONS)}, "
-                                 f"constants {sorted(CONSTANTS)})")
-        elif kind == token.OP:
-            if s not in OPERATORS:
-                raise ValueError(f"model expression: operator {s!r} is not allowed")
-            s = "**" if s == "^" else s
-        else:
-            raise ValueError(f"model expression: token {s!r} is not allowed")
-        pieces.append(s)
-    safe = " ".join(pieces)
     try:
-        expr = parse_expr(safe, local_dict=local,
-                          global_dict={"__builtins__": {}, "Integer": sp.Integer,
-                                       "Float": _double, "Rational": sp.Rational},
-                          transformations=(auto_number,))
-    except (SyntaxError, TypeError, tokenize.TokenError, ZeroDivisionError) as exc:
+        tree = ast.parse(" ".join(pieces), mode="eval")
+    except (SyntaxError, ValueError) as exc:
         raise ValueError(f"model expression is not well formed: {exc}") from None
+    except (RecursionError, MemoryError):
+        raise ValueError(f"model expression nests deeper than {MAX_DEPTH} levels") from None
+    _check_depth(tree.body)
+    try:
+        expr = _build(tree.body, local)
+    except (TypeError, ZeroDivisionError, OverflowError, RecursionError, MemoryError) as exc:
+        raise ValueError(f"model expression is not well formed: {type(exc).__name__}: "
+                         f"{str(exc)[:200]}") from None
     if not isinstance(expr, sp.Expr) or expr.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
-        raise ValueError(f"model expression does not evaluate to a finite expression: {text!r}")
+        raise ValueError(f"model expression does not evaluate to a finite expression: "
+                         f"{_short(text)}")
+    for number in expr.atoms(sp.Number):
+        if not math.isfinite(_as_float(number)):
+            raise ValueError(f"model expression: constant {_short(str(number))} is outside the "
+                             "range of a double")
     return expr
+
+
+def _short(text: str, n: int = 80) -> str:
+    return repr(text) if len(text) <= n else repr(text[:n]) + f"... ({len(text)} characters)"
+
+
+def _check_depth(root: ast.AST) -> None:
+    """Refuse a tree deeper than :data:`MAX_DEPTH` (checked without recursion)."""
+    stack = [(root, 1)]
+    while stack:
+        node, d = stack.pop()
+        if d > MAX_DEPTH:
+            raise ValueError(f"model expression nests deeper than {MAX_DEPTH} levels")
+        stack.extend((child, d + 1) for child in ast.iter_child_nodes(node))
+
+
+def _as_float(value: sp.Expr) -> float:
+    """A constant as a double (inf if it is beyond the double range)."""
+    try:
+        return float(value)
+    except (OverflowError, TypeError, ValueError):
+        return math.inf
+
+
+def _build(node: ast.AST, local: dict) -> sp.Expr:
+    """SymPy object of a checked syntax tree (numbers, names, + - * / **, unary ±, calls)."""
+    if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+        if isinstance(node.value, float):
+            if not math.isfinite(node.value):
+                raise ValueError(f"model expression: number {node.value!r} is not a finite "
+                                 "double")
+            return _double(repr(node.value))
+        if node.value.bit_length() > 1024:
+            raise ValueError("model expression: integer constant outside the range of a double")
+        return sp.Integer(node.value)
+    if isinstance(node, ast.Name):
+        if node.id in FUNCTIONS:
+            raise ValueError(f"model expression: function {node.id!r} must be called, as in "
+                             f"{node.id}(t)")
+        return local[node.id]
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        value = _build(node.operand, local)
+        return -value if isinstance(node.op, ast.USub) else value
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
+        left, right = _build(node.left, local), _build(node.right, local)
+        if isinstance(node.op, ast.Add):
+            return left + right
+        if isinstance(node.op, ast.Sub):
+            return left - right
+        if isinstance(node.op, ast.Mult):
+            return left * right
+        if isinstance(node.op, ast.Div):
+            return left / right
+        return _power(left, right)
+    if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+            and node.func.id in FUNCTIONS and len(node.args) == 1 and not node.keywords):
+        return FUNCTIONS[node.func.id](_build(node.args[0], local))
+    raise ValueError(f"model expression is not well formed: {ast.unparse(node)[:80]!r} is not "
+                     "a number, symbol, function call or arithmetic")
+
+
+def _power(base: sp.Expr, exponent: sp.Expr) -> sp.Expr:
+    """``base ** exponent`` with a constant exponent bounded by :data:`MAX_EXPONENT`."""
+    if not exponent.free_symbols:
+        e = _as_float(exponent)
+        if not abs(e) <= MAX_EXPONENT:
+            raise ValueError(f"model expression: exponent {_short(str(exponent), 40)} exceeds "
+                             f"the largest allowed magnitude {MAX_EXPONENT}")
+        if not base.free_symbols:
+            b = _as_float(base)
+            try:
+                value = abs(b) ** e if b != 0 or e >= 0 else math.inf
+            except OverflowError:
+                value = math.inf
+            if not math.isfinite(value):
+                raise ValueError(f"model expression: constant {_short(str(base), 40)}**"
+                                 f"{_short(str(exponent), 40)} is outside the range of a double")
+    return base ** exponent
 
 
 def _double(text: str) -> sp.Float:
