@@ -20,6 +20,19 @@ SCALE: dict[str, tuple[int, int]] = {
     "": (1, 1),
 }
 
+#: Physical range in SI (inclusive) of a study value given in each user unit: lengths of a
+#: sensor between 1 µm and 1 m, moduli between 1 Pa and 1 GPa, magnetisations between 1 A/m and
+#: 10 MA/m (the strongest permanent magnets are near 1.1 MA/m), forces within ±1 MN, angles
+#: between 0 and π/2. A setting may narrow its own range (``bounds`` in
+#: :func:`magtact.study._model.setting`).
+PHYSICAL: dict[str, tuple[float, float]] = {
+    "mm": (1e-6, 1.0),
+    "kPa": (1.0, 1e9),
+    "A_per_m": (1.0, 1e7),
+    "N": (-1e6, 1e6),
+    "rad": (0.0, 1.5707963267948966),
+}
+
 #: Printable form of each unit suffix.
 LABEL: dict[str, str] = {"A_per_m": "A/m", "": "-"}
 
