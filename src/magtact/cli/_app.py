@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 from typing import Annotated
 
@@ -39,6 +40,20 @@ def get_study(source: str | None) -> Study:
 
 
 def out_dir(path: Path) -> Path:
-    """Create and return an output folder."""
-    path.mkdir(parents=True, exist_ok=True)
+    """Create and return an output folder, checked to be a folder this process can write.
+
+    Raises
+    ------
+    ValueError
+        If ``path`` (or a parent) exists and is not a folder, or the folder is not writable.
+    """
+    for parent in (path, *path.parents):
+        if parent.exists() and not parent.is_dir():
+            raise ValueError(f"--out {path}: {parent} exists and is not a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = tempfile.NamedTemporaryFile(dir=path, prefix=".magtact-write-test-")
+        probe.close()
+    except OSError as exc:
+        raise ValueError(f"--out {path}: cannot write there ({exc.strerror or exc})") from None
     return path

@@ -28,13 +28,13 @@ def fit(
     """Fit B_r, B_z, F_r/G, F_z/G; write model JSON files, metamodels.md and figures."""
     from ..doe import load_bundled, load_dataset
     from ..metamodel import write_fit_outputs
-    from ..study import to_si
+    from ..study import checked_si
 
     s = get_study(study)
     if generations is not None:
         s = replace(s, metamodel=replace(s.metamodel, generations=generations))
-    H = to_si(H_mm, "mm") if H_mm is not None else None
-    G = to_si(G_kpa, "kPa") if G_kpa is not None else None
+    H = checked_si(H_mm, "mm", "--H-mm") if H_mm is not None else None
+    G = checked_si(G_kpa, "kPa", "--G-kpa") if G_kpa is not None else None
     ds = load_dataset(data) if data is not None else load_bundled()
     result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
                                       log=lambda msg: console.print(msg, highlight=False))

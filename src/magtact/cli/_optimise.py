@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from ..study import Study, from_si, to_si
+from ..study import Study, checked_si, from_si
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
 ModelsOpt = Annotated[
@@ -38,7 +38,7 @@ def parse_design(text: str, what: str) -> tuple[float, float]:
                          f"got {text!r}") from None
     if not (H_mm > 0 and G_kPa > 0):
         raise ValueError(f"{what}: H and G must be positive, got {text!r}")
-    return to_si(H_mm, "mm"), to_si(G_kPa, "kPa")
+    return checked_si(H_mm, "mm", f"{what}: H"), checked_si(G_kPa, "kPa", f"{what}: G")
 
 
 def study_models(study: Study, models: Path | None):

@@ -12,7 +12,7 @@ from pathlib import Path
 import tomli_w
 
 from ._model import SECTIONS, Study, key_of
-from ._units import LABEL, from_si, to_si
+from ._units import LABEL, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
 
@@ -217,10 +217,6 @@ def _number(full: str, f, value, source):
     return value
 
 
-#: SI unit of each user unit, for messages.
-_SI_UNIT = {"mm": "m", "kPa": "Pa", "mT": "T", "A_per_m": "A/m"}
-
-
 def _si(full: str, f, value: float, source) -> float:
     """``value`` converted to SI and checked against the setting's physical bounds."""
     m = f.metadata
@@ -231,12 +227,7 @@ def _si(full: str, f, value: float, source) -> float:
         return si
     lo, hi = bounds
     if not lo <= si <= hi:
-        label = LABEL.get(unit, unit)
-        where = f"between {from_si(lo, unit):g} and {from_si(hi, unit):g}"
-        if unit:
-            where += f" {label} ({lo:g} to {hi:g} {_SI_UNIT.get(unit, unit)} in SI)"
-        if m["minimum"] == 0:
-            where = "0 or " + where
+        where = ("0 or " if m["minimum"] == 0 else "") + bounds_text(unit, lo, hi)
         raise StudyError(full, f"must be {where}, got {value!r}", source)
     return si
 

@@ -6,6 +6,8 @@ millimetres and kilopascals. Every conversion between the two goes through this 
 
 from __future__ import annotations
 
+import math
+
 #: Value in SI = value in the user unit × num / den (kept as two integers so that a value such
 #: as 2.97 mm becomes exactly the float nearest to 0.00297 m).
 SCALE: dict[str, tuple[int, int]] = {
@@ -68,3 +70,35 @@ def mm(value):
 def kpa(value):
     """Pascal → kilopascal (for tables and plot axes)."""
     return from_si(value, "kPa")
+
+
+#: SI unit of each user unit, for messages.
+SI_LABEL: dict[str, str] = {"mm": "m", "kPa": "Pa", "mT": "T", "A_per_m": "A/m"}
+
+
+def bounds_text(unit: str, lo: float, hi: float) -> str:
+    """``"between 0.001 and 1000 mm (1e-06 to 1 m in SI)"`` for SI bounds of a user unit."""
+    text = f"between {from_si(lo, unit):g} and {from_si(hi, unit):g}"
+    if unit:
+        text += (f" {LABEL.get(unit, unit)} ({lo:g} to {hi:g} {SI_LABEL.get(unit, unit)} "
+                 "in SI)")
+    return text
+
+
+def check_si(si: float, unit: str, what: str, shown, bounds=None) -> float:
+    """Return the SI value ``si`` if it is finite and within ``bounds`` (default: the physical
+    range :data:`PHYSICAL` of ``unit``); else raise a ValueError naming ``what`` (e.g. ``"--H"``
+    or ``"data.csv: metadata 'design_h_mm'"``), the bounds and the value as given (``shown``)."""
+    lo, hi = PHYSICAL[unit] if bounds is None else bounds
+    if not (math.isfinite(si) and lo <= si <= hi):
+        raise ValueError(f"{what} must be {bounds_text(unit, lo, hi)}, got {shown!r}")
+    return si
+
+
+def checked_si(value: float, unit: str, what: str, bounds=None) -> float:
+    """``value`` in the user unit ``unit`` → SI, checked by :func:`check_si`."""
+    try:
+        si = to_si(float(value), unit)
+    except (OverflowError, TypeError, ValueError):
+        raise ValueError(f"{what} must be a number, got {value!r}") from None
+    return check_si(si, unit, what, value, bounds)
