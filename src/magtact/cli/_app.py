@@ -31,7 +31,19 @@ StudyArg = Annotated[
     typer.Argument(help="Study TOML file or preset ('magone', 'magone-printed'); "
                         "default: the built-in MagOne study."),
 ]
-OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).")]
+
+
+def check_out(path: Path) -> Path:
+    """Option callback of ``--out``: refuse, before any work, a path that cannot become a
+    folder (it or a parent is a file)."""
+    for parent in (path, *path.parents):
+        if parent.exists() and not parent.is_dir():
+            raise typer.BadParameter(f"{parent} exists and is not a folder")
+    return path
+
+
+OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).",
+                                      callback=check_out)]
 
 
 def get_study(source: str | None) -> Study:

@@ -80,13 +80,15 @@ def optimise_command(
     from ..optimise import force_constraints, optimise
 
     s = get_study(study)
+    Frc = None if Frc is None else checked_si(Frc, "N", "--Frc")
+    Fzc = None if Fzc is None else checked_si(Fzc, "N", "--Fzc")
     reference = (parse_design(constraints_from, "--constraints-from")
                  if constraints_from is not None else None)
+    folder = out_dir(out)  # a folder that cannot be written is refused before the work
     m = study_models(s, models)
     constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
     with console.status("optimising"):
         result = optimise(m, s, constraints)
-    folder = out_dir(out)
     result.write(folder)
     print_choice(result)
     console.print(f"written to {folder}", highlight=False)

@@ -11,7 +11,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ..study import MESH_DENSITIES, PRESETS, Study, checked_si
-from ._app import app, console, get_study, out_dir
+from ._app import app, check_out, console, get_study, out_dir
 
 #: Highest filter cut-off accepted (cycles per mm of u_z; the samples are far coarser).
 MAX_CYCLES_PER_MM = 1e6
@@ -66,7 +66,8 @@ def validate_command(
         metavar="[STUDY] DATA...",
         help="Optional study (preset or .toml), then CSV files of repeat tests; no files: the "
              "shipped SYNTHETIC example.")] = None,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path("validation"),
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.", callback=check_out)]
+    = Path("validation"),
     H: Annotated[float | None, typer.Option("--H", help="Body height H of the tested design "
                                             "(mm); default: the data's metadata.")] = None,
     G: Annotated[float | None, typer.Option("--G", help="Shear modulus G of the tested design "
@@ -113,9 +114,10 @@ def validate_command(
     filt = FilterSettings(f_lo=f_lo * 1e3, f_hi=f_hi * 1e3 if f_hi > 0 else None)
     experiment = read_experiment(data)
     H_m, G_pa = experiment.design(H_m, G_pa)
+    folder = out_dir(out)  # a folder that cannot be written is refused before the work
     model = path_model(study, H_m, G_pa, experiment.theta, models, solver, mesh)
     result = validate(experiment, model, filter=filt, n_grid=n_grid, floor=floor)
-    written = write_outputs(result, out_dir(out), sources=data)
+    written = write_outputs(result, folder, sources=data)
     print_table(result)
     for path in written:
         console.print(f"wrote {path}", highlight=False)
