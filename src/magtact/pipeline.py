@@ -16,6 +16,7 @@ import shutil
 import sys
 import time
 import traceback
+import uuid
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
@@ -29,6 +30,9 @@ PACKAGES = ("magtact", "numpy", "scipy", "xarray", "h5netcdf", "gmsh", "scikit-f
             "pypardiso", "pyoperon", "sympy", "pymoo", "scikit-learn", "matplotlib", "dask",
             "typer", "rich")
 
+
+#: File in each stage folder naming the run (``run.json``'s ``run_id``) that wrote the folder.
+RUN_STAMP = ".magtact-run"
 
 #: Study sections that determine the DOE data set (the others may differ from the bundle's).
 DOE_SECTIONS = ("body", "magnet", "loading", "material", "design", "doe", "magnetics",
@@ -139,17 +143,21 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
     ctx = _Context(study=study, folder=folder, recompute=recompute, refit=refit,
                    data=[Path(p) for p in data] if data else None,
                    cache=Path(cache) if cache is not None else None, workers=workers, log=log)
+    run_id = uuid.uuid4().hex
+    _forget_previous_run(folder)
     (folder / "study.toml").write_text(study.to_toml(), encoding="utf-8")
     manifest = {
-        "study": study.name, "command": command or "run_study(...)",
+        "run_id": run_id, "study": study.name, "command": command or "run_study(...)",
         "started": datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
         "recompute": recompute, "refit": refit, "versions": versions(), "stages": [],
     }
+    _write_json(folder / "run.json", manifest)  # an interrupted run is never taken for the last
     records = []
     for n, (key, title, fn) in enumerate(STAGES, start=1):
         rec = StageRecord(key=key, title=title)
         log(f"[{n}/{len(STAGES)}] {title} ...")
         t0 = time.perf_counter()
+        fresh = not (folder / key).exists()  # a folder there before holds files of another run
         try:
             rec.message = fn(ctx, rec) or ""
             rec.status = "ok"
@@ -161,6 +169,8 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
             logs.mkdir(exist_ok=True)
             (logs / f"{key}.traceback.txt").write_text(traceback.format_exc(), encoding="utf-8")
         rec.wall_time_s = time.perf_counter() - t0
+        if fresh and (folder / key).is_dir():  # what the stage wrote belongs to this run
+            (folder / key / RUN_STAMP).write_text(run_id, encoding="utf-8")
         log(f"      {rec.status} ({rec.wall_time_s:.1f} s) {rec.message}")
         records.append(rec)
         manifest["stages"] = [asdict(r) for r in records]
@@ -294,6 +304,16 @@ def _same_study(toml_text: str, study: Study) -> bool:
     except Exception:
         return False
     return all(getattr(other, name) == getattr(study, name) for name in DOE_SECTIONS)
+
+
+def _forget_previous_run(folder: Path) -> None:
+    """Remove what an earlier run left in ``folder``: its report and the stage folders it
+    stamped (folders without a stamp are not magtact's to delete; the report shows them as not
+    of this run)."""
+    (folder / "report.html").unlink(missing_ok=True)
+    for key, _, _ in STAGES:
+        if (folder / key / RUN_STAMP).is_file():
+            shutil.rmtree(folder / key)
 
 
 def _copy_evidence(folder: Path) -> None:
