@@ -44,6 +44,10 @@ class Timings:
         return self.constraints + self.sweep + self.nsga2 + self.decision + self.maps
 
 
+#: Largest relative distance of NSGA-II's Pareto set from the exact front accepted.
+MAX_FRONT_GAP = 0.05
+
+
 @dataclass(frozen=True)
 class Optimisation:
     """Everything the optimisation stage computes for one study.
@@ -182,6 +186,14 @@ def optimise(models: Responses | ModelSet, study: Study,
     choice = choose(R, study, pareto)
     reduction_choice = choose(R, study, reduction)
     gap = front_gap(pareto, reduction)
+    if not gap <= MAX_FRONT_GAP:  # NSGA-II and the exact reduction must tell the same story
+        e, d = reduction_choice.design, choice.design
+        raise ValueError(f"NSGA-II's Pareto set lies {gap:.3g} (relative) from the exact "
+                         f"reduction's front, more than {MAX_FRONT_GAP:g}: its choice H = "
+                         f"{from_si(d.H, 'mm'):.4g} mm, G = {from_si(d.G, 'kPa'):.4g} kPa "
+                         f"disagrees with the exact reduction's H = {from_si(e.H, 'mm'):.4g} "
+                         f"mm, G = {from_si(e.G, 'kPa'):.4g} kPa; check the design ranges or "
+                         "raise [optimise] nsga2_generations")
     t4 = clock()
     maps = design_maps(R, study)
     t5 = clock()
