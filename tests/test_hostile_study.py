@@ -91,6 +91,13 @@ def test_unhashable_values_and_odd_types():
     refused({"doe": {"n_t": {"a": 1}}}, "doe.n_t", "expected an integer")
 
 
+def test_keys_with_line_breaks_are_escaped_in_one_line():
+    with pytest.raises(StudyError) as info:
+        study_from_dict({"design": {"H\nmm\x00": 3.0}}, "bad.toml")
+    assert str(info.value).startswith("bad.toml: [design.H\\nmm\\x00] unknown key")
+    assert "\n" not in str(info.value)
+
+
 # ---- values that would overflow or vanish in the unit conversion ------------------------------
 @pytest.mark.parametrize("section, key, value, fragments", [
     ("material", "G_ref_kPa", 1e306, ("between 0.001 and 1e+06 kPa", "1 to 1e+09 Pa in SI")),
@@ -195,7 +202,8 @@ def documents(draw):
     for section in draw(st.lists(st.sampled_from([*SECTIONS, "geometry"]), max_size=4,
                                  unique=True)):
         spec = SPECS.get(section, {"R_mm": None})
-        keys = draw(st.lists(st.one_of(st.sampled_from(sorted(spec)), st.text(max_size=8)),
+        keys = draw(st.lists(st.one_of(st.sampled_from(sorted(spec)), st.text(max_size=8),
+                                       st.sampled_from(["a\nb", "\x00", "R_mm\r", "\u2028"])),
                              max_size=4, unique=True))
         table = {}
         for key in keys:

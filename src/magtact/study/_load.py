@@ -23,7 +23,15 @@ class StudyError(ValueError):
     def __init__(self, key: str, message: str, source: str | None = None):
         self.key = key
         where = f"{source}: " if source else ""
-        super().__init__(f"{where}[{key}] {message}")
+        super().__init__(_one_line(f"{where}[{key}] {message}"))
+
+
+def _one_line(text: str) -> str:
+    """``text`` with line breaks and other unprintable characters escaped (keys and values
+    quoted from a file may hold any character)."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def magone() -> Study:

@@ -63,6 +63,8 @@ class DataError(ValueError):
     """Malformed validation data; the message names the file, line and column."""
 
     def __init__(self, message: str):
+        if not message.isprintable():  # cells and labels quoted from a file hold any character
+            message = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
         super().__init__(_clip(message, MAX_MESSAGE))
 
 
