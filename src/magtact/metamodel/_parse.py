@@ -42,6 +42,9 @@ MAX_TOKENS = 20_000
 MAX_DEPTH = 200
 #: Largest magnitude of a constant exponent.
 MAX_EXPONENT = 100
+#: Largest magnitude of an integer constant (larger integers are not exact doubles, and numerical
+#: libraries cannot evaluate functions of them).
+MAX_INTEGER = 2**53
 
 _BINARY = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
 
@@ -150,11 +153,34 @@ def _check_depth(root: ast.AST) -> None:
 
 
 def _as_float(value: sp.Expr) -> float:
-    """A constant as a double (inf if it is beyond the double range)."""
+    """A constant as a double: inf beyond the double range, NaN if it is not a real number.
+
+    A number converts directly; any other constant (``sin(exp(exp(20)))``) is evaluated in
+    double precision (never by SymPy's arbitrary-precision evaluation, whose cost grows with the
+    size of the argument).
+    """
     try:
-        return float(value)
-    except (OverflowError, TypeError, ValueError):
+        if value.is_Number:
+            return float(value)
+        result = sp.lambdify((), value, modules="math")()
+        return float(result) if isinstance(result, (int, float)) else math.nan
+    except (OverflowError, ZeroDivisionError):
         return math.inf
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _checked(value: sp.Expr) -> sp.Expr:
+    """``value``, refused if it is a number beyond the double range (so that constants never
+    grow into huge integers or floats while the expression is built)."""
+    if value.is_Number and value.is_finite is not False and not math.isfinite(_as_float(value)):
+        raise ValueError(f"model expression: constant {_short(str(value), 40)} is outside the "
+                         "range of a double")
+    if value.is_Integer and abs(int(value)) > MAX_INTEGER:
+        raise ValueError(f"model expression: integer {_short(str(value), 40)} exceeds 2**53 (not "
+                         "exact in double precision); write it as a decimal number, e.g. "
+                         f"{float(value):.6g}")
+    return value
 
 
 def _build(node: ast.AST, local: dict) -> sp.Expr:
@@ -165,9 +191,7 @@ def _build(node: ast.AST, local: dict) -> sp.Expr:
                 raise ValueError(f"model expression: number {node.value!r} is not a finite "
                                  "double")
             return _double(repr(node.value))
-        if node.value.bit_length() > 1024:
-            raise ValueError("model expression: integer constant outside the range of a double")
-        return sp.Integer(node.value)
+        return _checked(sp.Integer(node.value))
     if isinstance(node, ast.Name):
         if node.id in FUNCTIONS:
             raise ValueError(f"model expression: function {node.id!r} must be called, as in "
@@ -179,14 +203,14 @@ def _build(node: ast.AST, local: dict) -> sp.Expr:
     if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
         left, right = _build(node.left, local), _build(node.right, local)
         if isinstance(node.op, ast.Add):
-            return left + right
+            return _checked(left + right)
         if isinstance(node.op, ast.Sub):
-            return left - right
+            return _checked(left - right)
         if isinstance(node.op, ast.Mult):
-            return left * right
+            return _checked(left * right)
         if isinstance(node.op, ast.Div):
-            return left / right
-        return _power(left, right)
+            return _checked(left / right)
+        return _checked(_power(left, right))
     if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
             and node.func.id in FUNCTIONS and len(node.args) == 1 and not node.keywords):
         return FUNCTIONS[node.func.id](_build(node.args[0], local))
@@ -199,8 +223,10 @@ def _power(base: sp.Expr, exponent: sp.Expr) -> sp.Expr:
     if not exponent.free_symbols:
         e = _as_float(exponent)
         if not abs(e) <= MAX_EXPONENT:
-            raise ValueError(f"model expression: exponent {_short(str(exponent), 40)} exceeds "
-                             f"the largest allowed magnitude {MAX_EXPONENT}")
+            what = ("exceeds the largest allowed magnitude" if not math.isnan(e) else
+                    "is not a real number; a constant exponent has a magnitude of at most")
+            raise ValueError(f"model expression: exponent {_short(str(exponent), 40)} {what} "
+                             f"{MAX_EXPONENT}")
         if not base.free_symbols:
             b = _as_float(base)
             try:
