@@ -34,10 +34,12 @@ CONSTANTS: dict[str, sp.Expr] = {"E": sp.E, "pi": sp.pi}
 #: Operator tokens a model expression may contain (``^`` is read as ``**``, as Operon writes it).
 OPERATORS = frozenset({"+", "-", "*", "/", "**", "^", "(", ")"})
 
-#: Longest expression text [characters].
-MAX_CHARS = 100_000
+#: Longest expression text [characters]. The shipped models have at most 1.6k; SymPy's cost of
+#: building an expression grows faster than its length (a few seconds at this bound for the
+#: worst shapes, a tenth of a second for the shipped models).
+MAX_CHARS = 10_000
 #: Most tokens (numbers, names, operators) in one expression.
-MAX_TOKENS = 20_000
+MAX_TOKENS = 2_500
 #: Deepest nesting of the expression tree (parentheses, operators, function calls).
 MAX_DEPTH = 200
 #: Largest magnitude of a constant exponent.
@@ -153,26 +155,17 @@ def _check_depth(root: ast.AST) -> None:
 
 
 def _as_float(value: sp.Expr) -> float:
-    """A constant as a double: inf beyond the double range, NaN if it is not a real number.
-
-    A number converts directly; any other constant (``sin(exp(exp(20)))``) is evaluated in
-    double precision (never by SymPy's arbitrary-precision evaluation, whose cost grows with the
-    size of the argument).
-    """
+    """A SymPy number as a double (inf beyond the double range)."""
     try:
-        if value.is_Number:
-            return float(value)
-        result = sp.lambdify((), value, modules="math")()
-        return float(result) if isinstance(result, (int, float)) else math.nan
-    except (OverflowError, ZeroDivisionError):
+        return float(value)
+    except (OverflowError, TypeError, ValueError):
         return math.inf
-    except (TypeError, ValueError):
-        return math.nan
 
 
 def _checked(value: sp.Expr) -> sp.Expr:
-    """``value``, refused if it is a number beyond the double range (so that constants never
-    grow into huge integers or floats while the expression is built)."""
+    """``value``, refused if it is a number beyond the double range or an integer beyond
+    :data:`MAX_INTEGER` (so that constants never grow into huge numbers while the expression is
+    built)."""
     if value.is_Number and value.is_finite is not False and not math.isfinite(_as_float(value)):
         raise ValueError(f"model expression: constant {_short(str(value), 40)} is outside the "
                          "range of a double")
@@ -183,60 +176,103 @@ def _checked(value: sp.Expr) -> sp.Expr:
     return value
 
 
+#: Double-precision counterparts of :data:`FUNCTIONS` and :data:`CONSTANTS`.
+_MATH = {"exp": math.exp, "log": math.log, "sqrt": math.sqrt, "tanh": math.tanh,
+         "tan": math.tan, "atan": math.atan, "sin": math.sin, "cos": math.cos}
+_MATH_CONSTANTS = {"E": math.e, "pi": math.pi}
+
+
+def _float_op(fn, *args) -> float:
+    """``fn(*args)`` in double precision: inf on overflow, NaN if the result is not real."""
+    try:
+        result = fn(*args)
+    except (OverflowError, ZeroDivisionError):
+        return math.inf
+    except ValueError:
+        return math.nan
+    return float(result) if isinstance(result, (int, float)) else math.nan
+
+
 def _build(node: ast.AST, local: dict) -> sp.Expr:
     """SymPy object of a checked syntax tree (numbers, names, + - * / **, unary ±, calls)."""
+    return _node(node, local)[0]
+
+
+def _node(node: ast.AST, local: dict) -> tuple[sp.Expr, float | None]:
+    """``(SymPy object, its value in double precision if it is a constant, else None)``.
+
+    Every constant is also evaluated in double precision, which costs the same for any
+    argument; a constant that is not a finite real double (``exp(exp(30))``, ``sqrt(-1)``) is
+    refused before SymPy, whose arbitrary-precision evaluation costs grow with the argument,
+    ever compares it.
+    """
     if isinstance(node, ast.Constant) and type(node.value) in (int, float):
         if isinstance(node.value, float):
             if not math.isfinite(node.value):
                 raise ValueError(f"model expression: number {node.value!r} is not a finite "
                                  "double")
-            return _double(repr(node.value))
-        return _checked(sp.Integer(node.value))
+            return _double(repr(node.value)), node.value
+        value = _checked(sp.Integer(node.value))
+        return value, float(node.value)
     if isinstance(node, ast.Name):
         if node.id in FUNCTIONS:
             raise ValueError(f"model expression: function {node.id!r} must be called, as in "
                              f"{node.id}(t)")
-        return local[node.id]
+        return local[node.id], _MATH_CONSTANTS.get(node.id)
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        value = _build(node.operand, local)
-        return -value if isinstance(node.op, ast.USub) else value
+        value, v = _node(node.operand, local)
+        if isinstance(node.op, ast.UAdd):
+            return value, v
+        return -value, (None if v is None else -v)
     if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
-        left, right = _build(node.left, local), _build(node.right, local)
+        (left, lv), (right, rv) = _node(node.left, local), _node(node.right, local)
+        const = lv is not None and rv is not None
         if isinstance(node.op, ast.Add):
-            return _checked(left + right)
-        if isinstance(node.op, ast.Sub):
-            return _checked(left - right)
-        if isinstance(node.op, ast.Mult):
-            return _checked(left * right)
-        if isinstance(node.op, ast.Div):
-            return _checked(left / right)
-        return _checked(_power(left, right))
+            expr, v = left + right, (_float_op(lambda a, b: a + b, lv, rv) if const else None)
+        elif isinstance(node.op, ast.Sub):
+            expr, v = left - right, (_float_op(lambda a, b: a - b, lv, rv) if const else None)
+        elif isinstance(node.op, ast.Mult):
+            expr, v = left * right, (_float_op(lambda a, b: a * b, lv, rv) if const else None)
+        elif isinstance(node.op, ast.Div):
+            expr, v = left / right, (_float_op(lambda a, b: a / b, lv, rv) if const else None)
+        else:
+            expr, v = _power(left, lv, right, rv)
+        return _constant(_checked(expr), v)
     if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
             and node.func.id in FUNCTIONS and len(node.args) == 1 and not node.keywords):
-        return FUNCTIONS[node.func.id](_build(node.args[0], local))
+        arg, v = _node(node.args[0], local)
+        expr = FUNCTIONS[node.func.id](arg)
+        return _constant(expr, None if v is None else _float_op(_MATH[node.func.id], v))
     raise ValueError(f"model expression is not well formed: {ast.unparse(node)[:80]!r} is not "
                      "a number, symbol, function call or arithmetic")
 
 
-def _power(base: sp.Expr, exponent: sp.Expr) -> sp.Expr:
-    """``base ** exponent`` with a constant exponent bounded by :data:`MAX_EXPONENT`."""
-    if not exponent.free_symbols:
-        e = _as_float(exponent)
-        if not abs(e) <= MAX_EXPONENT:
-            what = ("exceeds the largest allowed magnitude" if not math.isnan(e) else
-                    "is not a real number; a constant exponent has a magnitude of at most")
-            raise ValueError(f"model expression: exponent {_short(str(exponent), 40)} {what} "
-                             f"{MAX_EXPONENT}")
-        if not base.free_symbols:
-            b = _as_float(base)
-            try:
-                value = abs(b) ** e if b != 0 or e >= 0 else math.inf
-            except OverflowError:
-                value = math.inf
-            if not math.isfinite(value):
-                raise ValueError(f"model expression: constant {_short(str(base), 40)}**"
-                                 f"{_short(str(exponent), 40)} is outside the range of a double")
-    return base ** exponent
+def _constant(expr: sp.Expr, value: float | None) -> tuple[sp.Expr, float | None]:
+    """Refuse a constant whose double-precision value is not a finite real number (an exact
+    infinity such as 1/0 is left to the check of the whole expression)."""
+    if value is not None and not math.isfinite(value) and not expr.has(sp.zoo, sp.oo, sp.nan):
+        what = ("beyond the range of a double" if math.isinf(value) else
+                "not a real number in double precision")
+        raise ValueError(f"model expression: constant {_short(str(expr), 40)} is {what}")
+    return expr, value
+
+
+def _power(base: sp.Expr, b: float | None, exponent: sp.Expr,
+           e: float | None) -> tuple[sp.Expr, float | None]:
+    """``base ** exponent`` (and its double value) with a constant exponent bounded by
+    :data:`MAX_EXPONENT`."""
+    if e is None:
+        return base ** exponent, None
+    if not abs(e) <= MAX_EXPONENT:
+        raise ValueError(f"model expression: exponent {_short(str(exponent), 40)} exceeds the "
+                         f"largest allowed magnitude {MAX_EXPONENT}")
+    if b is None:
+        return base ** exponent, None
+    value = _float_op(math.pow, b, e) if b != 0 or e >= 0 else math.inf
+    if math.isinf(value):
+        raise ValueError(f"model expression: constant {_short(str(base), 40)}**"
+                         f"{_short(str(exponent), 40)} is outside the range of a double")
+    return base ** exponent, value
 
 
 def _double(text: str) -> sp.Float:

@@ -183,7 +183,7 @@ class Metamodel:
                                doc="GP generations per fit")
     population: int = setting(600, integer=True, minimum=10, maximum=100_000,
                               doc="GP population size")
-    max_length: int = setting(60, integer=True, minimum=3, maximum=1000,
+    max_length: int = setting(60, integer=True, minimum=3, maximum=200,
                               doc="largest expression (tree nodes)")
     local_iterations: int = setting(5, integer=True, minimum=0, maximum=1000,
                                     doc="Levenberg-Marquardt steps on the constants per evaluation")
