@@ -182,3 +182,21 @@ def test_two_processes_computing_the_same_cache(tmp_path):
         keys = store.keys("path")
         assert len(keys) == 12 and all(store.get("path", k) is not None for k in keys)
     assert not list(cache.rglob("*.tmp"))
+
+
+def test_hostile_input_errors_are_user_errors(tmp_path):
+    """Every refusal of hostile input is a MagtactError (the command line's one-line errors)."""
+    from magtact._errors import MagtactError
+    from magtact.metamodel import load_model
+    from magtact.study import StudyError, checked_si
+    from magtact.validation import DataError
+
+    for cls in (StudyError, DataError, CacheError):
+        assert issubclass(cls, MagtactError)
+    with pytest.raises(MagtactError, match="--H must be between"):
+        checked_si(float("nan"), "mm", "--H")
+    (tmp_path / "f_r.json").write_text('{"format": "magtact-metamodel/1", "name": "f_r", '
+                                       '"units": "N/Pa", "expression": "9**9**9*t", '
+                                       '"expression_pq": "p"}')
+    with pytest.raises(MagtactError, match="f_r.json: model expression: exponent '387420489'"):
+        load_model(tmp_path / "f_r.json")

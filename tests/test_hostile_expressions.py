@@ -180,15 +180,20 @@ def parse_or_refuse(text: str):
         return None
     finally:
         assert time.perf_counter() - start < 1.0, text[:200]
-    # the oracle of an accepted expression: a finite expression of finite doubles
+    assert_accepted(expr)
+    return expr
+
+
+def assert_accepted(expr) -> None:
+    """The oracle of an accepted expression: a finite expression of finite doubles, which
+    evaluates numerically without raising."""
     assert isinstance(expr, sp.Expr)
     assert not expr.has(sp.zoo, sp.oo, -sp.oo, sp.nan)
     for number in expr.atoms(sp.Number):
         assert math.isfinite(float(number)), number
-    with np.errstate(all="ignore"):  # and it evaluates numerically without raising
+    with np.errstate(all="ignore"):
         f = sp.lambdify(sorted(expr.free_symbols, key=str), expr, "numpy")
         f(*([np.linspace(0.1, 1.0, 3)] * len(expr.free_symbols)))
-    return expr
 
 
 SETTINGS = settings(max_examples=300, deadline=None, derandomize=True,

@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from .._errors import MagtactError
 from ..study import Study, load_study
 
 app = typer.Typer(
@@ -56,16 +57,16 @@ def out_dir(path: Path) -> Path:
 
     Raises
     ------
-    ValueError
+    MagtactError
         If ``path`` (or a parent) exists and is not a folder, or the folder is not writable.
     """
     for parent in (path, *path.parents):
         if parent.exists() and not parent.is_dir():
-            raise ValueError(f"--out {path}: {parent} exists and is not a folder")
+            raise MagtactError(f"--out {path}: {parent} exists and is not a folder")
     try:
         path.mkdir(parents=True, exist_ok=True)
         probe = tempfile.NamedTemporaryFile(dir=path, prefix=".magtact-write-test-")
         probe.close()
     except OSError as exc:
-        raise ValueError(f"--out {path}: cannot write there ({exc.strerror or exc})") from None
+        raise MagtactError(f"--out {path}: cannot write there ({exc.strerror or exc})") from None
     return path

@@ -9,6 +9,7 @@ from typing import Annotated
 
 import typer
 
+from .._errors import MagtactError
 from ..study import MESH_DENSITIES
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
@@ -39,7 +40,7 @@ def simulate_command(
     H_si = checked_si(H, "mm", "--H")
     G_si = None if G is None else checked_si(G, "kPa", "--G")
     if not (math.isfinite(theta) and 0.0 <= theta < math.pi / 2):
-        raise ValueError(f"--theta must be in [0, π/2) rad, got {theta!r}")
+        raise MagtactError(f"--theta must be in [0, π/2) rad, got {theta!r}")
     folder = out_dir(out)
     vtu = folder / "deformed_t1.vtu"
     t = s.t_levels

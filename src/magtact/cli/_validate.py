@@ -10,6 +10,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from .._errors import MagtactError
 from ..study import MESH_DENSITIES, PRESETS, Study, checked_si
 from ._app import app, check_out, console, get_study, out_dir
 
@@ -109,7 +110,7 @@ def validate_command(
         raise ValueError(f"--solver must be 'exact' or 'fe', got {solver!r}")
     for name, value in (("--f-lo", f_lo), ("--f-hi", f_hi)):
         if not (math.isfinite(value) and 0.0 <= value <= MAX_CYCLES_PER_MM):
-            raise ValueError(f"{name} must be between 0 and {MAX_CYCLES_PER_MM:g} cycles per mm "
+            raise MagtactError(f"{name} must be between 0 and {MAX_CYCLES_PER_MM:g} cycles per mm "
                              f"(--f-hi 0: no low-pass), got {value!r}")
     filt = FilterSettings(f_lo=f_lo * 1e3, f_hi=f_hi * 1e3 if f_hi > 0 else None)
     experiment = read_experiment(data)

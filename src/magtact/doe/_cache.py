@@ -26,12 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
+
 MAGIC = b"MAGTACT-CACHE"
 FORMAT = 1
 SUFFIX = ".mtc"
 
 
-class CacheError(ValueError):
+class CacheError(MagtactError):
     """An entry's place in the cache holds something magtact cannot read or replace."""
 
 

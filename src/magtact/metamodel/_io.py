@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
+from .._errors import MagtactError
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
 from ._symbols import PQ_TO_TTH, TTH
@@ -60,19 +61,19 @@ def model_from_dict(data: dict, source: str = "<dict>") -> Metamodel:
         that disagree.
     """
     if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise ValueError(f"{source}: not a magtact metamodel file (expected format {FORMAT!r})")
+        raise MagtactError(f"{source}: not a magtact metamodel file (expected format {FORMAT!r})")
     for key in ("name", "units", "expression", "expression_pq"):
         if not isinstance(data.get(key), str):
-            raise ValueError(f"{source}: key {key!r} is missing or not a string")
+            raise MagtactError(f"{source}: key {key!r} is missing or not a string")
     try:
         expr = parse_expression(data["expression"], ("t", "theta", "H"))
         expr_pq = parse_expression(data["expression_pq"], ("p", "q", "H"))
     except ValueError as exc:
-        raise ValueError(f"{source}: {exc}") from None
+        raise MagtactError(f"{source}: {exc}") from None
     _check_agree(expr, expr_pq, source)
     info = data.get("info", {})
     if not isinstance(info, dict):
-        raise ValueError(f"{source}: 'info' must be an object")
+        raise MagtactError(f"{source}: 'info' must be an object")
     return Metamodel(name=data["name"], expr=expr, units=data["units"], expr_pq=expr_pq, info=info)
 
 
@@ -86,10 +87,10 @@ def _check_agree(expr, expr_pq, source, n: int = 16) -> None:
     a, b = np.broadcast_to(a, (n,)), np.broadcast_to(b, (n,))
     ok = np.isfinite(a) & np.isfinite(b)
     if not ok.any():
-        raise ValueError(f"{source}: the model is not finite at any of {n} sample points "
+        raise MagtactError(f"{source}: the model is not finite at any of {n} sample points "
                          "(0.05 <= t <= 1, 0 <= theta <= 0.6 rad, 2 <= H <= 8 mm)")
     if not np.allclose(a[ok], b[ok], rtol=1e-9, atol=1e-12 * np.max(np.abs(a[ok]), initial=1.0)):
-        raise ValueError(f"{source}: 'expression' and 'expression_pq' describe different models")
+        raise MagtactError(f"{source}: 'expression' and 'expression_pq' describe different models")
 
 
 def save_model(model: Metamodel, path: str | Path) -> Path:
@@ -124,18 +125,18 @@ def _read_json(path: Path):
         raise FileNotFoundError(f"metamodel file not found: {path}")
     try:
         if path.stat().st_size > MAX_FILE_BYTES:
-            raise ValueError(f"{path}: {path.stat().st_size:,} bytes; a model file has at most "
+            raise MagtactError(f"{path}: {path.stat().st_size:,} bytes; a model file has at most "
                              f"{MAX_FILE_BYTES:,}")
         text = path.read_bytes().decode("utf-8-sig")
         return json.loads(text)
     except OSError as exc:
-        raise ValueError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+        raise MagtactError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     except UnicodeDecodeError as exc:
-        raise ValueError(f"{path}: not UTF-8 text (byte offset {exc.start})") from None
+        raise MagtactError(f"{path}: not UTF-8 text (byte offset {exc.start})") from None
     except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        raise MagtactError(f"{path}: not valid JSON ({exc})") from None
     except (RecursionError, MemoryError):
-        raise ValueError(f"{path}: not a model file (JSON nested too deeply)") from None
+        raise MagtactError(f"{path}: not a model file (JSON nested too deeply)") from None
 
 
 def save_models(models: ModelSet, folder: str | Path) -> list[Path]:
@@ -171,7 +172,7 @@ def _load_any(path: Path, name: str):
         try:
             study = study_from_dict(tomllib.loads(data["study_toml"]), str(path))
         except (KeyError, TypeError, tomllib.TOMLDecodeError, RecursionError) as exc:
-            raise ValueError(f"{path}: exact-field file without a valid study ({exc})") from None
+            raise MagtactError(f"{path}: exact-field file without a valid study ({exc})") from None
         return ExactField(study, name)
     return model_from_dict(data, str(path))
 
@@ -205,7 +206,7 @@ def load_models(folder: str | Path, B_model=None) -> ModelSet:
             raise FileNotFoundError(f"metamodel file not found: {path}")
         m = _load_any(path, k)
         if m.name != k or m.units != RESPONSES[k]:
-            raise ValueError(f"{path}: holds {m.name!r} [{m.units}], "
+            raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "
                              f"expected {k!r} [{RESPONSES[k]}]")
         models[k] = m
     return ModelSet(**models)

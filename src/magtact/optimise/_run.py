@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study, from_si
@@ -188,7 +189,7 @@ def optimise(models: Responses | ModelSet, study: Study,
     gap = front_gap(pareto, reduction)
     if not gap <= MAX_FRONT_GAP:  # NSGA-II and the exact reduction must tell the same story
         e, d = reduction_choice.design, choice.design
-        raise ValueError(f"NSGA-II's Pareto set lies {gap:.3g} (relative) from the exact "
+        raise MagtactError(f"NSGA-II's Pareto set lies {gap:.3g} (relative) from the exact "
                          f"reduction's front, more than {MAX_FRONT_GAP:g}: its choice H = "
                          f"{from_si(d.H, 'mm'):.4g} mm, G = {from_si(d.G, 'kPa'):.4g} kPa "
                          f"disagrees with the exact reduction's H = {from_si(e.H, 'mm'):.4g} "

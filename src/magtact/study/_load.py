@@ -11,13 +11,14 @@ from pathlib import Path
 
 import tomli_w
 
+from .._errors import MagtactError
 from ._model import SECTIONS, Study, key_of
 from ._units import LABEL, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
 
 
-class StudyError(ValueError):
+class StudyError(MagtactError):
     """A study file is invalid. ``key`` names the offending TOML key (``section.key``)."""
 
     def __init__(self, key: str, message: str, source: str | None = None):

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import math
 
+from .._errors import MagtactError
+
 #: Value in SI = value in the user unit × num / den (kept as two integers so that a value such
 #: as 2.97 mm becomes exactly the float nearest to 0.00297 m).
 SCALE: dict[str, tuple[int, int]] = {
@@ -87,11 +89,11 @@ def bounds_text(unit: str, lo: float, hi: float) -> str:
 
 def check_si(si: float, unit: str, what: str, shown, bounds=None) -> float:
     """Return the SI value ``si`` if it is finite and within ``bounds`` (default: the physical
-    range :data:`PHYSICAL` of ``unit``); else raise a ValueError naming ``what`` (e.g. ``"--H"``
+    range :data:`PHYSICAL` of ``unit``); else raise a MagtactError naming ``what`` (e.g. ``"--H"``
     or ``"data.csv: metadata 'design_h_mm'"``), the bounds and the value as given (``shown``)."""
     lo, hi = PHYSICAL[unit] if bounds is None else bounds
     if not (math.isfinite(si) and lo <= si <= hi):
-        raise ValueError(f"{what} must be {bounds_text(unit, lo, hi)}, got {shown!r}")
+        raise MagtactError(f"{what} must be {bounds_text(unit, lo, hi)}, got {shown!r}")
     return si
 
 
@@ -100,5 +102,5 @@ def checked_si(value: float, unit: str, what: str, bounds=None) -> float:
     try:
         si = to_si(float(value), unit)
     except (OverflowError, TypeError, ValueError):
-        raise ValueError(f"{what} must be a number, got {value!r}") from None
+        raise MagtactError(f"{what} must be a number, got {value!r}") from None
     return check_si(si, unit, what, value, bounds)

@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..study import check_si
 
 #: The measured responses and the unit suffix of their columns.
@@ -59,7 +60,7 @@ PHYSICAL_RANGE: dict[str, tuple[float, float, str]] = {
 }
 
 
-class DataError(ValueError):
+class DataError(MagtactError):
     """Malformed validation data; the message names the file, line and column."""
 
     def __init__(self, message: str):

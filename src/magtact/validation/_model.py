@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..geometry import loading_path
 from ..study import Study
 from ._io import RESPONSES
@@ -53,7 +54,7 @@ class PathModel:
         for r, v in values.items():
             bad = np.flatnonzero(~np.isfinite(v))
             if bad.size:
-                raise ValueError(f"model {self.label!r} gives a non-finite {r} ({v[bad[0]]}) at "
+                raise MagtactError(f"model {self.label!r} gives a non-finite {r} ({v[bad[0]]}) at "
                                  f"u_z = {u_z.flat[bad[0]] * 1e3:.6g} mm ({bad.size} of "
                                  f"{v.size} points)")
         return values
