@@ -91,3 +91,15 @@ def test_unstamped_folder_is_marked_not_of_this_run(tmp_path, monkeypatch, skip_
     assert ("The files in <code>validation/</code> are not of this run (the folder was written by "
             "a run that did not stamp it, or by hand)") in html
     assert (folder / "old.csv").is_file()  # not magtact's to delete
+
+
+@pytest.mark.parametrize("text", [
+    "[1, 2]", "[" * 100_000, '{"stages": [1, "x", null]}', '{"stages": 3}', "\xff",
+    '{"stages": [{"key": "doe", "status": 3, "wall_time_s": "x", "notes": 5}], "versions": 3, '
+    '"run_id": 7, "wall_time_s": "long"}'])
+def test_report_of_a_forged_run_json_is_built(tmp_path, text):
+    folder = tmp_path / "R"
+    folder.mkdir()
+    (folder / "run.json").write_text(text, encoding="utf-8", errors="surrogateescape")
+    html = build_report(folder).read_text()
+    assert "magtact report" in html and "Run summary" in html

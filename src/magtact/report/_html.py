@@ -87,8 +87,11 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     folder = Path(folder)
     if not folder.is_dir():
         raise FileNotFoundError(f"{folder}: no such results folder")
-    manifest = _load_json(folder / "run.json") or {}
-    stages = {s.get("key"): s for s in manifest.get("stages", [])}
+    manifest = _load_json(folder / "run.json")
+    manifest = manifest if isinstance(manifest, dict) else {}  # a forged run.json: none
+    listed = manifest.get("stages")
+    stages = {s.get("key"): _stage_record(s) for s in (listed if isinstance(listed, list) else [])
+              if isinstance(s, dict)}
     study_name = manifest.get("study", "unknown study")
     parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
              f"<p>Results folder <code>{_e(folder.resolve())}</code>; report built "
@@ -210,6 +213,14 @@ def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> 
     return "\n".join(out)
 
 
+def _stage_record(s: dict) -> dict:
+    """A stage's record of run.json with every field of the type the report expects."""
+    notes = s.get("notes")
+    return {"key": s.get("key"), "status": str(s.get("status", "unknown")),
+            "wall_time_s": s.get("wall_time_s"), "message": str(s.get("message", "")),
+            "notes": [str(n) for n in notes] if isinstance(notes, list) else []}
+
+
 def _of_run(folder: Path, run_id: str | None) -> bool:
     """True if ``folder`` holds the outputs of the run ``run_id`` (its stamp file names it), or
     if the manifest names no run (a folder laid out by hand)."""
@@ -255,7 +266,7 @@ def _settings(path: Path) -> str:
 
 def _versions(manifest: dict) -> str:
     versions = manifest.get("versions")
-    if not versions:
+    if not versions or not isinstance(versions, dict):
         return ""
     rows = "".join(f'<tr><td class="l">{_e(k)}</td><td class="l">{_e(v)}</td></tr>'
                    for k, v in versions.items())
@@ -407,7 +418,7 @@ def _is_synthetic(folder: Path) -> bool:
 def _load_json(path: Path):
     try:
         return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return None
 
 
