@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from magtact.study import PHYSICAL, Study, StudyError, load_study, magone, study_from_dict
-from magtact.study._load import MAX_FIELD_POINTS, MAX_FILE_BYTES, MAX_PATHS
+from magtact.study._load import MAX_DATA_POINTS, MAX_FIELD_POINTS, MAX_FILE_BYTES, MAX_PATHS
 from magtact.study._model import SECTIONS, key_of
 
 # ---- the settings, from the dataclasses (so new settings are generated too) ------------------
@@ -140,6 +140,8 @@ def test_every_number_has_physical_bounds_that_hold_the_presets():
     ({"n_t": 10**30}, "doe.n_t", "got 1000000000000000000000000000000"),
     ({"n_theta": 101, "n_H": 100}, "doe.n_H", f"at most {MAX_PATHS:,}"),
     ({"n_t": 1001, "n_theta": 50, "n_H": 50}, "doe.n_t", f"at most {MAX_FIELD_POINTS:,}"),
+    ({"n_t": 1001, "n_theta": 10, "n_H": 10, "n_G": 1001}, "doe.n_G",
+     f"at most {MAX_DATA_POINTS:,}"),
 ])
 def test_doe_size_is_bounded(doe, key, fragment):
     refused({"doe": doe}, key, fragment)
@@ -174,6 +176,7 @@ def assert_within_bounds(s: Study) -> None:
                     assert lo <= v <= hi, (section, f.name, v)
     d = s.doe
     assert d.n_theta * d.n_H <= MAX_PATHS and d.n_t * d.n_theta * d.n_H <= MAX_FIELD_POINTS
+    assert d.n_t * d.n_theta * d.n_H * d.n_G <= MAX_DATA_POINTS
 
 
 FLOATS = st.one_of(

@@ -288,6 +288,8 @@ def _check_consistency(s: Study, source) -> None:
 MAX_PATHS = 10_000
 #: Most field points (t × θ × H levels) a study's DOE may ask for.
 MAX_FIELD_POINTS = 2_000_000
+#: Most force points (t × θ × H × G levels) of a study's DOE data set (80 MB per force array).
+MAX_DATA_POINTS = 10_000_000
 #: Finest FE element at the magnet surface, as a fraction of the magnet's smaller dimension.
 MIN_H_MAGNET_RATIO = 1 / 200
 
@@ -305,6 +307,10 @@ def _check_work(s: Study, source) -> None:
     if points > MAX_FIELD_POINTS:
         raise StudyError("doe.n_t", f"the DOE asks for {points:,} field points (n_t × n_theta × "
                                     f"n_H); at most {MAX_FIELD_POINTS:,}", source)
+    if points * d.n_G > MAX_DATA_POINTS:
+        raise StudyError("doe.n_G", f"the DOE data set would hold {points * d.n_G:,} force points "
+                                    f"(n_t × n_theta × n_H × n_G); at most {MAX_DATA_POINTS:,}",
+                         source)
     finest = MIN_H_MAGNET_RATIO * min(mg.R_m, mg.H_m)
     if fm.h_magnet < finest:
         raise StudyError("magnetics.h_magnet_mm", f"an element size of {_mm(fm.h_magnet)} mm "
