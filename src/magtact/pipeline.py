@@ -17,6 +17,7 @@ import sys
 import time
 import traceback
 import uuid
+import warnings
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
@@ -256,9 +257,17 @@ def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
 def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
-    from .optimise import write_optimise_outputs
+    from .optimise._run import FrontGapWarning, write_optimise_outputs
 
-    ctx.chosen = write_optimise_outputs(ctx.models, ctx.study, ctx.folder / "optimise")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", FrontGapWarning)
+        ctx.chosen = write_optimise_outputs(ctx.models, ctx.study, ctx.folder / "optimise")
+    for w in caught:  # a disagreement of NSGA-II and the exact reduction is said in the report
+        if issubclass(w.category, FrontGapWarning):
+            rec.notes.append(f"WARNING: {w.message}")
+            ctx.log(f"      WARNING: {w.message}")
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return "design chosen"
 
 
