@@ -2,10 +2,18 @@
 
 A metamodel file is data, never code. :func:`parse_expression` accepts only numbers, the model
 symbols (t, theta, H, p, q), a whitelist of smooth functions and the operators + − × ÷ ** ^ and
-parentheses; the text is tokenised and every token checked *before* SymPy builds the expression,
-and the builder sees no Python built-ins; constants are read as doubles. Anything else (attribute
-access, names such as ``__import__``, commas, brackets, strings) is refused with a ValueError
-naming it.
+parentheses; the text is tokenised and every token checked, then parsed into a Python syntax
+tree that is turned into SymPy objects node by node (nothing is evaluated by Python, no built-in
+is reachable); constants are read as doubles. Anything else (attribute access, names such as
+``__import__``, commas, brackets, strings) is refused with a ValueError naming it.
+
+The cost of reading is bounded before and while the expression is built: at most
+:data:`MAX_CHARS` characters, :data:`MAX_TOKENS` tokens and :data:`MAX_DEPTH` levels of nesting;
+a constant exponent of magnitude at most :data:`MAX_EXPONENT` (``9**9**9`` is refused at once
+instead of computing a 370-million-digit integer); integers of magnitude at most
+:data:`MAX_INTEGER`; and every constant is also evaluated in double precision as it is built,
+refused unless it is a finite real double (``exp(exp(30))``, ``sqrt(-1)``), so SymPy never needs
+arbitrary precision to compare it.
 
 :func:`format_expression` prints every floating-point constant with the shortest decimal that
 reads back to the same double, so ``parse_expression(format_expression(e)) == e`` exactly.
