@@ -265,3 +265,10 @@ def test_raw_text_and_bytes_give_a_study_or_a_study_error(raw):
     with tempfile.TemporaryDirectory() as tmp:
         path = write(Path(tmp), raw.encode("utf-8") if isinstance(raw, str) else raw)
         load_or_refuse(lambda: load_study(path))
+
+
+def test_bounds_in_si_units_are_said_once():
+    refused({"constraints": {"F_z_c_N": 1e9}}, "constraints.F_z_c_N",
+            "must be between -1e+06 and 1e+06 N, got 1000000000.0")
+    msg = refused({"magnet": {"M_z_A_per_m": 0.5}}, "magnet.M_z_A_per_m")
+    assert "between 1 and 1e+07 A/m, got 0.5" in msg and "in SI" not in msg

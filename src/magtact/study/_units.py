@@ -81,9 +81,11 @@ SI_LABEL: dict[str, str] = {"mm": "m", "kPa": "Pa", "mT": "T", "A_per_m": "A/m"}
 def bounds_text(unit: str, lo: float, hi: float) -> str:
     """``"between 0.001 and 1000 mm (1e-06 to 1 m in SI)"`` for SI bounds of a user unit."""
     text = f"between {from_si(lo, unit):g} and {from_si(hi, unit):g}"
+    label, si_label = LABEL.get(unit, unit), SI_LABEL.get(unit, unit)
     if unit:
-        text += (f" {LABEL.get(unit, unit)} ({lo:g} to {hi:g} {SI_LABEL.get(unit, unit)} "
-                 "in SI)")
+        text += f" {label}"
+    if unit and si_label != label:
+        text += f" ({lo:g} to {hi:g} {si_label} in SI)"
     return text
 
 
