@@ -144,11 +144,12 @@ def test_folder_in_place_of_an_entry_is_a_cache_error(tmp_path):
 
 
 def test_two_processes_computing_the_same_cache(tmp_path):
-    """Both processes compute (the stand-in is slowed down so that they overlap); both end with
-    the clean run's data and every entry verifies."""
+    """Both processes compute (they start together and the stand-in is slowed down so that
+    they overlap); both end with the clean run's data and every entry verifies."""
     cache = tmp_path / "cache"
     script = textwrap.dedent(f"""
         import sys, time
+        from pathlib import Path
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         import test_doe
         from magtact.doe import run_doe, save_dataset
@@ -157,6 +158,9 @@ def test_two_processes_computing_the_same_cache(tmp_path):
             time.sleep(0.15)
             return test_doe.fake_path(*args, **kwargs)
 
+        Path(sys.argv[1] + ".ready").touch()  # start together, once both have imported
+        while len(list(Path({str(tmp_path)!r}).glob("*.ready"))) < 2:
+            time.sleep(0.01)
         ds = run_doe(test_doe.tiny(n_theta=3, n_H=4), cache={str(cache)!r}, workers=0,
                      path_solver=slow_path, field_solver=test_doe.fake_field)
         save_dataset(ds, sys.argv[1])
