@@ -49,3 +49,20 @@ def test_pipeline_says_the_disagreement_in_the_report(monkeypatch, tmp_path):
     assert pipeline._stage_optimise(ctx, rec) == "design chosen"
     assert rec.notes == ["WARNING: NSGA-II's Pareto set lies 0.3 (relative) from the exact "
                          "reduction's front"]
+
+
+def test_models_not_finite_on_the_domain_are_refused_before_optimising():
+    """A model NaN on part of the domain would put NaN into the tables (reduction.csv)."""
+    import sympy as sp
+
+    from magtact.metamodel import Metamodel, ModelSet
+    from magtact.metamodel._symbols import SYMBOLS
+
+    ms = synthetic_models()
+    bad = Metamodel.from_expr("f_z", ms.f_z.expr * sp.sqrt(SYMBOLS["t"] - sp.Rational(1, 3)),
+                              "N/Pa")
+    models = ModelSet(B_r=ms.B_r, B_z=ms.B_z, f_r=ms.f_r, f_z=bad)
+    n_bad = 14 * 11 * 11  # the 14 levels t = 0, 0.025, ..., 0.325 below 1/3, every (θ, H)
+    with pytest.raises(MagtactError, match=r"model f_z is not finite \(nan\) at t = 0, theta = 0 "
+                                           rf"rad, H = 3 mm \({n_bad} of 4961 points"):
+        optimise(Responses(models), load_study(None))

@@ -182,6 +182,7 @@ def optimise(models: Responses | ModelSet, study: Study,
         If no design in the bounds meets the constraints (with the best reachable values).
     """
     R = as_responses(models)
+    R.models.check_finite(study)  # no NaN or inf from a model into the results
     clock = time.perf_counter
     t0 = clock()
     constraints = force_constraints(R, study) if constraints is None else constraints
