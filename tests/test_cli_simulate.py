@@ -53,4 +53,4 @@ def test_bad_height_is_a_clean_error(tmp_path):
                           "0.1", "--out", str(tmp_path / "o")],
                          capture_output=True, text=True, timeout=120)
     assert res.returncode == 2
-    assert "H must be positive" in res.stderr and "Traceback" not in res.stderr
+    assert "--H must be between 0.001 and 1000 mm" in res.stderr and "Traceback" not in res.stderr

@@ -16,6 +16,8 @@ import shutil
 import sys
 import time
 import traceback
+import uuid
+import warnings
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
@@ -29,6 +31,10 @@ from .study import Study
 PACKAGES = ("magtact", "numpy", "scipy", "xarray", "h5netcdf", "gmsh", "scikit-fem", "felupe",
             "pypardiso", "pyoperon", "sympy", "pymoo", "scikit-learn", "matplotlib", "dask",
             "typer", "rich")
+
+
+#: File in each stage folder naming the run (``run.json``'s ``run_id``) that wrote the folder.
+RUN_STAMP = ".magtact-run"
 
 
 class StageSkipped(Exception):
@@ -146,17 +152,21 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
     ctx = _Context(study=study, folder=folder, recompute=recompute, refit=refit,
                    data=[Path(p) for p in data] if data else None,
                    cache=Path(cache) if cache is not None else None, workers=workers, log=log)
+    run_id = uuid.uuid4().hex
+    _forget_previous_run(folder)
     (folder / "study.toml").write_text(study.to_toml(), encoding="utf-8")
     manifest = {
-        "study": study.name, "command": command or "run_study(...)",
+        "run_id": run_id, "study": study.name, "command": command or "run_study(...)",
         "started": datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
         "recompute": recompute, "refit": refit, "versions": versions(), "stages": [],
     }
+    _write_json(folder / "run.json", manifest)  # an interrupted run is never taken for the last
     records = []
     for n, (key, title, fn) in enumerate(STAGES, start=1):
         rec = StageRecord(key=key, title=title)
         log(f"[{n}/{len(STAGES)}] {title} ...")
         t0 = time.perf_counter()
+        fresh = not (folder / key).exists()  # a folder there before holds files of another run
         try:
             rec.message = fn(ctx, rec) or ""
             rec.status = "ok"
@@ -168,6 +178,8 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
             logs.mkdir(exist_ok=True)
             (logs / f"{key}.traceback.txt").write_text(traceback.format_exc(), encoding="utf-8")
         rec.wall_time_s = time.perf_counter() - t0
+        if fresh and (folder / key).is_dir():  # what the stage wrote belongs to this run
+            (folder / key / RUN_STAMP).write_text(run_id, encoding="utf-8")
         log(f"      {rec.status} ({rec.wall_time_s:.1f} s) {rec.message}")
         records.append(rec)
         manifest["stages"] = [asdict(r) for r in records]
@@ -259,11 +271,19 @@ def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
 def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
-    from .optimise import write_optimise_outputs
+    from .optimise._run import FrontGapWarning, write_optimise_outputs
     from .report import optimise_figures
 
-    ctx.chosen = write_optimise_outputs(ctx.models, ctx.study, ctx.folder / "optimise",
-                                        figures=optimise_figures)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", FrontGapWarning)
+        ctx.chosen = write_optimise_outputs(ctx.models, ctx.study, ctx.folder / "optimise",
+                                            figures=optimise_figures)
+    for w in caught:  # a disagreement of NSGA-II and the exact reduction is said in the report
+        if issubclass(w.category, FrontGapWarning):
+            rec.notes.append(f"WARNING: {w.message}")
+            ctx.log(f"      WARNING: {w.message}")
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return "design chosen"
 
 
@@ -300,6 +320,16 @@ STAGES: tuple[tuple[str, str, Callable], ...] = (
 
 
 # ---- helpers ---------------------------------------------------------------------------------
+def _forget_previous_run(folder: Path) -> None:
+    """Remove what an earlier run left in ``folder``: its report and the stage folders it
+    stamped (folders without a stamp are not magtact's to delete; the report shows them as not
+    of this run)."""
+    (folder / "report.html").unlink(missing_ok=True)
+    for key, _, _ in STAGES:
+        if (folder / key / RUN_STAMP).is_file():
+            shutil.rmtree(folder / key)
+
+
 def _copy_evidence(source: Path, folder: Path) -> None:
     """Copy ``source/*.json`` into ``folder/evidence``."""
     target = folder / "evidence"

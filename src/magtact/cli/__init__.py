@@ -33,6 +33,17 @@ def main() -> None:
     except USER_ERRORS as exc:
         console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
         sys.exit(2)
+    except OSError as exc:  # a file or folder the user named cannot be read or written
+        console.print(f"[bold red]error:[/] {escape(os_message(exc))}", highlight=False,
+                      soft_wrap=True)
+        sys.exit(2)
+
+
+def os_message(exc: OSError) -> str:
+    """One line for a failed file operation: the file(s), then the system's reason."""
+    files = [str(f) for f in (exc.filename, exc.filename2) if f is not None]
+    reason = exc.strerror or str(exc)
+    return f"{' -> '.join(files)}: {reason}" if files else reason
 
 
 __all__ = ["app", "main"]

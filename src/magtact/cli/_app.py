@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
 
+from .._errors import MagtactError
 from ..study import Study, load_study
 
 app = typer.Typer(
@@ -30,7 +32,19 @@ StudyArg = Annotated[
     typer.Argument(help="Study TOML file or preset ('magone', 'magone-printed'); "
                         "default: the built-in MagOne study."),
 ]
-OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).")]
+
+
+def check_out(path: Path) -> Path:
+    """Option callback of ``--out``: refuse, before any work, a path that cannot become a
+    folder (it or a parent is a file)."""
+    for parent in (path, *path.parents):
+        if parent.exists() and not parent.is_dir():
+            raise typer.BadParameter(f"{parent} exists and is not a folder")
+    return path
+
+
+OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).",
+                                      callback=check_out)]
 
 
 def get_study(source: str | None) -> Study:
@@ -39,6 +53,20 @@ def get_study(source: str | None) -> Study:
 
 
 def out_dir(path: Path) -> Path:
-    """Create and return an output folder."""
-    path.mkdir(parents=True, exist_ok=True)
+    """Create and return an output folder, checked to be a folder this process can write.
+
+    Raises
+    ------
+    MagtactError
+        If ``path`` (or a parent) exists and is not a folder, or the folder is not writable.
+    """
+    for parent in (path, *path.parents):
+        if parent.exists() and not parent.is_dir():
+            raise MagtactError(f"--out {path}: {parent} exists and is not a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = tempfile.NamedTemporaryFile(dir=path, prefix=".magtact-write-test-")
+        probe.close()
+    except OSError as exc:
+        raise MagtactError(f"--out {path}: cannot write there ({exc.strerror or exc})") from None
     return path

@@ -30,13 +30,13 @@ def fit(
     from ..metamodel import write_fit_outputs
     from ..report import fit_figures
     from ..sensitivity import compare_with_data
-    from ..study import to_si
+    from ..study import checked_si
 
     s = get_study(study)
     if generations is not None:
         s = replace(s, metamodel=replace(s.metamodel, generations=generations))
-    H = to_si(H_mm, "mm") if H_mm is not None else None
-    G = to_si(G_kpa, "kPa") if G_kpa is not None else None
+    H = checked_si(H_mm, "mm", "--H-mm") if H_mm is not None else None
+    G = checked_si(G_kpa, "kPa", "--G-kpa") if G_kpa is not None else None
     ds = load_dataset(data) if data is not None else bundled_for(s)
     result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
                                       log=lambda msg: console.print(msg, highlight=False),

@@ -11,7 +11,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from .._errors import MagtactError
-from ..study import Study, from_si, to_si
+from ..study import Study, checked_si, from_si
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
 ModelsOpt = Annotated[
@@ -39,7 +39,7 @@ def parse_design(text: str, what: str) -> tuple[float, float]:
                            f"got {text!r}") from None
     if not (H_mm > 0 and G_kPa > 0):
         raise MagtactError(f"{what}: H and G must be positive, got {text!r}")
-    return to_si(H_mm, "mm"), to_si(G_kPa, "kPa")
+    return checked_si(H_mm, "mm", f"{what}: H"), checked_si(G_kPa, "kPa", f"{what}: G")
 
 
 def study_models(study: Study, models: Path | None):
@@ -78,13 +78,15 @@ def optimise_command(
     from ..report import optimise_figures
 
     s = get_study(study)
+    Frc = None if Frc is None else checked_si(Frc, "N", "--Frc")
+    Fzc = None if Fzc is None else checked_si(Fzc, "N", "--Fzc")
     reference = (parse_design(constraints_from, "--constraints-from")
                  if constraints_from is not None else None)
+    folder = out_dir(out)  # a folder that cannot be written is refused before the work
     m = study_models(s, models)
     constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
     with console.status("optimising"):
         result = optimise(m, s, constraints)
-    folder = out_dir(out)
     result.write(folder, figures=optimise_figures)
     print_choice(result)
     console.print(f"written to {folder}", highlight=False)

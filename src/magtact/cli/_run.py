@@ -8,13 +8,14 @@ from typing import Annotated
 
 import typer
 
-from ._app import StudyArg, app, console, get_study, out_dir
+from ._app import StudyArg, app, check_out, console, get_study, out_dir
 
 
 @app.command("run")
 def run_command(
     study: StudyArg = None,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Results folder (created).")]
+    out: Annotated[Path, typer.Option("--out", "-o", help="Results folder (created).",
+                                      callback=check_out)]
     = Path("results"),
     recompute: Annotated[bool, typer.Option(
         "--recompute", help="Run the full FE design of experiments (cached) instead of using "

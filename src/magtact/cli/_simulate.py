@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import math
 from enum import StrEnum
 from typing import Annotated
 
@@ -33,11 +34,13 @@ def simulate_command(
 
     from ..mechanics import PathFailed, simulate_path
     from ..report import fig_deformed_body
-    from ..study import from_si, to_si
+    from ..study import checked_si, from_si
 
     s = get_study(study)
-    H_si = to_si(H, "mm")
-    G_si = None if G is None else to_si(G, "kPa")
+    H_si = checked_si(H, "mm", "--H")
+    G_si = None if G is None else checked_si(G, "kPa", "--G")
+    if not (math.isfinite(theta) and 0.0 <= theta < math.pi / 2):
+        raise MagtactError(f"--theta must be in [0, π/2) rad, got {theta!r}")
     folder = out_dir(out)
     vtu = folder / "deformed_t1.vtu"
     t = s.t_levels

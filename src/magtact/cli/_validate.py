@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -10,8 +11,11 @@ from rich.console import Console
 from rich.table import Table
 
 from .._errors import MagtactError
-from ..study import MESH_DENSITIES, PRESETS, Study
-from ._app import app, console, get_study, out_dir
+from ..study import MESH_DENSITIES, PRESETS, Study, checked_si
+from ._app import app, check_out, console, get_study, out_dir
+
+#: Highest filter cut-off accepted (cycles per mm of u_z; the samples are far coarser).
+MAX_CYCLES_PER_MM = 1e6
 
 
 def split_study_and_data(args: list[str]) -> tuple[str | None, list[Path]]:
@@ -63,7 +67,8 @@ def validate_command(
         metavar="[STUDY] DATA...",
         help="Optional study (preset or .toml), then CSV files of repeat tests; no files: the "
              "shipped SYNTHETIC example.")] = None,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")] = Path("validation"),
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.", callback=check_out)]
+    = Path("validation"),
     H: Annotated[float | None, typer.Option("--H", help="Body height H of the tested design "
                                             "(mm); default: the data's metadata.")] = None,
     G: Annotated[float | None, typer.Option("--G", help="Shear modulus G of the tested design "
@@ -100,15 +105,21 @@ def validate_command(
         data = synthetic_files()
         console.print("no data files given: using the shipped SYNTHETIC example "
                       f"({len(data)} files)", highlight=False)
-    experiment = read_experiment(data)
-    H_m, G_pa = experiment.design(None if H is None else H * 1e-3,
-                                  None if G is None else G * 1e3)
+    H_m = None if H is None else checked_si(H, "mm", "--H")
+    G_pa = None if G is None else checked_si(G, "kPa", "--G")
     if solver not in ("exact", "fe"):
         raise MagtactError(f"--solver must be 'exact' or 'fe', got {solver!r}")
+    for name, value in (("--f-lo", f_lo), ("--f-hi", f_hi)):
+        if not (math.isfinite(value) and 0.0 <= value <= MAX_CYCLES_PER_MM):
+            raise MagtactError(f"{name} must be between 0 and {MAX_CYCLES_PER_MM:g} cycles per mm "
+                               f"(--f-hi 0: no low-pass), got {value!r}")
     filt = FilterSettings(f_lo=f_lo * 1e3, f_hi=f_hi * 1e3 if f_hi > 0 else None)
+    experiment = read_experiment(data)
+    H_m, G_pa = experiment.design(H_m, G_pa)
+    folder = out_dir(out)  # a folder that cannot be written is refused before the work
     model = path_model(study, H_m, G_pa, experiment.theta, models, solver, mesh)
     result = validate(experiment, model, filter=filt, n_grid=n_grid, floor=floor)
-    written = write_outputs(result, out_dir(out), sources=data, figures=validation_figures)
+    written = write_outputs(result, folder, sources=data, figures=validation_figures)
     print_table(result)
     for path in written:
         console.print(f"wrote {path}", highlight=False)

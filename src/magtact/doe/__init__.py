@@ -1,6 +1,6 @@
 """Design of experiments: parallel, cached, resumable runs of the field and mechanics stages."""
 
-from ._cache import CacheCorruptWarning, JobCache
+from ._cache import CacheCorruptWarning, CacheError, JobCache
 from ._dataset import (
     DOE_SECTIONS,
     bundled_for,
@@ -15,7 +15,7 @@ from ._executor import default_workers
 from ._run import DOEFailed, JobFailure, RunStats, run_doe
 
 __all__ = [
-    "DOE_SECTIONS", "CacheCorruptWarning", "DOEFailed", "JobCache", "JobFailure", "RunStats",
-    "bundled_for", "bundled_path", "default_workers", "load_bundled", "load_dataset",
-    "matches_study", "run_doe", "save_dataset", "write_csv",
+    "DOE_SECTIONS", "CacheCorruptWarning", "CacheError", "DOEFailed", "JobCache", "JobFailure",
+    "RunStats", "bundled_for", "bundled_path", "default_workers", "load_bundled",
+    "load_dataset", "matches_study", "run_doe", "save_dataset", "write_csv",
 ]

@@ -6,7 +6,11 @@ NumPy ``.npz`` archive (read with ``allow_pickle=False``) holding the job's arra
 string of its scalar metadata. An entry is written to a temporary file in the same folder and
 renamed over the target (``os.replace`` is atomic on one file system), so a reader never sees a
 half-written entry; an entry that fails any check on read (header, size, checksum, key, archive)
-is reported with a :class:`CacheCorruptWarning` and treated as missing, so the job is recomputed.
+is reported with a :class:`CacheCorruptWarning` and treated as missing, so the job is recomputed;
+so is an entry that passes those checks but fails the caller's ``verify`` (an array missing,
+misshapen or not finite). Something that is not a file in an entry's place (a folder), or an
+entry that cannot be read, is a :class:`CacheError` naming it: the cache is not this run's to
+delete.
 """
 
 from __future__ import annotations
@@ -22,9 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
+
 MAGIC = b"MAGTACT-CACHE"
 FORMAT = 1
 SUFFIX = ".mtc"
+
+
+class CacheError(MagtactError):
+    """An entry's place in the cache holds something magtact cannot read or replace."""
 
 
 class CacheCorruptWarning(UserWarning):
@@ -60,15 +70,31 @@ class JobCache:
         _check_name(key, "key")
         return self.root / kind / f"{key}{SUFFIX}"
 
-    def get(self, kind: str, key: str) -> Entry | None:
-        """The verified entry, or ``None`` if it is missing or corrupt (with a warning)."""
+    def get(self, kind: str, key: str, verify=None) -> Entry | None:
+        """The verified entry, or ``None`` if it is missing or corrupt (with a warning).
+
+        ``verify(entry)``, if given, checks the content and raises ValueError when the entry
+        does not hold what the job produces (the entry is then treated as corrupt).
+
+        Raises
+        ------
+        CacheError
+            If the entry's place holds a folder or another non-file, or cannot be read.
+        """
         path = self.path(kind, key)
         try:
             data = path.read_bytes()
         except FileNotFoundError:
             return None
+        except OSError as exc:
+            what = "a folder" if path.is_dir() else "unreadable"
+            raise CacheError(f"cache entry {path} is {what} ({exc.strerror or exc}); remove it "
+                             "or give another cache folder") from None
         try:
-            return _decode(data, kind, key)
+            entry = _decode(data, kind, key)
+            if verify is not None:
+                verify(entry)
+            return entry
         except ValueError as exc:
             self.corrupt += 1
             warnings.warn(f"cache entry {path} is corrupt ({exc}); the job is recomputed",
@@ -146,4 +172,6 @@ def _decode(data: bytes, kind: str, key: str) -> Entry:
         meta = json.loads(str(arrays.pop("__meta__")))
     except Exception as exc:  # a payload that passed the checksum but is not a valid archive
         raise ValueError(f"unreadable payload: {exc}") from None
+    if not isinstance(meta, dict):
+        raise ValueError("the metadata is not a JSON object")
     return Entry(arrays=arrays, meta=meta)

@@ -208,6 +208,43 @@ def path_entry(job: PathJob, result) -> Entry:
     return Entry(arrays=arrays, meta=meta)
 
 
+def verify_entry(job: PathJob | FieldJob, entry: Entry) -> None:
+    """Check that a cache entry holds what ``job`` produces: every array with the job's shape,
+    finite, and (for a path) its scalars with a positive modulus.
+
+    Raises
+    ------
+    ValueError
+        Naming the first array or scalar that is missing, misshapen or not finite.
+    """
+    if isinstance(job, FieldJob):
+        shape = (len(job.t), len(job.theta), len(job.H))
+        names = ("B_r", "B_z")
+    else:
+        shape = (len(job.t),)
+        names = PATH_ARRAYS
+    for name in names:
+        if name not in entry.arrays:
+            raise ValueError(f"array {name!r} is missing")
+        a = entry.arrays[name]
+        if a.shape != shape or a.dtype.kind not in "fi":
+            raise ValueError(f"array {name!r} has shape {a.shape} and type {a.dtype}, expected "
+                             f"numbers of shape {shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"array {name!r} holds non-finite values")
+    if isinstance(job, PathJob):
+        if not np.allclose(entry.arrays["t"], job.t, rtol=0, atol=1e-12):
+            raise ValueError("the entry is at other t levels than the job")
+        for name in PATH_SCALARS:
+            value = entry.meta.get(name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ValueError(f"scalar {name!r} is missing or not a number")
+            if not np.isfinite(value):
+                raise ValueError(f"scalar {name!r} is not finite")
+        if not entry.meta["G"] > 0:
+            raise ValueError(f"scalar 'G' is {entry.meta['G']!r}, expected a positive modulus")
+
+
 def run_path(job: PathJob, path_solver) -> Outcome:
     """Solve one path job (in a worker); errors are returned, not raised."""
     start = time.perf_counter()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import subprocess
 import time
@@ -15,7 +16,15 @@ from ..study import Study
 from ._cache import JobCache
 from ._dataset import assemble
 from ._executor import Task, default_workers, execute
-from ._jobs import FIELD_MODEL, PATH_MODEL, plan, run_field, run_path, solver_identity
+from ._jobs import (
+    FIELD_MODEL,
+    PATH_MODEL,
+    plan,
+    run_field,
+    run_path,
+    solver_identity,
+    verify_entry,
+)
 from ._progress import Display
 
 
@@ -105,7 +114,8 @@ def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: in
     results, field_entry, tasks = {}, None, []
     display = Display([field_job, *path_jobs], console)
     for job in (field_job, *path_jobs):
-        entry = store.get(job.kind, job.key) if store is not None else None
+        entry = (store.get(job.kind, job.key, verify=functools.partial(verify_entry, job))
+                 if store is not None else None)
         if entry is None:
             is_field = job is field_job
             tasks.append(Task(job, run_field if is_field else run_path,

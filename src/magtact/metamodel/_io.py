@@ -91,10 +91,14 @@ def _check_agree(expr, expr_pq, source, n: int = 16) -> None:
     """Both forms must give the same values at random points with t > 0."""
     rng = np.random.default_rng(0)
     tt, th, hh = rng.uniform(0.05, 1.0, n), rng.uniform(0.0, 0.6, n), rng.uniform(2e-3, 8e-3, n)
-    a = sp.lambdify(TTH, expr, "numpy")(tt, th, hh)
-    b = sp.lambdify(TTH, expr_pq.subs(PQ_TO_TTH), "numpy")(tt, th, hh)
+    with np.errstate(all="ignore"):
+        a = sp.lambdify(TTH, expr, "numpy")(tt, th, hh)
+        b = sp.lambdify(TTH, expr_pq.subs(PQ_TO_TTH), "numpy")(tt, th, hh)
     a, b = np.broadcast_to(a, (n,)), np.broadcast_to(b, (n,))
     ok = np.isfinite(a) & np.isfinite(b)
+    if not ok.any():
+        raise MagtactError(f"{source}: the model is not finite at any of {n} sample points "
+                         "(0.05 <= t <= 1, 0 <= theta <= 0.6 rad, 2 <= H <= 8 mm)")
     if not np.allclose(a[ok], b[ok], rtol=1e-9, atol=1e-12 * np.max(np.abs(a[ok]), initial=1.0)):
         raise MagtactError(f"{source}: 'expression' and 'expression_pq' describe different models")
 
@@ -158,11 +162,31 @@ def load_model(path: str | Path) -> Metamodel:
         If it is not valid JSON or not a valid model file.
     """
     path = Path(path)
+    return model_from_dict(_read_json(path), str(path))
+
+
+#: Largest model file read [bytes] (a fitted model file is a few kilobytes).
+MAX_FILE_BYTES = 1_000_000
+
+
+def _read_json(path: Path):
+    """The JSON content of a model file; every way it can fail is one ValueError naming it."""
+    if not path.exists():
+        raise MissingFileError(f"metamodel file not found: {path}")
     try:
-        data = json.loads(path.read_text())
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise MagtactError(f"{path}: {path.stat().st_size:,} bytes; a model file has at most "
+                             f"{MAX_FILE_BYTES:,}")
+        text = path.read_bytes().decode("utf-8-sig")
+        return json.loads(text)
+    except OSError as exc:
+        raise MagtactError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise MagtactError(f"{path}: not UTF-8 text (byte offset {exc.start})") from None
     except json.JSONDecodeError as exc:
         raise MagtactError(f"{path}: not valid JSON ({exc})") from None
-    return model_from_dict(data, str(path))
+    except (RecursionError, MemoryError):
+        raise MagtactError(f"{path}: not a model file (JSON nested too deeply)") from None
 
 
 def save_models(models: ModelSet, folder: str | Path) -> list[Path]:
@@ -190,10 +214,7 @@ def save_models(models: ModelSet, folder: str | Path) -> list[Path]:
 
 
 def _load_any(path: Path, name: str):
-    try:
-        data = json.loads(path.read_text())
-    except json.JSONDecodeError as exc:
-        raise MagtactError(f"{path}: not valid JSON ({exc})") from None
+    data = _read_json(path)
     if isinstance(data, dict) and data.get("format") == EXACT_FORMAT and name in ("B_r", "B_z"):
         import tomllib
 
@@ -202,7 +223,7 @@ def _load_any(path: Path, name: str):
 
         try:
             study = study_from_dict(tomllib.loads(data["study_toml"]), str(path))
-        except (KeyError, TypeError, tomllib.TOMLDecodeError) as exc:
+        except (KeyError, TypeError, tomllib.TOMLDecodeError, RecursionError) as exc:
             raise MagtactError(f"{path}: exact-field file without a valid study ({exc})") from None
         return ExactField(study, name)
     if isinstance(data, dict) and data.get("format") == FIELD_FORCE_FORMAT:

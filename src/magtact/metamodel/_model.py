@@ -229,6 +229,33 @@ class ModelSet:
         """(name, model) pairs in the order B_r, B_z, f_r, f_z."""
         return [(k, getattr(self, k)) for k in RESPONSES]
 
+    def check_finite(self, study, n: tuple[int, int, int] = (41, 11, 11)) -> None:
+        """Refuse models that are not finite somewhere on the study's domain.
+
+        Each response is evaluated on an ``n`` grid over t in [0, 1], θ in [0, θ_max] and H over
+        the design range; no NaN or inf may come from a model into a result.
+
+        Raises
+        ------
+        MagtactError
+            Naming the response, the first point where it is not finite, and how many are.
+        """
+        from .._errors import MagtactError
+
+        t = np.linspace(0.0, 1.0, n[0])
+        theta = np.linspace(0.0, study.loading.theta_max, n[1])
+        H = np.linspace(*study.design.H, n[2])
+        T, TH, HH = np.meshgrid(t, theta, H, indexing="ij")
+        for name, model in self.items():
+            with np.errstate(all="ignore"):
+                v = np.broadcast_to(np.asarray(model.value(T, TH, HH), dtype=float), T.shape)
+            bad = np.flatnonzero(~np.isfinite(v))
+            if bad.size:
+                i = np.unravel_index(bad[0], T.shape)
+                raise MagtactError(f"model {name} is not finite ({v[i]}) at t = {T[i]:.4g}, "
+                                   f"theta = {TH[i]:.4g} rad, H = {HH[i] * 1e3:.4g} mm ({bad.size}"
+                                   f" of {v.size} points of the study's domain)")
+
     def fields(self, t, theta, H) -> tuple[np.ndarray, np.ndarray]:
         """(B_r, B_z) [T] at (t, θ, H) (broadcast)."""
         return self.B_r.value(t, theta, H), self.B_z.value(t, theta, H)

@@ -5,12 +5,14 @@ from __future__ import annotations
 import csv
 import json
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study, from_si
@@ -44,6 +46,16 @@ class Timings:
     def total(self) -> float:
         """Sum of the parts [s]."""
         return self.constraints + self.sweep + self.nsga2 + self.decision + self.maps
+
+
+#: Relative distance of NSGA-II's Pareto set from the exact front above which the two answers
+#: disagree: a :class:`FrontGapWarning` (a gap that is not a number is an error).
+WARN_FRONT_GAP = 0.05
+
+
+class FrontGapWarning(UserWarning):
+    """NSGA-II's Pareto set lies off the exact front: its chosen design is not to be trusted
+    (too small a budget, or design ranges far wider than the sensor's)."""
 
 
 @dataclass(frozen=True)
@@ -174,6 +186,7 @@ def optimise(models: Responses | ModelSet, study: Study,
         If no design in the bounds meets the constraints (with the best reachable values).
     """
     R = as_responses(models)
+    R.models.check_finite(study)  # no NaN or inf from a model into the results
     clock = time.perf_counter
     t0 = clock()
     constraints = force_constraints(R, study) if constraints is None else constraints
@@ -186,6 +199,16 @@ def optimise(models: Responses | ModelSet, study: Study,
     choice = choose(R, study, pareto)
     reduction_choice = choose(R, study, reduction)
     gap = front_gap(pareto, reduction)
+    if not gap <= WARN_FRONT_GAP:  # NSGA-II and the exact reduction must tell the same story
+        e, d = reduction_choice.design, choice.design
+        text = (f"NSGA-II's Pareto set lies {gap:.3g} (relative) from the exact reduction's "
+                f"front, more than {WARN_FRONT_GAP:g}: its choice H = {from_si(d.H, 'mm'):.4g} "
+                f"mm, G = {from_si(d.G, 'kPa'):.4g} kPa disagrees with the exact reduction's "
+                f"H = {from_si(e.H, 'mm'):.4g} mm, G = {from_si(e.G, 'kPa'):.4g} kPa; check the "
+                "design ranges or raise [optimise] population and nsga2_generations")
+        if not np.isfinite(gap):
+            raise MagtactError(text)
+        warnings.warn(text, FrontGapWarning, stacklevel=2)
     t4 = clock()
     maps = design_maps(R, study)
     t5 = clock()

@@ -39,6 +39,8 @@ STAGES: tuple[tuple[str, str, str], ...] = (
     ("validation", "Validation against experiments",
      "Mean ± standard deviation of repeat indentation tests against the model; c_v and ε."),
 )
+#: File in each stage folder naming the run that wrote it (see :mod:`magtact.pipeline`).
+RUN_STAMP = ".magtact-run"
 #: JSON files of a stage folder that are not shown as data.
 SKIP_JSON = ("captions.json", "chosen.json")
 #: Rows of a CSV table shown in the report (the file has them all).
@@ -88,8 +90,11 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     folder = Path(folder)
     if not folder.is_dir():
         raise MissingFileError(f"{folder}: no such results folder")
-    manifest = _load_json(folder / "run.json") or {}
-    stages = {s.get("key"): s for s in manifest.get("stages", [])}
+    manifest = _load_json(folder / "run.json")
+    manifest = manifest if isinstance(manifest, dict) else {}  # a forged run.json: none
+    listed = manifest.get("stages")
+    stages = {s.get("key"): _stage_record(s) for s in (listed if isinstance(listed, list) else [])
+              if isinstance(s, dict)}
     study_name = manifest.get("study", "unknown study")
     parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
              f"<p>Results folder <code>{_e(folder.resolve())}</code>; report built "
@@ -100,7 +105,8 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
         parts.append('<div class="missing">No <code>run.json</code> in this folder: the stages '
                      "below are reported from the files present only; statuses and timings are "
                      "unknown.</div>")
-    if _is_synthetic(folder / "validation"):
+    if (_of_run(folder / "validation", manifest.get("run_id"))
+            and _is_synthetic(folder / "validation")):
         parts.append('<div class="banner"><b>SYNTHETIC validation data.</b> The validation '
                      "section compares the model with a generated example data set (model plus "
                      "noise, drift and scatter), not with measurements.</div>")
@@ -109,9 +115,13 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
                  f'{toc} · <a href="#publication">The publication</a> · '
                  '<a href="#evidence">Evidence</a> · <a href="#settings">Settings</a></p>')
     parts.append(_summary(manifest, stages, folder))
-    parts.append(_chosen(folder / "optimise"))
+    run_id = manifest.get("run_id")
+    parts.append(_chosen(folder / "optimise" if _of_run(folder / "optimise", run_id) else None))
     for key, title, what in STAGES:
-        parts.append(_stage(folder / key, key, title, what, stages.get(key)))
+        if _of_run(folder / key, run_id):
+            parts.append(_stage(folder / key, key, title, what, stages.get(key)))
+        else:
+            parts.append(_other_run(folder / key, key, title, what))
     parts.append(publication_section(folder / "publication", _definition(folder)))
     parts.append(_evidence([folder / "evidence"] + ([Path(evidence)] if evidence else [])))
     parts.append(_settings(folder / "study.toml"))
@@ -156,8 +166,8 @@ def _summary(manifest: dict, stages: dict, folder: Path) -> str:
             '</th><th class="l">message</th></tr>' + "".join(rows) + "</table>")
 
 
-def _chosen(folder: Path) -> str:
-    data = _load_json(folder / "chosen.json")
+def _chosen(folder: Path | None) -> str:
+    data = _load_json(folder / "chosen.json") if folder is not None else None
     if not data:
         return ('<h2 id="chosen">Chosen design</h2><div class="missing">No chosen design in '
                 "this folder (the optimisation stage did not produce "
@@ -203,7 +213,7 @@ def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> 
         out.append('<div class="banner"><b>SYNTHETIC example data</b> — generated from the model '
                    "with noise, drift and sensor-to-sensor scatter; not a measurement.</div>")
     captions = _load_json(folder / "captions.json") or {}
-    files = sorted(p for p in folder.iterdir() if p.is_file())
+    files = sorted(p for p in folder.iterdir() if p.is_file() and not p.name.startswith("."))
     summaries = [p for p in files if p.suffix == ".json" and p.name not in SKIP_JSON]
     for p in summaries:  # a stage's summary (a JSON with a title) comes first
         if isinstance(_load_json(p), dict) and "title" in _load_json(p):
@@ -232,6 +242,35 @@ def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> 
     return "\n".join(out)
 
 
+def _stage_record(s: dict) -> dict:
+    """A stage's record of run.json with every field of the type the report expects."""
+    notes = s.get("notes")
+    return {"key": s.get("key"), "status": str(s.get("status", "unknown")),
+            "wall_time_s": s.get("wall_time_s"), "message": str(s.get("message", "")),
+            "notes": [str(n) for n in notes] if isinstance(notes, list) else []}
+
+
+def _of_run(folder: Path, run_id: str | None) -> bool:
+    """True if ``folder`` holds the outputs of the run ``run_id`` (its stamp file names it), or
+    if the manifest names no run (a folder laid out by hand)."""
+    if run_id is None or not folder.is_dir() or not any(folder.iterdir()):
+        return True
+    stamp = folder / RUN_STAMP
+    return stamp.is_file() and stamp.read_text(encoding="utf-8", errors="replace").strip() == \
+        run_id
+
+
+def _other_run(folder: Path, key: str, title: str, what: str) -> str:
+    """The section of a stage whose folder was written by another run: nothing of it shown."""
+    stamp = folder / RUN_STAMP
+    other = (f"run {stamp.read_text(encoding='utf-8', errors='replace').strip()[:32]}"
+             if stamp.is_file() else "a run that did not stamp it, or by hand")
+    return (f'<h2 id="{key}">{_e(title)}</h2><p>{_e(what)}</p><div class="missing">The files '
+            f"in <code>{_e(key)}/</code> are not of this run (the folder was written by "
+            f"{_e(other)}); nothing of them is shown. Remove the folder or run into a new "
+            "one.</div>")
+
+
 def _evidence(folders: list[Path]) -> str:
     files = sorted({p.name: p for f in folders if f.is_dir() for p in f.glob("*.json")}.values())
     out = ['<h2 id="evidence">Accuracy and convergence evidence</h2>']
@@ -257,7 +296,7 @@ def _settings(path: Path) -> str:
 
 def _versions(manifest: dict) -> str:
     versions = manifest.get("versions")
-    if not versions:
+    if not versions or not isinstance(versions, dict):
         return ""
     rows = "".join(f'<tr><td class="l">{_e(k)}</td><td class="l">{_e(v)}</td></tr>'
                    for k, v in versions.items())
@@ -409,7 +448,7 @@ def _is_synthetic(folder: Path) -> bool:
 def _load_json(path: Path):
     try:
         return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return None
 
 

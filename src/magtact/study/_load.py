@@ -13,7 +13,7 @@ import tomli_w
 
 from .._errors import MagtactError
 from ._model import SECTIONS, Study, key_of
-from ._units import LABEL, from_si, to_si
+from ._units import LABEL, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
 
@@ -24,7 +24,15 @@ class StudyError(MagtactError):
     def __init__(self, key: str, message: str, source: str | None = None):
         self.key = key
         where = f"{source}: " if source else ""
-        super().__init__(f"{where}[{key}] {message}")
+        super().__init__(_one_line(f"{where}[{key}] {message}"))
+
+
+def _one_line(text: str) -> str:
+    """``text`` with line breaks and other unprintable characters escaped (keys and values
+    quoted from a file may hold any character)."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def magone() -> Study:
@@ -52,42 +60,80 @@ def load_study(source: str | Path | None = None) -> Study:
         label = f"preset '{source}'"
     else:
         path = Path(source)
-        if not path.is_file():
-            raise StudyError("file", f"study file not found: {path}")
-        text = path.read_text("utf-8")
-        label = str(path)
+        text, label = _read_text(path), str(path)
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise StudyError("file", f"is not valid TOML: {exc}", label) from None
+    except (tomllib.TOMLDecodeError, ValueError) as exc:
+        raise StudyError("file", f"is not valid TOML: {_clip(str(exc), 200)}", label) from None
+    except (RecursionError, MemoryError):
+        raise StudyError("file", "is not a study: its arrays or tables nest too deeply",
+                         label) from None
     return study_from_dict(data, label)
+
+
+#: Largest study file read [bytes] (the built-in study is about 3 kB).
+MAX_FILE_BYTES = 1_000_000
+
+
+def _read_text(path: Path) -> str:
+    """The text of a study file (UTF-8, with or without a byte-order mark), or a StudyError."""
+    if not path.exists():
+        raise StudyError("file", f"study file not found: {path}")
+    if not path.is_file():
+        raise StudyError("file", "is not a file (a study is one TOML file)", str(path))
+    try:
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise StudyError("file", f"has {size:,} bytes; a study file has at most "
+                                     f"{MAX_FILE_BYTES:,}", str(path))
+        data = path.read_bytes()
+    except OSError as exc:
+        raise StudyError("file", f"cannot be read: {exc.strerror or exc}", str(path)) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise StudyError("file", f"is not UTF-8 text (byte {data[exc.start]:#04x} at offset "
+                                 f"{exc.start}); save it as UTF-8", str(path)) from None
+
+
+def _clip(text: str, n: int = 60) -> str:
+    return text if len(text) <= n else text[:n] + f"... ({len(text)} characters)"
+
+
+def _show(value) -> str:
+    """A value for a message: its repr, shortened (huge integers and strings included)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
+        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+    return _clip(repr(value))
 
 
 def study_from_dict(data: dict, source: str | None = None) -> Study:
     """Build a validated :class:`Study` from a TOML-shaped dict in user units."""
+    if not isinstance(data, dict):
+        raise StudyError("file", f"expected a table of sections, got {_show(data)}", source)
     data = dict(data)
     base_name = data.pop("base", "magone")
     if base_name == "none":
         base, complete = Study(), True
-    elif base_name in PRESETS:
+    elif isinstance(base_name, str) and base_name in PRESETS:
         base, complete = load_study(base_name), False
     else:
-        raise StudyError("base", f"expected one of {sorted(PRESETS) + ['none']}, got {base_name!r}",
-                         source)
+        raise StudyError("base", f"expected one of {sorted(PRESETS) + ['none']}, got "
+                                 f"{_show(base_name)}", source)
     top = {}
     for key in ("name", "description"):
         if key in data:
             value = data.pop(key)
             if not isinstance(value, str):
-                raise StudyError(key, f"expected a string, got {value!r}", source)
+                raise StudyError(key, f"expected a string, got {_show(value)}", source)
             top[key] = value
     if complete and "name" not in top:
         raise StudyError("name", "is missing (required when base = 'none')", source)
     for key in data:
         if key not in SECTIONS:
-            raise StudyError(key, _unknown(key, SECTIONS, "section"), source)
+            raise StudyError(_clip(str(key)), _unknown(str(key), SECTIONS, "section"), source)
         if not isinstance(data[key], dict):
-            raise StudyError(key, f"expected a table [{key}], got {data[key]!r}", source)
+            raise StudyError(key, f"expected a table [{key}], got {_show(data[key])}", source)
     sections = {}
     for name in SECTIONS:
         sections[name] = _section(name, getattr(base, name), data.get(name, {}), complete, source)
@@ -106,7 +152,8 @@ def _section(name: str, default, given: dict, complete: bool, source):
     spec = {key_of(f): f for f in fields(default)}
     for key in given:
         if key not in spec:
-            raise StudyError(f"{name}.{key}", _unknown(key, spec, "key"), source)
+            raise StudyError(f"{name}.{_clip(str(key))}", _unknown(str(key), spec, "key"),
+                             source)
     values = {}
     for key, f in spec.items():
         full = f"{name}.{key}"
@@ -135,38 +182,63 @@ def _expected(f) -> str:
 def _convert(full: str, f, value, source):
     m = f.metadata
     if m["choices"]:
-        if value not in m["choices"]:
-            raise StudyError(full, f"expected {_expected(f)}, got {value!r}", source)
+        if not isinstance(value, str) or value not in m["choices"]:
+            raise StudyError(full, f"expected {_expected(f)}, got {_show(value)}", source)
         return value
     if isinstance(f.default, bool):
         if not isinstance(value, bool):
-            raise StudyError(full, f"expected true or false, got {value!r}", source)
+            raise StudyError(full, f"expected true or false, got {_show(value)}", source)
         return value
     if isinstance(f.default, tuple):
         if not (isinstance(value, list) and len(value) == 2):
-            raise StudyError(full, f"expected {_expected(f)}, got {value!r}", source)
+            raise StudyError(full, f"expected {_expected(f)}, got {_show(value)}", source)
         lo, hi = (_number(full, f, v, source) for v in value)
         if not lo < hi:
             raise StudyError(full, f"range out of order: low {value[0]} must be below high "
                                    f"{value[1]}", source)
-        return (to_si(lo, m["unit"]), to_si(hi, m["unit"]))
+        return (_si(full, f, lo, source), _si(full, f, hi, source))
     value = _number(full, f, value, source)
-    return value if m["integer"] else to_si(value, m["unit"])
+    return value if m["integer"] else _si(full, f, value, source)
 
 
 def _number(full: str, f, value, source):
+    """A number as written, checked for type, finiteness, sign and the written bounds."""
     m = f.metadata
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise StudyError(full, f"expected {_expected(f)}, got {value!r}", source)
+        raise StudyError(full, f"expected {_expected(f)}, got {_show(value)}", source)
     if m["integer"] and not isinstance(value, int):
-        raise StudyError(full, f"expected an integer, got {value!r}", source)
-    if not math.isfinite(value):
-        raise StudyError(full, f"expected a finite number, got {value!r}", source)
+        raise StudyError(full, f"expected an integer, got {_show(value)}", source)
+    if not m["integer"]:
+        try:
+            value = float(value)
+        except OverflowError:
+            raise StudyError(full, f"{_show(value)} is outside the range of a double",
+                             source) from None
+        if not math.isfinite(value):
+            raise StudyError(full, f"expected a finite number, got {value!r}", source)
     if m["positive"] and value <= 0:
-        raise StudyError(full, f"must be positive, got {value!r}", source)
+        raise StudyError(full, f"must be positive, got {_show(value)}", source)
     if m["minimum"] is not None and value < m["minimum"]:
-        raise StudyError(full, f"must be at least {m['minimum']}, got {value!r}", source)
+        raise StudyError(full, f"must be at least {m['minimum']}, got {_show(value)}", source)
+    if m["maximum"] is not None and value > m["maximum"]:
+        raise StudyError(full, f"must be at most {m['maximum']:,} (a bound on the work a study "
+                               f"may ask for), got {_show(value)}", source)
     return value
+
+
+def _si(full: str, f, value: float, source) -> float:
+    """``value`` converted to SI and checked against the setting's physical bounds."""
+    m = f.metadata
+    unit = m["unit"]
+    si = to_si(value, unit)
+    bounds = m["bounds"]
+    if bounds is None or (value == 0 and m["minimum"] == 0):
+        return si
+    lo, hi = bounds
+    if not lo <= si <= hi:
+        where = ("0 or " if m["minimum"] == 0 else "") + bounds_text(unit, lo, hi)
+        raise StudyError(full, f"must be {where}, got {value!r}", source)
+    return si
 
 
 def _check_consistency(s: Study, source) -> None:
@@ -198,12 +270,61 @@ def _check_consistency(s: Study, source) -> None:
         raise StudyError("loading.theta_max_rad", f"must not exceed atan(mu_f) = "
                                                   f"{math.atan(ld.mu_f):.6g} rad, got "
                                                   f"{ld.theta_max:.6g}", source)
+    if s.mechanics.magnet_edge_radius >= min(mg.R_m, mg.H_m):
+        raise StudyError("mechanics.magnet_edge_radius_mm",
+                         f"the magnet's edge radius {_mm(s.mechanics.magnet_edge_radius)} mm must "
+                         f"be smaller than its radius and height (min(R_m, H_m) = "
+                         f"{_mm(min(mg.R_m, mg.H_m))} mm)", source)
+    _check_work(s, source)
     for name in ("H_original", "G_original"):
         value, (lo, hi) = getattr(s.design, name), getattr(s.design, name[0])
         if not lo <= value <= hi:
             unit = "mm" if name[0] == "H" else "kPa"
             raise StudyError(f"design.{name}_{unit}", f"{from_si(value, unit):g} {unit} lies "
                                                       f"outside the design range", source)
+
+
+#: Most structural paths (loading paths solved by FE) a study's DOE may ask for.
+MAX_PATHS = 10_000
+#: Most field points (t × θ × H levels) a study's DOE may ask for.
+MAX_FIELD_POINTS = 2_000_000
+#: Most force points (t × θ × H × G levels) of a study's DOE data set (80 MB per force array).
+MAX_DATA_POINTS = 10_000_000
+#: Finest FE element at the magnet surface, as a fraction of the magnet's smaller dimension.
+MIN_H_MAGNET_RATIO = 1 / 200
+
+
+def _check_work(s: Study, source) -> None:
+    """Bounds on the work a study asks for (each message says the bound)."""
+    d, mg, fm = s.doe, s.magnet, s.magnetics
+    paths = d.n_theta * d.n_H * (1 if s.mechanics.scale_in_G else d.n_G)
+    if paths > MAX_PATHS:
+        key = "doe.n_G" if not s.mechanics.scale_in_G and d.n_G > 1 else "doe.n_H"
+        raise StudyError(key, f"the DOE asks for {paths:,} structural paths (n_theta × n_H"
+                              f"{'' if s.mechanics.scale_in_G else ' × n_G'}); at most "
+                              f"{MAX_PATHS:,}", source)
+    points = d.n_t * d.n_theta * d.n_H
+    if points > MAX_FIELD_POINTS:
+        raise StudyError("doe.n_t", f"the DOE asks for {points:,} field points (n_t × n_theta × "
+                                    f"n_H); at most {MAX_FIELD_POINTS:,}", source)
+    if points * d.n_G > MAX_DATA_POINTS:
+        raise StudyError("doe.n_G", f"the DOE data set would hold {points * d.n_G:,} force points "
+                                    f"(n_t × n_theta × n_H × n_G); at most {MAX_DATA_POINTS:,}",
+                         source)
+    finest = MIN_H_MAGNET_RATIO * min(mg.R_m, mg.H_m)
+    if fm.h_magnet < finest:
+        raise StudyError("magnetics.h_magnet_mm", f"an element size of {_mm(fm.h_magnet)} mm "
+                                                  f"would mesh millions of cells; at least "
+                                                  f"min(R_m, H_m)/200 = {_mm(finest)} mm",
+                         source)
+    if fm.h_magnet > min(mg.R_m, mg.H_m):
+        raise StudyError("magnetics.h_magnet_mm", f"an element size of {_mm(fm.h_magnet)} mm "
+                                                  f"does not resolve the magnet; at most "
+                                                  f"min(R_m, H_m) = {_mm(min(mg.R_m, mg.H_m))} "
+                                                  "mm", source)
+    if not fm.growth_near < fm.growth:
+        raise StudyError("magnetics.growth_near", f"must be below magnetics.growth = "
+                                                  f"{fm.growth:g}, got {fm.growth_near:g}", source)
 
 
 def _mm(x: float) -> str:

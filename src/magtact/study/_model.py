@@ -2,8 +2,12 @@
 
 Each TOML section is one frozen dataclass below. A field's metadata says how it is written in a
 study file: the key is the field name followed by the unit suffix (``R`` in metres is ``R_mm`` in
-millimetres), ``positive`` asks for a value > 0, ``choices`` lists the allowed strings. Adding a
-setting is adding one field here; loading, validation and TOML export follow from the metadata.
+millimetres), ``positive`` asks for a value > 0, ``choices`` lists the allowed strings,
+``minimum`` and ``maximum`` bound the value as written. Every number is also checked *after* its
+conversion to SI against ``bounds``, the range a physical sensor (or a run that finishes) can
+have: by default :data:`magtact.study._units.PHYSICAL` of its unit, so no value overflows or
+vanishes in the conversion. Adding a setting is adding one field here; loading, validation and
+TOML export follow from the metadata.
 """
 
 from __future__ import annotations
@@ -13,13 +17,23 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from ._units import PHYSICAL
+
 
 def setting(default, unit: str = "", *, positive: bool = False, choices=None,
-            integer: bool = False, minimum=None, doc: str = ""):
-    """A study setting with its user unit (``default`` is given in SI)."""
+            integer: bool = False, minimum=None, maximum=None, bounds=None, doc: str = ""):
+    """A study setting with its user unit (``default`` is given in SI).
+
+    ``bounds = (low, high)`` is the physical range of the value in SI (inclusive; a zero is
+    also accepted when ``minimum`` is 0); default: the range of its unit in
+    :data:`magtact.study._units.PHYSICAL`. ``maximum`` bounds the value as written (integers:
+    the work a study may ask for).
+    """
+    if bounds is None and not choices and not integer:
+        bounds = PHYSICAL.get(unit)
     return field(default=default, metadata={
         "unit": unit, "positive": positive, "choices": choices, "integer": integer,
-        "minimum": minimum, "doc": doc,
+        "minimum": minimum, "maximum": maximum, "bounds": bounds, "doc": doc,
     })
 
 
@@ -64,8 +78,9 @@ class Loading:
 
     dz_sat: float = setting(2.97e-3, "mm", positive=True,
                             doc="magnet–sensor distance at which the Hall reading saturates")
-    mu_f: float = setting(0.45, positive=True, doc="Coulomb friction coefficient elastomer/plates")
-    theta_max: float = setting(math.atan(0.45), "rad", positive=True,
+    mu_f: float = setting(0.45, positive=True, bounds=(1e-3, 10.0),
+                          doc="Coulomb friction coefficient elastomer/plates")
+    theta_max: float = setting(math.atan(0.45), "rad", positive=True, bounds=(1e-6, 1.5),
                                doc="largest shear angle; at most atan(mu_f)")
 
 
@@ -75,7 +90,7 @@ class Material:
 
     G_ref: float = setting(29.4e3, "kPa", positive=True,
                            doc="shear modulus of the structural solves (F scales with G)")
-    bulk_ratio: float = setting(5000.0, minimum=1000.0,
+    bulk_ratio: float = setting(5000.0, minimum=1000.0, bounds=(1000.0, 1e9),
                                 doc="bulk / shear modulus (nearly incompressible)")
 
 
@@ -93,10 +108,12 @@ class Design:
 class DOE:
     """Full-factorial levels (docs/method.md §4)."""
 
-    n_t: int = setting(21, integer=True, minimum=2, doc="levels of the non-dimensional load t")
-    n_theta: int = setting(5, integer=True, minimum=1, doc="levels of the shear angle")
-    n_H: int = setting(5, integer=True, minimum=1, doc="levels of the base height H")
-    n_G: int = setting(5, integer=True, minimum=1, doc="levels of the shear modulus G")
+    n_t: int = setting(21, integer=True, minimum=2, maximum=1001,
+                       doc="levels of the non-dimensional load t")
+    n_theta: int = setting(5, integer=True, minimum=1, maximum=101, doc="levels of the shear angle")
+    n_H: int = setting(5, integer=True, minimum=1, maximum=101, doc="levels of the base height H")
+    n_G: int = setting(5, integer=True, minimum=1, maximum=1001,
+                       doc="levels of the shear modulus G")
 
 
 @dataclass(frozen=True)
@@ -106,15 +123,17 @@ class Magnetics:
     solver: str = setting("fe", choices=("fe", "exact"), doc="field solver")
     h_magnet: float = setting(0.1e-3, "mm", positive=True,
                               doc="FE element size at the magnet surface")
-    growth_near: float = setting(0.0125, minimum=0.0,
+    growth_near: float = setting(0.0125, minimum=0.0, bounds=(1e-4, 10.0),
                                  doc="FE size growth per unit distance within `near` of the magnet")
     near: float = setting(13e-3, "mm", positive=True,
                           doc="thickness of the finely graded zone around the magnet (holds the "
                               "Hall point path)")
-    growth: float = setting(0.3, positive=True,
+    growth: float = setting(0.3, positive=True, bounds=(1e-2, 100.0),
                             doc="FE element size growth per unit distance beyond `near` (grading)")
-    far_r: float = setting(100.0, positive=True, doc="far boundary radius in units of R_m")
-    far_z: float = setting(50.0, positive=True, doc="far boundary half-height in units of H_m")
+    far_r: float = setting(100.0, positive=True, bounds=(2.0, 1000.0),
+                           doc="far boundary radius in units of R_m")
+    far_z: float = setting(50.0, positive=True, bounds=(1.0, 1000.0),
+                           doc="far boundary half-height in units of H_m")
 
 
 @dataclass(frozen=True)
@@ -126,20 +145,23 @@ class Mechanics:
     scale_in_G: bool = setting(True, doc="solve at G_ref and scale forces by G/G_ref")
     solver: str = setting("pardiso", choices=("pardiso", "superlu"),
                           doc="sparse direct solver of the Newton systems")
-    threads: int = setting(1, integer=True, minimum=0,
+    threads: int = setting(1, integer=True, minimum=0, maximum=1024,
                            doc="threads of the PARDISO solver (0: library default)")
-    contact_penalty: float = setting(5.0, positive=True,
+    contact_penalty: float = setting(5.0, positive=True, bounds=(1e-3, 1e6),
                                      doc="contact penalty relative to the solid's nodal stiffness")
-    elastic_slip: float = setting(5e-5, "mm", positive=True,
+    elastic_slip: float = setting(5e-5, "mm", positive=True, bounds=(1e-12, 1e-3),
                                   doc="allowable elastic slip of sticking contact points")
     magnet_edge_radius: float = setting(6e-4, "mm", minimum=0.0,
                                         doc="radius of the rounded lower edge of the rigid magnet "
                                             "in the structural model (0: sharp)")
-    dt_initial: float = setting(0.025, positive=True, doc="first load step (in units of t)")
-    dt_min: float = setting(1e-4, positive=True, doc="smallest load step before a path fails")
-    dt_max: float = setting(0.1, positive=True, doc="largest load step")
-    max_newton: int = setting(12, integer=True, minimum=2, doc="Newton iterations per step")
-    newton_tol: float = setting(1e-6, positive=True,
+    dt_initial: float = setting(0.025, positive=True, bounds=(1e-9, 1.0),
+                                doc="first load step (in units of t)")
+    dt_min: float = setting(1e-4, positive=True, bounds=(1e-9, 1.0),
+                            doc="smallest load step before a path fails")
+    dt_max: float = setting(0.1, positive=True, bounds=(1e-9, 1.0), doc="largest load step")
+    max_newton: int = setting(12, integer=True, minimum=2, maximum=1000,
+                              doc="Newton iterations per step")
+    newton_tol: float = setting(1e-6, positive=True, bounds=(1e-15, 0.5),
                                 doc="relative residual tolerance of the Newton iterations")
 
 
@@ -158,22 +180,26 @@ class Metamodel:
     """Genetic-programming metamodels (docs/method.md §5); fixed generations and seed:
     reproducible."""
 
-    generations: int = setting(100, integer=True, minimum=1, doc="GP generations per fit")
-    population: int = setting(600, integer=True, minimum=10, doc="GP population size")
-    max_length: int = setting(60, integer=True, minimum=3, doc="largest expression (tree nodes)")
-    local_iterations: int = setting(5, integer=True, minimum=0,
+    generations: int = setting(100, integer=True, minimum=1, maximum=100_000,
+                               doc="GP generations per fit")
+    population: int = setting(600, integer=True, minimum=10, maximum=100_000,
+                              doc="GP population size")
+    max_length: int = setting(60, integer=True, minimum=3, maximum=200,
+                              doc="largest expression (tree nodes)")
+    local_iterations: int = setting(5, integer=True, minimum=0, maximum=1000,
                                     doc="Levenberg-Marquardt steps on the constants per evaluation")
     operators: str = setting("smooth", choices=("smooth", "rational"),
                              doc="'smooth': add, sub, mul, div, exp, log, sqrt, tanh; "
                                  "'rational': add, sub, mul, div")
-    seed: int = setting(0, integer=True, minimum=0, doc="random seed of the first fit")
-    retries: int = setting(2, integer=True, minimum=0,
+    seed: int = setting(0, integer=True, minimum=0, maximum=2**32 - 1,
+                      doc="random seed of the first fit")
+    retries: int = setting(2, integer=True, minimum=0, maximum=100,
                            doc="refits with the next seeds when a model fails the guard rails")
-    holdout_paths: int = setting(4, integer=True, minimum=0,
+    holdout_paths: int = setting(4, integer=True, minimum=0, maximum=10_000,
                                  doc="interior (theta, H) paths held out to measure accuracy")
     b_model: str = setting("fit", choices=("fit", "exact"),
                            doc="'fit': GP models of B_r, B_z; 'exact': the closed-form field")
-    threads: int = setting(2, integer=True, minimum=1, doc="threads of the GP")
+    threads: int = setting(2, integer=True, minimum=1, maximum=1024, doc="threads of the GP")
 
 
 #: Definitions of the sensitivity Γ (docs/method.md §6): "jacobian", the total
@@ -197,23 +223,27 @@ class Sensitivity:
 class Optimise:
     """Design optimisation (docs/method.md §7): per-design extrema, maps, NSGA-II, reduction."""
 
-    population: int = setting(200, integer=True, minimum=4,
+    population: int = setting(200, integer=True, minimum=4, maximum=100_000,
                               doc="population of the per-design GA and of NSGA-II")
-    seed: int = setting(0, integer=True, minimum=0, doc="random seed of every GA run")
-    ga_generations: int = setting(15, integer=True, minimum=1,
+    seed: int = setting(0, integer=True, minimum=0, maximum=2**32 - 1,
+                      doc="random seed of every GA run")
+    ga_generations: int = setting(15, integer=True, minimum=1, maximum=10_000,
                                   doc="GA generations before the trust-region refinement")
-    nsga2_generations: int = setting(100, integer=True, minimum=1, doc="NSGA-II generations")
-    tol: float = setting(1e-12, positive=True, doc="refinement tolerance (relative)")
-    grid_n: int = setting(10, integer=True, minimum=2, doc="map levels along H and along G")
-    sweep_n: int = setting(1001, integer=True, minimum=3,
+    nsga2_generations: int = setting(100, integer=True, minimum=1, maximum=10_000,
+                                     doc="NSGA-II generations")
+    tol: float = setting(1e-12, positive=True, bounds=(1e-16, 0.1),
+                         doc="refinement tolerance (relative)")
+    grid_n: int = setting(10, integer=True, minimum=2, maximum=1000,
+                          doc="map levels along H and along G")
+    sweep_n: int = setting(1001, integer=True, minimum=3, maximum=100_001,
                            doc="heights of the exact reduction's 1D sweep")
-    sweep_coarse: int = setting(41, integer=True, minimum=2,
+    sweep_coarse: int = setting(41, integer=True, minimum=2, maximum=10_001,
                                 doc="heights of the sweep solved from full start grids")
-    start_t: int = setting(41, integer=True, minimum=2,
+    start_t: int = setting(41, integer=True, minimum=2, maximum=1001,
                            doc="start grid along t of the batched per-height solver")
-    start_theta: int = setting(21, integer=True, minimum=2,
+    start_theta: int = setting(21, integer=True, minimum=2, maximum=1001,
                                doc="start grid along theta of the batched per-height solver")
-    active_rtol: float = setting(1e-2, positive=True,
+    active_rtol: float = setting(1e-2, positive=True, bounds=(1e-12, 1.0),
                                  doc="a constraint is active when |margin| <= this x |limit|")
 
 

@@ -6,6 +6,10 @@ millimetres and kilopascals. Every conversion between the two goes through this 
 
 from __future__ import annotations
 
+import math
+
+from .._errors import MagtactError
+
 #: Value in SI = value in the user unit × num / den (kept as two integers so that a value such
 #: as 2.97 mm becomes exactly the float nearest to 0.00297 m).
 SCALE: dict[str, tuple[int, int]] = {
@@ -18,6 +22,19 @@ SCALE: dict[str, tuple[int, int]] = {
     "A_per_m": (1, 1),
     "s": (1, 1),
     "": (1, 1),
+}
+
+#: Physical range in SI (inclusive) of a study value given in each user unit: lengths of a
+#: sensor between 1 µm and 1 m, moduli between 1 Pa and 1 GPa, magnetisations between 1 A/m and
+#: 10 MA/m (the strongest permanent magnets are near 1.1 MA/m), forces within ±1 MN, angles
+#: between 0 and π/2. A setting may narrow its own range (``bounds`` in
+#: :func:`magtact.study._model.setting`).
+PHYSICAL: dict[str, tuple[float, float]] = {
+    "mm": (1e-6, 1.0),
+    "kPa": (1.0, 1e9),
+    "A_per_m": (1.0, 1e7),
+    "N": (-1e6, 1e6),
+    "rad": (0.0, 1.5707963267948966),
 }
 
 #: Printable form of each unit suffix.
@@ -55,3 +72,37 @@ def mm(value):
 def kpa(value):
     """Pascal → kilopascal (for tables and plot axes)."""
     return from_si(value, "kPa")
+
+
+#: SI unit of each user unit, for messages.
+SI_LABEL: dict[str, str] = {"mm": "m", "kPa": "Pa", "mT": "T", "A_per_m": "A/m"}
+
+
+def bounds_text(unit: str, lo: float, hi: float) -> str:
+    """``"between 0.001 and 1000 mm (1e-06 to 1 m in SI)"`` for SI bounds of a user unit."""
+    text = f"between {from_si(lo, unit):g} and {from_si(hi, unit):g}"
+    label, si_label = LABEL.get(unit, unit), SI_LABEL.get(unit, unit)
+    if unit:
+        text += f" {label}"
+    if unit and si_label != label:
+        text += f" ({lo:g} to {hi:g} {si_label} in SI)"
+    return text
+
+
+def check_si(si: float, unit: str, what: str, shown, bounds=None) -> float:
+    """Return the SI value ``si`` if it is finite and within ``bounds`` (default: the physical
+    range :data:`PHYSICAL` of ``unit``); else raise a MagtactError naming ``what`` (e.g. ``"--H"``
+    or ``"data.csv: metadata 'design_h_mm'"``), the bounds and the value as given (``shown``)."""
+    lo, hi = PHYSICAL[unit] if bounds is None else bounds
+    if not (math.isfinite(si) and lo <= si <= hi):
+        raise MagtactError(f"{what} must be {bounds_text(unit, lo, hi)}, got {shown!r}")
+    return si
+
+
+def checked_si(value: float, unit: str, what: str, bounds=None) -> float:
+    """``value`` in the user unit ``unit`` → SI, checked by :func:`check_si`."""
+    try:
+        si = to_si(float(value), unit)
+    except (OverflowError, TypeError, ValueError):
+        raise MagtactError(f"{what} must be a number, got {value!r}") from None
+    return check_si(si, unit, what, value, bounds)

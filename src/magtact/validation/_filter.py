@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,9 +31,9 @@ class FilterSettings:
     f_hi: float | None = 2000.0
 
     def __post_init__(self):
-        if not self.f_lo >= 0.0:
-            raise MagtactError(f"filter: f_lo must be >= 0, got {self.f_lo}")
-        if self.f_hi is not None and not self.f_hi > self.f_lo:
+        if not (math.isfinite(self.f_lo) and self.f_lo >= 0.0):
+            raise MagtactError(f"filter: f_lo must be >= 0 and finite, got {self.f_lo}")
+        if self.f_hi is not None and not (math.isfinite(self.f_hi) and self.f_hi > self.f_lo):
             raise MagtactError(f"filter: f_hi ({self.f_hi} 1/m) must exceed f_lo ({self.f_lo} 1/m)")
 
     @property

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError, MissingFileError
+from ..study import check_si
 
 #: The measured responses and the unit suffix of their columns.
 RESPONSES: tuple[str, ...] = ("B_r", "B_z", "F_r", "F_z")
@@ -47,8 +48,29 @@ MIN_SAMPLES = 4
 THETA_TOL = 1e-6
 
 
+#: Largest data file read [bytes].
+MAX_FILE_BYTES = 200_000_000
+#: Longest message of a :class:`DataError` [characters] (cells are quoted, and may be huge).
+MAX_MESSAGE = 1000
+#: Physical range in SI of each kind of column: displacements within ±1 m, shear angles in
+#: [0, π/2], Hall fields within ±100 T, forces within ±1 MN.
+PHYSICAL_RANGE: dict[str, tuple[float, float, str]] = {
+    "length": (-1.0, 1.0, "m"), "angle": (0.0, math.pi / 2, "rad"),
+    "T": (-100.0, 100.0, "T"), "N": (-1e6, 1e6, "N"),
+}
+
+
 class DataError(MagtactError):
     """Malformed validation data; the message names the file, line and column."""
+
+    def __init__(self, message: str):
+        if not message.isprintable():  # cells and labels quoted from a file hold any character
+            message = "".join(c if c.isprintable() else repr(c)[1:-1] for c in message)
+        super().__init__(_clip(message, MAX_MESSAGE))
+
+
+def _clip(text: str, n: int = 60) -> str:
+    return text if len(text) <= n else text[:n] + f"... ({len(text)} characters)"
 
 
 @dataclass(frozen=True)
@@ -113,19 +135,21 @@ class Experiment:
         MagtactError
             If a value is neither given nor in the metadata, or the metadata is not a number.
         """
-        return (H if H is not None else self._meta_si("design_h_mm", 1e-3, "H"),
-                G if G is not None else self._meta_si("design_g_kpa", 1e3, "G"))
+        return (H if H is not None else self._meta_si("design_h_mm", 1e-3, "H", "mm"),
+                G if G is not None else self._meta_si("design_g_kpa", 1e3, "G", "kPa"))
 
-    def _meta_si(self, key: str, factor: float, name: str) -> float:
+    def _meta_si(self, key: str, factor: float, name: str, unit: str) -> float:
         where = self.sources[0] if self.curves else "the data"
         if key not in self.metadata:
             raise MagtactError(f"give the design's {name} (--{name}): {where} has no metadata "
                              f"'{key}'")
+        text = self.metadata[key]
         try:
-            return float(self.metadata[key]) * factor
+            value = float(text)
         except ValueError:
             raise MagtactError(f"{where}: metadata '{key}' is not a number: "
-                             f"{self.metadata[key]!r}") from None
+                             f"{_clip(text)!r}") from None
+        return check_si(value * factor, unit, f"{where}: metadata '{key}'", value)
 
     @property
     def sources(self) -> tuple[str, ...]:
@@ -193,13 +217,20 @@ def read_experiment(paths) -> Experiment:
 
 def _read_file(path: Path):
     """Parse one file → (curves, theta, where theta was read, metadata)."""
-    if not path.is_file():
+    if not path.exists():
         raise MissingFileError(f"{path}: no such data file")
+    if not path.is_file():
+        raise DataError(f"{path}: not a file (give CSV files)")
     try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise DataError(f"{path}: {path.stat().st_size:,} bytes; a data file has at most "
+                            f"{MAX_FILE_BYTES:,}")
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataError(f"{path}: not a UTF-8 text file ({exc.reason} at byte "
                         f"{exc.start})") from None
+    except OSError as exc:
+        raise DataError(f"{path}: cannot be read: {exc.strerror or exc}") from None
     lines = text.splitlines()
     meta: dict[str, str] = {}
     meta_line: dict[str, int] = {}
@@ -218,13 +249,13 @@ def _read_file(path: Path):
     if i >= len(lines):
         raise DataError(f"{path}: empty file (no header row of column names)")
     header_line = i + 1
-    header = [h.strip() for h in next(csv.reader([lines[i]]))]
+    header = [h.strip() for h in _cells(path, lines[i], i + 1)]
     columns = _columns(path, header, header_line)
     rows: list[tuple[int, list[str]]] = []
     for j in range(i + 1, len(lines)):
         if not lines[j].strip() or lines[j].lstrip().startswith("#"):
             continue
-        cells = [c.strip() for c in next(csv.reader([lines[j]]))]
+        cells = [c.strip() for c in _cells(path, lines[j], j + 1)]
         if len(cells) != len(header):
             raise DataError(f"{path}: line {j + 1}: {len(cells)} cells, the header on line "
                             f"{header_line} has {len(header)} columns")
@@ -269,6 +300,15 @@ def _read_file(path: Path):
     return curves, theta, where, meta
 
 
+def _cells(path: Path, text: str, line: int) -> list[str]:
+    """The cells of one CSV line (the csv module's errors, e.g. a cell over its size limit,
+    become a DataError naming the line)."""
+    try:
+        return next(csv.reader([text]), [])
+    except csv.Error as exc:
+        raise DataError(f"{path}: line {line}: not a CSV row ({exc})") from None
+
+
 def _columns(path: Path, header: list[str], line: int) -> dict[str, str]:
     """Map quantity → column name; check required columns and duplicates."""
     for k, h in enumerate(header):
@@ -304,6 +344,8 @@ def _numbers(path: Path, rows, header: list[str], column: str) -> np.ndarray:
     k = header.index(column)
     unit = column.rsplit("_", 1)[1]
     factor = _LENGTH.get(unit, _ANGLE.get(unit, 1.0))
+    kind = "length" if unit in _LENGTH else "angle" if unit in _ANGLE else unit
+    lo, hi, si = PHYSICAL_RANGE.get(kind, (-math.inf, math.inf, ""))
     out = np.empty(len(rows))
     for n, (line, cells) in enumerate(rows):
         cell = cells[k]
@@ -316,6 +358,9 @@ def _numbers(path: Path, rows, header: list[str], column: str) -> np.ndarray:
             raise DataError(f"{path}: line {line}, column {column!r}: {cell!r} is not a finite "
                             "number")
         out[n] = value * factor
+        if not lo <= out[n] <= hi:
+            raise DataError(f"{path}: line {line}, column {column!r}: {cell} is outside the "
+                            f"physical range [{lo:g}, {hi:g}] {si} (in SI)")
     return out
 
 
@@ -330,6 +375,9 @@ def _theta(path, rows, header, columns, numeric, meta, meta_line):
             except ValueError:
                 raise DataError(f"{path}: line {meta_line[key]}, metadata {key!r}: not a number: "
                                 f"{meta[key]!r}") from None
+            if not 0.0 <= from_meta <= math.pi / 2:
+                raise DataError(f"{path}: line {meta_line[key]}, metadata {key!r}: shear angle "
+                                f"{meta[key]} is outside [0, π/2] rad")
             meta_where = f"{path}, line {meta_line[key]} (metadata {key!r})"
     if "theta" in numeric:
         values = numeric["theta"]

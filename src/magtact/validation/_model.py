@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import MagtactError
 from ..geometry import loading_path
 from ..study import Study
 from ._io import RESPONSES
@@ -48,8 +49,15 @@ class PathModel:
         missing = [r for r in RESPONSES if r not in out]
         if missing:
             raise ValueError(f"model {self.label!r} does not give {', '.join(missing)}")
-        return {r: np.broadcast_to(np.asarray(out[r], dtype=float), u_z.shape).copy()
-                for r in RESPONSES}
+        values = {r: np.broadcast_to(np.asarray(out[r], dtype=float), u_z.shape).copy()
+                  for r in RESPONSES}
+        for r, v in values.items():
+            bad = np.flatnonzero(~np.isfinite(v))
+            if bad.size:
+                raise MagtactError(f"model {self.label!r} gives a non-finite {r} ({v[bad[0]]}) at "
+                                 f"u_z = {u_z.flat[bad[0]] * 1e3:.6g} mm ({bad.size} of "
+                                 f"{v.size} points)")
+        return values
 
     @classmethod
     def from_samples(cls, u_z, values: Mapping[str, np.ndarray], theta: float,

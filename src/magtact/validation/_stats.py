@@ -15,6 +15,8 @@ from ._model import PathModel
 
 #: Default number of points of the common displacement grid.
 N_GRID = 201
+#: Most points of the common grid (a bound on the work of one validation).
+MAX_GRID = 100_001
 #: Default guard: a ratio is evaluated only where |denominator| > FLOOR × max |denominator|.
 FLOOR = 0.05
 
@@ -169,8 +171,8 @@ def validate(experiment: Experiment, model: PathModel, *,
         ε = \\max_φ |(ψ_μ − ψ_{model}) / ψ_{model}| · 100 \\%.
     """
     filter = FilterSettings() if filter is None else filter
-    if n_grid < 2:
-        raise MagtactError(f"n_grid must be at least 2, got {n_grid}")
+    if not 2 <= n_grid <= MAX_GRID:
+        raise MagtactError(f"n_grid must be between 2 and {MAX_GRID:,}, got {n_grid}")
     if not 0.0 <= floor < 1.0:
         raise MagtactError(f"floor must be in [0, 1), got {floor}")
     if abs(model.theta - experiment.theta) > 1e-3:
