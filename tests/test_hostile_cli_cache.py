@@ -5,6 +5,7 @@ The DOE tests use the analytic stand-in solvers of ``test_doe.py``.
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import textwrap
@@ -29,8 +30,9 @@ def magtact(*args: str) -> subprocess.CompletedProcess:
     from magtact.cli import main
 
     out, err = io.StringIO(), io.StringIO()
-    argv = sys.argv
+    argv, columns = sys.argv, os.environ.get("COLUMNS")
     sys.argv = ["magtact", *args]
+    os.environ["COLUMNS"] = "1000"  # typer's error box must not break a long path mid-word
     code = 0
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
@@ -39,6 +41,10 @@ def magtact(*args: str) -> subprocess.CompletedProcess:
         code = exc.code if isinstance(exc.code, int) else 1
     finally:
         sys.argv = argv
+        if columns is None:
+            os.environ.pop("COLUMNS", None)
+        else:
+            os.environ["COLUMNS"] = columns
     return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 

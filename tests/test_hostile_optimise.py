@@ -36,7 +36,7 @@ def test_pipeline_says_the_disagreement_in_the_report(monkeypatch, tmp_path):
 
     from magtact import pipeline
 
-    def fake_write(models, study, folder):
+    def fake_write(models, study, folder, figures=None):
         warnings.warn("NSGA-II's Pareto set lies 0.3 (relative) from the exact reduction's "
                       "front", run_module.FrontGapWarning, stacklevel=2)
         return "chosen"
