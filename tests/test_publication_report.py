@@ -74,6 +74,10 @@ def test_files_figures_and_report_section(records, tmp_path):
     assert section.count("<img") == 5
     assert "resolution–range trade-off" in section
     assert "original design: Γ_z,max / Γ_r,max" in section
+    # the method is the report's appendix, linked from its header, with the sensor figure
+    method = html[html.index('<h2 id="method">'):]
+    assert '<a href="#method">' in html[:html.index('id="summary"')]
+    assert "6. Sensitivity" in method and "<svg" in method
 
 
 def test_resolution_range_lines_pass_through_the_origin(records, tmp_path, monkeypatch):

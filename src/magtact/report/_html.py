@@ -99,8 +99,9 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
              f"<p>Results folder <code>{_e(folder.resolve())}</code>; report built "
              f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}. The method behind every number, with "
-             "its equations and defaults: <code>docs/method.md</code> of the magtact "
-             "repository; the benchmarks' evidence: <code>docs/verification.md</code>.</p>"]
+             'its equations and defaults: <a href="#method">the method</a> (appendix, '
+             "<code>docs/method.md</code> of the magtact repository); the benchmarks' "
+             "evidence: <code>docs/verification.md</code>.</p>"]
     if not manifest:
         parts.append('<div class="missing">No <code>run.json</code> in this folder: the stages '
                      "below are reported from the files present only; statuses and timings are "
@@ -113,7 +114,8 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     toc = " · ".join(f'<a href="#{k}">{_e(t)}</a>' for k, t, _ in STAGES)
     parts.append(f'<p><a href="#summary">Summary</a> · <a href="#chosen">Chosen design</a> · '
                  f'{toc} · <a href="#publication">The publication</a> · '
-                 '<a href="#evidence">Evidence</a> · <a href="#settings">Settings</a></p>')
+                 '<a href="#evidence">Evidence</a> · <a href="#settings">Settings</a> · '
+                 '<a href="#method">Method</a></p>')
     parts.append(_summary(manifest, stages, folder))
     run_id = manifest.get("run_id")
     parts.append(_chosen(folder / "optimise" if _of_run(folder / "optimise", run_id) else None))
@@ -125,6 +127,7 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     parts.append(publication_section(folder / "publication", _definition(folder)))
     parts.append(_evidence([folder / "evidence"] + ([Path(evidence)] if evidence else [])))
     parts.append(_settings(folder / "study.toml"))
+    parts.append(_method())
     parts.append(_versions(manifest))
     doc = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
            f"<title>magtact report — {_e(study_name)}</title><style>{CSS}</style></head>"
@@ -135,6 +138,22 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
 
 
 # ---- sections ------------------------------------------------------------------------------
+def _method() -> str:
+    """The method (docs/method.md, shipped with the package) as the report's appendix."""
+    from importlib import resources
+
+    here = resources.files("magtact.report")
+    try:
+        text = here.joinpath("method.md").read_text(encoding="utf-8")
+        svg = here.joinpath("sensor.svg").read_text(encoding="utf-8")
+    except OSError:
+        return ('<h2 id="method">Method</h2><div class="missing">The method document is not '
+                "part of this installation.</div>")
+    svg = svg[svg.index("<svg"):] if "<svg" in svg else ""
+    return ('<h2 id="method">Method</h2><details open><summary>docs/method.md</summary>'
+            f'<figure class="sensor">{svg}</figure>{_markdown(text)}</details>')
+
+
 def _definition(folder: Path) -> str | None:
     """The sensitivity definition of the run (from its design.json), if recorded."""
     data = _load_json(folder / "optimise" / "design.json") or {}
