@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -24,6 +25,9 @@ def reproduce_command(
         "--workers", "-j", help="Worker processes (default: the number of cores).")] = None,
     data: Annotated[Path | None, typer.Option(
         "--data", help="DOE data set (.nc); default: the bundled MagOne data set.")] = None,
+    generations: Annotated[int | None, typer.Option(
+        "--generations", min=1, max=10_000,
+        help="Override [metamodel] generations of every fit (default: the study's).")] = None,
     definition: Annotated[list[str] | None, typer.Option(
         "--definition", help="Sensitivity definition to include (repeat for several); "
                              "default: jacobian and published.")] = None,
@@ -41,6 +45,8 @@ def reproduce_command(
                 f"unknown sensitivity definition {d!r} ([sensitivity] definition): choose "
                 f"from {', '.join(DEFINITIONS)}", param_hint="--definition")
     s = get_study(study)
+    if generations is not None:
+        s = replace(s, metamodel=replace(s.metamodel, generations=generations))
     folder = out_dir(out) / "publication"
     result = reproduce(s, seeds=seeds, workers=workers, data=data, cache=folder / "fits",
                        definitions=tuple(definition) if definition else DEFINITIONS,

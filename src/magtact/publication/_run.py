@@ -53,6 +53,8 @@ class Reproduction:
                "definition_of_study": self.study.sensitivity.definition,
                "seeds": list(self.seeds), "workers": self.workers,
                "G_range_Pa": list(self.study.design.G),
+               "gp": {"generations": self.study.metamodel.generations,
+                      "population": self.study.metamodel.population},
                "wall_time_s": self.wall_time_s, "spread": self.spread,
                "comparison": self.comparison, "records": self.records}
         files = [_write(out / "publication.json", json.dumps(_finite(doc), indent=1,

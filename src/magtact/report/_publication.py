@@ -108,13 +108,19 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
     figs = "".join(_figure(folder / f"{k}.png", c) for k, c in captions.items()
                    if (folder / f"{k}.png").is_file())
     text = ("<p>Median [min, max] over "
-            f"{len(doc['seeds'])} GP seeds per definition ({doc['wall_time_s']:.0f} s, "
-            f"{doc['workers']} workers). Rows marked scale-free do not depend on how G is "
+            f"{len(doc['seeds'])} GP seeds per definition{_budget(doc)} "
+            f"({doc['wall_time_s']:.0f} s, {doc['workers']} workers). Rows marked scale-free do not depend on how G is "
             "read: they are where magtact and the publication can be compared directly. "
             "Every force and Γ is G times a function of H, so each height has a fixed ratio of "
             "worst sensitivity to measurable force (figure <i>resolution–range</i>): choosing "
             "H chooses that ratio, and G then slides the design along its line.</p>")
     return head + text + table + "<h3>Spread across seeds</h3>" + spread + figs
+
+
+def _budget(doc: dict) -> str:
+    gp = doc.get("gp") or {}
+    return (f" (GP: {gp['generations']} generations, population {gp['population']})"
+            if "generations" in gp and "population" in gp else "")
 
 
 def _num(v) -> str:
