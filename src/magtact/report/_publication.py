@@ -109,7 +109,8 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
                    if (folder / f"{k}.png").is_file())
     text = ("<p>Median [min, max] over "
             f"{len(doc['seeds'])} GP seeds per definition{_budget(doc)} "
-            f"({doc['wall_time_s']:.0f} s, {doc['workers']} workers). Rows marked scale-free do not depend on how G is "
+            f"({doc['wall_time_s']:.0f} s, {doc['workers']} workers). Rows marked scale-free do "
+            "not depend on how G is "
             "read: they are where magtact and the publication can be compared directly. "
             "Every force and Γ is G times a function of H, so each height has a fixed ratio of "
             "worst sensitivity to measurable force (figure <i>resolution–range</i>): choosing "
