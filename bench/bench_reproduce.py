@@ -7,7 +7,8 @@ Usage::
 Runs :func:`magtact.publication.reproduce` on the bundled MagOne DOE (force models refitted
 with each seed under the Jacobian and the published definition, field models shared), writes
 its files and figures to ``bench/results/reproduce/`` and the summary (wall time, spread per
-definition, the comparison table) to ``bench/results/reproduce.json``.
+definition, the comparison table) to ``bench/results/reproduce.json`` (with ``--generations N``:
+``reproduce_gN``, a smaller GP budget for every fit).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import argparse
 import json
 import os
 import platform
+from dataclasses import replace
 from pathlib import Path
 
 from magtact.publication import (
@@ -36,6 +38,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--generations", type=int, default=None,
+                        help="GP generations of every fit (default: the study's); results go "
+                             "to reproduce_g<N> instead of reproduce")
     parser.add_argument("--cache", default=None,
                         help="folder of finished records (default: none, every fit is timed)")
     parser.add_argument("--summarise", metavar="FOLDER", default=None,
@@ -44,6 +49,10 @@ def main() -> None:
                              "kept)")
     args = parser.parse_args()
     study = load_study("magone")
+    name = "reproduce"
+    if args.generations is not None:
+        study = replace(study, metamodel=replace(study.metamodel, generations=args.generations))
+        name = f"reproduce_g{args.generations}"
     if args.summarise:
         doc = json.loads((Path(args.summarise) / "publication.json").read_text())
         recs = doc["records"]
@@ -52,7 +61,7 @@ def main() -> None:
     else:
         result = reproduce(study, seeds=args.seeds, workers=args.workers, cache=args.cache,
                            log=print)
-    folder = RESULTS / "reproduce"
+    folder = RESULTS / name
     result.write(folder)
     publication_figures(folder)
     summary = {
@@ -71,7 +80,9 @@ def main() -> None:
                        | {k: cell_text(v) for k, v in r.items() if "/" in k}
                        for r in result.comparison],
     }
-    (RESULTS / "reproduce.json").write_text(json.dumps(summary, indent=1, ensure_ascii=False)
+    summary["gp"] = {"generations": study.metamodel.generations,
+                     "population": study.metamodel.population}
+    (RESULTS / f"{name}.json").write_text(json.dumps(summary, indent=1, ensure_ascii=False)
                                             + "\n")
     print(f"wall time {result.wall_time_s:.0f} s")
 

@@ -258,6 +258,17 @@ def optimise_section(r: Results) -> list[str]:
     return out
 
 
+def _spread_rows(p: dict) -> list[list[str]]:
+    rows = []
+    for d, figs in p["spread"].items():
+        for f in figs.values():
+            if "min" in f and f.get("min") is not None:
+                mm = f.get("max_over_min")
+                rows.append([d, f["label"], f["unit"], f"{f['min']:.4g}", f"{f['max']:.4g}",
+                             "∞" if mm is None or mm == float("inf") else f"{mm:.3g}"])
+    return rows
+
+
 def publication_section(r: Results) -> list[str]:
     if "reproduce" not in r.files:
         return []
@@ -268,19 +279,19 @@ def publication_section(r: Results) -> list[str]:
            f"{len(p['seeds'])} GP seeds under each definition of Γ on the bundled DOE, "
            f"{p['workers']} workers, {p['wall_time_s']:.0f} s.", "",
            "Spread across seeds (max / min):", ""]
-    rows = []
-    for d, figs in p["spread"].items():
-        for f in figs.values():
-            if "min" in f and f.get("min") is not None:
-                mm = f.get("max_over_min")
-                rows.append([d, f["label"], f["unit"], f"{f['min']:.4g}", f"{f['max']:.4g}",
-                             "∞" if mm is None or mm == float("inf") else f"{mm:.3g}"])
-    out += table(["definition", "figure", "unit", "min", "max", "max / min"], rows)
+    out += table(["definition", "figure", "unit", "min", "max", "max / min"], _spread_rows(p))
     out += ["Beside the publication (median [min, max] over seeds; G as magone reads it):", ""]
     cols = [k for k in p["comparison"][0] if k.endswith("/study")]
     out += table(["quantity", "unit", "scale-free", "publication", *cols],
                  [[c["quantity"], c["unit"], "yes" if c["scale_free"] else "no",
                    c["publication"], *(c[k] for k in cols)] for c in p["comparison"]])
+    for stem in sorted(k for k in r.files if k.startswith("reproduce_g")):
+        q = r[stem]
+        out += [f"**A smaller GP budget** ({r.source(stem)}: {q['gp']['generations']} "
+                f"generations per fit instead of {p.get('gp', {}).get('generations', '?')}, "
+                f"{q['wall_time_s']:.0f} s):", ""]
+        out += table(["definition", "figure", "unit", "min", "max", "max / min"],
+                     _spread_rows(q))
     return out
 
 
