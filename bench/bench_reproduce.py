@@ -7,8 +7,9 @@ Usage::
 Runs :func:`magtact.publication.reproduce` on the bundled MagOne DOE (force models refitted
 with each seed under the Jacobian and the published definition, field models shared), writes
 its files and figures to ``bench/results/reproduce/`` and the summary (wall time, spread per
-definition, the comparison table) to ``bench/results/reproduce.json`` (with ``--generations N``:
-``reproduce_gN``, a smaller GP budget for every fit).
+definition, the comparison table) to ``bench/results/reproduce.json``, at the seed study's
+default GP budget (``SEED_GENERATIONS``); with ``--generations N`` another budget goes to
+``reproduce_gN``.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from magtact.publication import (
+    SEED_GENERATIONS,
     Reproduction,
     cell_text,
     comparison,
@@ -38,9 +40,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--generations", type=int, default=None,
-                        help="GP generations of every fit (default: the study's); results go "
-                             "to reproduce_g<N> instead of reproduce")
+    parser.add_argument("--generations", type=int, default=SEED_GENERATIONS,
+                        help="GP generations of every fit; another budget than the default "
+                             "goes to reproduce_g<N> instead of reproduce")
     parser.add_argument("--cache", default=None,
                         help="folder of finished records (default: none, every fit is timed)")
     parser.add_argument("--summarise", metavar="FOLDER", default=None,
@@ -50,17 +52,17 @@ def main() -> None:
     args = parser.parse_args()
     study = load_study("magone")
     name = "reproduce"
-    if args.generations is not None:
-        study = replace(study, metamodel=replace(study.metamodel, generations=args.generations))
+    if args.generations != SEED_GENERATIONS:
         name = f"reproduce_g{args.generations}"
     if args.summarise:
         doc = json.loads((Path(args.summarise) / "publication.json").read_text())
         recs = doc["records"]
+        study = replace(study, metamodel=replace(study.metamodel, generations=args.generations))
         result = Reproduction(study, tuple(doc["seeds"]), recs, spread(recs), comparison(recs),
                               doc["wall_time_s"], doc["workers"])
     else:
         result = reproduce(study, seeds=args.seeds, workers=args.workers, cache=args.cache,
-                           log=print)
+                           generations=args.generations, log=print)
     folder = RESULTS / name
     result.write(folder)
     publication_figures(folder)
@@ -80,8 +82,8 @@ def main() -> None:
                        | {k: cell_text(v) for k, v in r.items() if "/" in k}
                        for r in result.comparison],
     }
-    summary["gp"] = {"generations": study.metamodel.generations,
-                     "population": study.metamodel.population}
+    summary["gp"] = {"generations": result.study.metamodel.generations,
+                     "population": result.study.metamodel.population}
     (RESULTS / f"{name}.json").write_text(json.dumps(summary, indent=1, ensure_ascii=False)
                                             + "\n")
     print(f"wall time {result.wall_time_s:.0f} s")

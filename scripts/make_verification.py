@@ -277,7 +277,8 @@ def publication_section(r: Results) -> list[str]:
            f"Source: {r.source('reproduce')} (`bench/bench_reproduce.py`, "
            "`magtact reproduce`); docs/method.md §6. The force models refitted with "
            f"{len(p['seeds'])} GP seeds under each definition of Γ on the bundled DOE, "
-           f"{p['workers']} workers, {p['wall_time_s']:.0f} s.", "",
+           f"{p.get('gp', {}).get('generations', '?')} GP generations per fit (the seed "
+           f"study's default), {p['workers']} workers, {p['wall_time_s']:.0f} s.", "",
            "Spread across seeds (max / min):", ""]
     out += table(["definition", "figure", "unit", "min", "max", "max / min"], _spread_rows(p))
     out += ["Beside the publication (median [min, max] over seeds; G as magone reads it):", ""]
@@ -287,9 +288,9 @@ def publication_section(r: Results) -> list[str]:
                    c["publication"], *(c[k] for k in cols)] for c in p["comparison"]])
     for stem in sorted(k for k in r.files if k.startswith("reproduce_g")):
         q = r[stem]
-        out += [f"**A smaller GP budget** ({r.source(stem)}: {q['gp']['generations']} "
-                f"generations per fit instead of {p.get('gp', {}).get('generations', '?')}, "
-                f"{q['wall_time_s']:.0f} s):", ""]
+        g, g0 = q["gp"]["generations"], p.get("gp", {}).get("generations", 0)
+        out += [f"**A {'larger' if g > g0 else 'smaller'} GP budget** ({r.source(stem)}: "
+                f"{g} generations per fit instead of {g0}, {q['wall_time_s']:.0f} s):", ""]
         out += table(["definition", "figure", "unit", "min", "max", "max / min"],
                      _spread_rows(q))
     return out

@@ -267,3 +267,21 @@ def test_seed_study_keeps_each_record_and_resumes(tmp_path):
     seed_study(other, load_bundled(), prefitted_dir(), log=lines.append,
                **(kw | {"definitions": ("jacobian",)}))
     assert not any("from" in m for m in lines)  # other settings: nothing reused
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_reproduce_fits_with_the_seed_study_budget(tmp_path):
+    """``generations`` sets every fit's budget and the written summary says which it was."""
+    from magtact.publication import SEED_GENERATIONS, reproduce
+    from magtact.study import load_study
+
+    study = _tiny(load_study("magone"))
+    assert SEED_GENERATIONS < load_study("magone").metamodel.generations
+    result = reproduce(study, seeds=1, definitions=("jacobian",), workers=1, sweep_n=21,
+                       generations=2)
+    assert result.study.metamodel.generations == 2
+    result.write(tmp_path)
+    assert json.loads((tmp_path / "publication.json").read_text())["gp"]["generations"] == 2
+    kept = reproduce(study, seeds=1, definitions=("jacobian",), workers=1, sweep_n=21,
+                     generations=None)
+    assert kept.study.metamodel.generations == TINY["generations"]

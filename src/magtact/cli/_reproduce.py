@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -10,6 +9,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from ..publication import SEED_GENERATIONS
 from ._app import StudyArg, app, console, get_study, out_dir
 
 
@@ -25,9 +25,10 @@ def reproduce_command(
         "--workers", "-j", help="Worker processes (default: the number of cores).")] = None,
     data: Annotated[Path | None, typer.Option(
         "--data", help="DOE data set (.nc); default: the bundled MagOne data set.")] = None,
-    generations: Annotated[int | None, typer.Option(
+    generations: Annotated[int, typer.Option(
         "--generations", min=1, max=10_000,
-        help="Override [metamodel] generations of every fit (default: the study's).")] = None,
+        help="GP generations of every force fit (the design fit's budget is [metamodel] "
+             "generations, 100 for magone).")] = SEED_GENERATIONS,
     definition: Annotated[list[str] | None, typer.Option(
         "--definition", help="Sensitivity definition to include (repeat for several); "
                              "default: jacobian and published.")] = None,
@@ -45,10 +46,9 @@ def reproduce_command(
                 f"unknown sensitivity definition {d!r} ([sensitivity] definition): choose "
                 f"from {', '.join(DEFINITIONS)}", param_hint="--definition")
     s = get_study(study)
-    if generations is not None:
-        s = replace(s, metamodel=replace(s.metamodel, generations=generations))
     folder = out_dir(out) / "publication"
     result = reproduce(s, seeds=seeds, workers=workers, data=data, cache=folder / "fits",
+                       generations=generations,
                        definitions=tuple(definition) if definition else DEFINITIONS,
                        log=lambda m: console.print(m, highlight=False, markup=False))
     files = result.write(folder)

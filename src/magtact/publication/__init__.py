@@ -3,8 +3,8 @@ sensitivity definitions, the side-by-side table, and the publication's own numbe
 
 from . import _reference as reference
 from ._compare import cell_text, comparison, publication_text, spread
-from ._run import Reproduction, reproduce
+from ._run import SEED_GENERATIONS, Reproduction, reproduce
 from ._seeds import DEFINITIONS, count_branches, seed_study, trend
 
-__all__ = ["DEFINITIONS", "Reproduction", "cell_text", "comparison", "count_branches",
+__all__ = ["DEFINITIONS", "Reproduction", "SEED_GENERATIONS", "cell_text", "comparison", "count_branches",
            "publication_text", "reference", "reproduce", "seed_study", "spread", "trend"]

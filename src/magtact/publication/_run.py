@@ -8,7 +8,7 @@ import math
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from tempfile import mkdtemp
 
@@ -16,6 +16,12 @@ from .._errors import MagtactError
 from ..study import Study
 from ._compare import FIGURES, cell_text, comparison, publication_text, spread
 from ._seeds import DEFINITIONS, seed_study
+
+#: GP generations per force fit in the seed study. Half the design fit's budget: the study
+#: measures how answers spread between seeds, and on the MagOne DOE 50 and 100 generations
+#: give the same spreads and conclusions (docs/verification.md, "The seed study") while
+#: 8 seeds x 2 definitions take 6 instead of 15 minutes on two cores.
+SEED_GENERATIONS = 50
 
 
 @dataclass(frozen=True)
@@ -81,6 +87,7 @@ class Reproduction:
 def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
               data: str | Path | None = None, models: str | Path | None = None,
               definitions=DEFINITIONS, sweep_n: int = 201, cache: str | Path | None = None,
+              generations: int | None = SEED_GENERATIONS,
               log: Callable[[str], None] | None = None) -> Reproduction:
     """Refit the force models with ``seeds`` seeds under each definition and compare.
 
@@ -102,6 +109,9 @@ def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
         Heights of each fit's exact-reduction sweep.
     cache : path, optional
         Folder of finished records (see :func:`magtact.publication.seed_study`).
+    generations : int or None
+        GP generations of every force fit (default :data:`SEED_GENERATIONS`); None: the
+        study's ``[metamodel] generations``.
     log : callable, optional
 
     Raises
@@ -116,6 +126,8 @@ def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
 
     if not isinstance(seeds, int) or seeds < 1:
         raise MagtactError(f"--seeds must be a whole number of at least 1, got {seeds!r}")
+    if generations is not None:
+        study = replace(study, metamodel=replace(study.metamodel, generations=int(generations)))
     t0 = time.perf_counter()
     ds = load_dataset(data) if data is not None else bundled_for(study)
     if models is None:
