@@ -449,3 +449,18 @@ def test_infinite_anchor_is_rejected_and_refitted(monkeypatch):
     assert rep.seed == 1 and rep.tries == 2
     assert rep.rejected == ("anchor_x, seed 0: infinite constant after the transform (pole on "
                             "the axis?)",)
+
+
+def test_feature_map_derivatives_match_differences():
+    """∂(p, q)/∂(t, θ) and ∂²q/∂(t, θ)² against central differences of the map itself."""
+    from magtact.metamodel import feature_jacobian, features, q_hessian
+
+    t, th, h = np.array([0.0, 0.3, 1.0]), np.array([0.0, 0.2, 0.5]), 1e-6
+    J, Hq = feature_jacobian(t, th), q_hessian(t, th)
+    for k, (dt, dth) in enumerate(((h, 0.0), (0.0, h))):
+        d = [(a - b) / (2 * h) for a, b in zip(features(t + dt, th + dth),
+                                                features(t - dt, th - dth), strict=True)]
+        np.testing.assert_allclose(J[:, 0, k], d[0], atol=1e-9)
+        np.testing.assert_allclose(J[:, 1, k], d[1], atol=1e-9)
+        dJq = (feature_jacobian(t + dt, th + dth)[:, 1] - feature_jacobian(t - dt, th - dth)[:, 1])
+        np.testing.assert_allclose(Hq[:, k], dJq / (2 * h), atol=1e-8)

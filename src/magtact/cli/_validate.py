@@ -11,7 +11,9 @@ from rich.console import Console
 from rich.table import Table
 
 from .._errors import MagtactError
+from .._floor import RELATIVE_FLOOR
 from ..study import MESH_DENSITIES, PRESETS, Study, checked_si
+from ..validation import N_GRID
 from ._app import app, check_out, console, get_study, out_dir
 
 #: Highest filter cut-off accepted (cycles per mm of u_z; the samples are far coarser).
@@ -85,9 +87,9 @@ def validate_command(
     = 0.0,
     f_hi: Annotated[float, typer.Option("--f-hi", help="High cut-off (cycles per mm of u_z); 0: no "
                                         "low-pass.")] = 2.0,
-    n_grid: Annotated[int, typer.Option("--n-grid", help="Points of the common grid.")] = 201,
+    n_grid: Annotated[int, typer.Option("--n-grid", help="Points of the common grid.")] = N_GRID,
     floor: Annotated[float, typer.Option(help="Ratios are evaluated where |denominator| > floor "
-                                         "× its largest value.")] = 0.05,
+                                         "× its largest value.")] = RELATIVE_FLOOR,
 ) -> None:
     """Validate the model of a design against repeat indentation tests: c_v, ε and figures."""
     from ..report import validation_figures

@@ -36,9 +36,14 @@ def loading_path(study: Study, t, theta, H) -> tuple[np.ndarray, np.ndarray]:
     u_z = t (Δz_sat + H_m − H − H_g) = t (Δz_sat − Δz0), u_r = −u_z tan θ. u_z ≤ 0 (the magnet
     moves down), u_r ≥ 0 (along +x). Broadcasts.
     """
-    t, theta = np.asarray(t, dtype=float), np.asarray(theta, dtype=float)
+    t = np.asarray(t, dtype=float)
     u_z = t * (study.loading.dz_sat + study.magnet.H_m - np.asarray(H) - study.body.H_g)
-    return -u_z * np.tan(theta), u_z
+    return shear_displacement(u_z, theta), u_z
+
+
+def shear_displacement(u_z, theta):
+    """u_r = −u_z tan θ [m]: the shear displacement that goes with u_z on a path of angle θ."""
+    return -np.asarray(u_z, dtype=float) * np.tan(np.asarray(theta, dtype=float))
 
 
 def hall_from_magnet_centre(study: Study, u_r, u_z, H) -> tuple[np.ndarray, np.ndarray]:

@@ -30,14 +30,15 @@ from ._parse import format_expression, parse_expression
 from ._prefitted import copy_prefitted, find_prefitted, prefitted_dir
 from ._regressor import OPERATOR_SETS, SymbolicRegressor
 from ._select import Selection, select_metamodels
-from ._symbols import H, p, q, t, theta
+from ._symbols import H, feature_jacobian, features, p, q, q_hessian, t, theta
 
 __all__ = [
-    "OPERATOR_SETS", "RESPONSES", "TRAIN_TARGET", "TRANSFORMS", "Accuracy", "ComposedForce",
-    "ExactField", "FieldForceModel", "FitReport", "FitResult", "H", "Metamodel", "ModelSet",
-    "Selection", "SymbolicRegressor", "accuracy", "copy_prefitted", "data_hash", "find_prefitted",
-    "fit_models", "fit_response", "format_expression", "hall_features", "holdout_paths",
-    "load_field_models", "load_model", "load_models", "model_from_dict", "model_to_dict", "p",
-    "parse_expression", "prefitted_dir", "q", "save_model", "save_models", "select_metamodels",
-    "t", "theta", "write_fit_outputs",
+    "Accuracy", "ComposedForce", "ExactField", "FieldForceModel", "FitReport", "FitResult",
+    "H", "Metamodel", "ModelSet", "OPERATOR_SETS", "RESPONSES", "Selection",
+    "SymbolicRegressor", "TRAIN_TARGET", "TRANSFORMS", "accuracy", "copy_prefitted",
+    "data_hash", "feature_jacobian", "features", "find_prefitted", "fit_models",
+    "fit_response", "format_expression", "hall_features", "holdout_paths", "load_field_models",
+    "load_model", "load_models", "model_from_dict", "model_to_dict", "p", "parse_expression",
+    "prefitted_dir", "q", "q_hessian", "save_model", "save_models", "select_metamodels", "t",
+    "theta", "write_fit_outputs",
 ]

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..study import Study
 from ._fit import _affine_in_H
+from ._symbols import feature_jacobian, features, q_hessian
 
 #: Finite-difference step in the Hall position [m].
 STEP = 2e-5
@@ -77,7 +78,8 @@ class ExactField:
     def _position(self, t, theta, H):
         t, theta, H = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (t, theta, H)))
         a = self.a0 + self.a1 * H
-        return t, theta, H, a, a * t * np.tan(theta), self.z0 + self.z1 * H - a * t
+        pv, qv = features(t, theta)
+        return t, theta, H, a, a * qv, self.z0 + self.z1 * H - a * pv
 
     def _derivs(self, X, Z, order):
         """D[i][j] = ∂^(i+j) B / ∂X^i ∂Z^j for i + j ≤ order, each of the shape of X."""
@@ -97,11 +99,12 @@ class ExactField:
     def _chain(self, t, theta, H, order):
         t, theta, H, a, X, Z = self._position(t, theta, H)
         D = self._derivs(X, Z, order)
-        tan, sec2 = np.tan(theta), 1.0 / np.cos(theta) ** 2
+        Jq = feature_jacobian(t, theta)[..., 1, :]  # ∂q/∂(t, θ); X = a(H) q
         zero = np.zeros_like(t)
-        dX = np.stack([a * tan, a * t * sec2, self.a1 * t * tan], axis=-1)
+        dX = np.stack([a * Jq[..., 0], a * Jq[..., 1], self.a1 * features(t, theta)[1]],
+                      axis=-1)
         dZ = np.stack([-a, zero, self.z1 - self.a1 * t], axis=-1)
-        return t, theta, a, tan, sec2, D, dX, dZ
+        return t, theta, a, Jq, D, dX, dZ
 
     def grad(self, t, theta, H) -> np.ndarray:
         """Gradient w.r.t. (t, θ, H), shape (..., 3)."""
@@ -110,16 +113,14 @@ class ExactField:
 
     def hess(self, t, theta, H) -> np.ndarray:
         """Hessian w.r.t. (t, θ, H), shape (..., 3, 3)."""
-        t, theta, a, tan, sec2, D, dX, dZ = self._chain(t, theta, H, 2)
+        t, theta, a, Jq, D, dX, dZ = self._chain(t, theta, H, 2)
         out = (D[2, 0][..., None, None] * dX[..., :, None] * dX[..., None, :]
                + D[1, 1][..., None, None] * (dX[..., :, None] * dZ[..., None, :]
                                              + dZ[..., :, None] * dX[..., None, :])
                + D[0, 2][..., None, None] * dZ[..., :, None] * dZ[..., None, :])
         d2X = np.zeros(t.shape + (3, 3))
-        d2X[..., 0, 1] = d2X[..., 1, 0] = a * sec2
-        d2X[..., 0, 2] = d2X[..., 2, 0] = self.a1 * tan
-        d2X[..., 1, 1] = 2 * a * t * sec2 * tan
-        d2X[..., 1, 2] = d2X[..., 2, 1] = self.a1 * t * sec2
+        d2X[..., :2, :2] = a[..., None, None] * q_hessian(t, theta)
+        d2X[..., :2, 2] = d2X[..., 2, :2] = self.a1 * Jq
         out += D[1, 0][..., None, None] * d2X
         out[..., 0, 2] -= D[0, 1] * self.a1
         out[..., 2, 0] -= D[0, 1] * self.a1

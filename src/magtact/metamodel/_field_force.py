@@ -30,7 +30,7 @@ import numpy as np
 import sympy as sp
 
 from ._model import _derivative_tensors, _evaluate, _lambdify
-from ._symbols import H, p, q
+from ._symbols import H, features, p, q
 
 #: Field symbols of a field-force model [T].
 B_r, B_z = sp.symbols("B_r B_z")
@@ -147,7 +147,7 @@ class ComposedForce:
         """z = (B_r, B_z, p, q) along the path and its x-derivatives Z1, Z2."""
         t = np.asarray(t, dtype=float)
         theta = np.asarray(theta, dtype=float)
-        pv, qv = t, t * np.tan(theta)
+        pv, qv = features(t, theta)
         jr = self.B_r.jet(t, theta, Hv, order)
         jz = self.B_z.jet(t, theta, Hv, order)
         shape = np.broadcast_shapes(np.shape(jr[0]), np.shape(jz[0]), pv.shape, qv.shape,

@@ -41,12 +41,13 @@ import numpy as np
 import sympy as sp
 
 from .._errors import MagtactError
+from .._floor import above_floor
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..study import Study
 from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._regressor import SymbolicRegressor
-from ._symbols import H, p, q
+from ._symbols import H, features, p, q
 
 #: Transform of each response (see the module notes).
 TRANSFORMS = {"B_r": "anchor_x", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
@@ -57,8 +58,6 @@ FALLBACK = {"log": "identity"}
 #: accuracy aimed at for B (1 % of the range); that accuracy itself (2 %) for F, whose FE data
 #: are rough at the ~1 % level (contact events), so that a tighter target only costs refits.
 TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.02, "f_z": 0.02}
-#: Fraction of max |y| below which relative errors are not reported.
-REL_FLOOR = 0.05
 
 
 @dataclass(frozen=True)
@@ -136,7 +135,7 @@ def accuracy(y, y_hat, reference=None) -> Accuracy:
     err = np.abs(y_hat - y)
     ss = np.sum((y - y.mean()) ** 2)
     rng = np.ptp(ref)
-    big = np.abs(y) > REL_FLOOR * np.max(np.abs(ref))
+    big = above_floor(y, np.max(np.abs(ref)))
     return Accuracy(
         r2=float(1.0 - np.sum(err**2) / ss) if ss > 0 else float("nan"),
         max_abs_err=float(err.max()),
@@ -326,7 +325,7 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     cfg = settings or study.metamodel
     y = table[name]
     transform = TRANSFORMS[name]
-    pv, qv = table["t"], table["t"] * np.tan(table["theta"])
+    pv, qv = features(table["t"], table["theta"])
     published = field_models is not None and name in ("f_r", "f_z")
     if published:
         # field in mT and H in mm: inputs of order one for the GP

@@ -10,7 +10,7 @@ import numpy as np
 import symengine as se
 import sympy as sp
 
-from ._symbols import PQ_TO_TTH, PQH, SYMBOLS, TTH, TTH_TO_PQ, p, q
+from ._symbols import PQ_TO_TTH, PQH, SYMBOLS, TTH, TTH_TO_PQ, features, p, q
 
 #: Names of the four responses of a :class:`ModelSet` and their SI units.
 RESPONSES: dict[str, str] = {"B_r": "T", "B_z": "T", "f_r": "N/Pa", "f_z": "N/Pa"}
@@ -173,7 +173,7 @@ class Metamodel:
         if not 0 <= order <= 3:
             raise ValueError(f"jet order must be 0..3, got {order}")
         t = np.asarray(t, dtype=float)
-        pv, qv = t, t * np.tan(np.asarray(theta, dtype=float))
+        pv, qv = features(t, theta)
         # two derivative directions (p, q); H enters as a parameter
         return _evaluate(self._fn("pq", order), 2, order, pv, qv, H)
 

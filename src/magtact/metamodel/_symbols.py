@@ -13,6 +13,7 @@ substituting p = t, q = t tan θ.
 
 from __future__ import annotations
 
+import numpy as np
 import sympy as sp
 
 #: Non-dimensional load t [-], shear angle θ [rad], base height H [m]. No assumptions on
@@ -33,3 +34,32 @@ TTH_TO_PQ = {t: p, theta: sp.atan(q / p)}
 
 #: Every symbol a model may contain, by name.
 SYMBOLS: dict[str, sp.Symbol] = {s.name: s for s in (t, theta, H, p, q)}
+
+
+def features(t, theta) -> tuple[np.ndarray, np.ndarray]:
+    """The features (p, q) = (t, t tan θ) of a load point (broadcast arrays)."""
+    t, theta = np.broadcast_arrays(np.asarray(t, dtype=float), np.asarray(theta, dtype=float))
+    return t, t * np.tan(theta)
+
+
+def feature_jacobian(t, theta) -> np.ndarray:
+    """∂(p, q)/∂(t, θ), shape (..., 2, 2): rows p, q; columns t, θ.
+
+    .. math:: \\begin{pmatrix} 1 & 0 \\\\ \\tan θ & t \\sec^2 θ \\end{pmatrix}
+    """
+    t, theta = np.broadcast_arrays(np.asarray(t, dtype=float), np.asarray(theta, dtype=float))
+    J = np.zeros(t.shape + (2, 2))
+    J[..., 0, 0] = 1.0
+    J[..., 1, 0] = np.tan(theta)
+    J[..., 1, 1] = t / np.cos(theta) ** 2
+    return J
+
+
+def q_hessian(t, theta) -> np.ndarray:
+    """∂²q/∂(t, θ)², shape (..., 2, 2) (p = t is linear: its Hessian is zero)."""
+    t, theta = np.broadcast_arrays(np.asarray(t, dtype=float), np.asarray(theta, dtype=float))
+    sec2 = 1.0 / np.cos(theta) ** 2
+    out = np.zeros(t.shape + (2, 2))
+    out[..., 0, 1] = out[..., 1, 0] = sec2
+    out[..., 1, 1] = 2.0 * t * sec2 * np.tan(theta)
+    return out

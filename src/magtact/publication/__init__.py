@@ -6,5 +6,8 @@ from ._compare import cell_text, comparison, publication_text, spread
 from ._run import SEED_GENERATIONS, Reproduction, reproduce
 from ._seeds import DEFINITIONS, count_branches, seed_study, trend
 
-__all__ = ["DEFINITIONS", "Reproduction", "SEED_GENERATIONS", "cell_text", "comparison", "count_branches",
-           "publication_text", "reference", "reproduce", "seed_study", "spread", "trend"]
+__all__ = [
+    "DEFINITIONS", "Reproduction", "SEED_GENERATIONS", "cell_text", "comparison",
+    "count_branches", "publication_text", "reference", "reproduce", "seed_study", "spread",
+    "trend",
+]

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._errors import MagtactError
+from .._floor import RELATIVE_FLOOR, above_floor
 from ..metamodel import ModelSet
-from ._gamma import gamma
+from ._gamma import gamma, row_norms, through_displacement
 
 
 def _mirrored(theta_levels: np.ndarray) -> bool:
@@ -51,12 +52,12 @@ def gamma_from_data(ds) -> tuple[np.ndarray, np.ndarray]:
     dF = np.stack([d(arr("F_r"), -1), d(arr("F_z"), 1)], axis=-2)  # (..., F, x)
     S = np.full(J.shape, np.nan)
     ok = (np.abs(np.linalg.det(J)) > 0) & (t_ > 0)[:, None, None]
-    S[ok] = dF[ok] @ np.linalg.inv(J[ok])
-    return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])
+    S[ok] = through_displacement(dF[ok], J[ok])
+    return row_norms(S)
 
 
 def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
-                      floor: float = 0.05) -> dict[str, dict[str, float]]:
+                      floor: float = RELATIVE_FLOOR) -> dict[str, dict[str, float]]:
     """Relative difference between the models' γ and the data's finite-difference γ.
 
     Points with t < ``t_min`` are excluded (the finite differences of the data are singular at
@@ -84,7 +85,7 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
         diff = np.abs(gm - gd)
         scale = np.nanmax(np.abs(gm[keep]))
         rel_all = diff / np.abs(gm)
-        above = keep & (np.abs(gm) > floor * scale)
+        above = keep & above_floor(gm, scale, floor)
         stats = {}
         for suffix, mask in (("", keep), ("_interior", interior), ("_above_floor", above)):
             rel = rel_all[mask]

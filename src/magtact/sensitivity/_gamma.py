@@ -26,20 +26,33 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ..metamodel import ModelSet
+from ..metamodel import ModelSet, feature_jacobian, q_hessian
 
 #: Names served by :class:`Responses`: f = F / G [N/Pa] and γ = Γ / G [N/(T·Pa)].
 NAMES = ("f_r", "f_z", "gamma_r", "gamma_z")
+
+
+def through_displacement(dF_dx, dB_dx):
+    """∂F/∂B = (∂F/∂x)(∂B/∂x)⁻¹ for any coordinates x of the displacement (..., 2, 2).
+
+    Works on NumPy arrays (stacked, rows F or B, columns x) and on SymPy matrices alike.
+    """
+    if isinstance(dB_dx, sp.MatrixBase):
+        return dF_dx * dB_dx.inv()
+    return dF_dx @ np.linalg.inv(dB_dx)
+
+
+def row_norms(S):
+    """Γ_r, Γ_z: the Euclidean norms of the rows (F_r, F_z) of ∂F/∂B (..., 2, 2)."""
+    return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])
 
 
 def _phi_functions():
     """γ of v = (f_p, f_q, Br_p, Br_q, Bz_p, Bz_q), with its 1st and 2nd derivatives."""
     v = sp.symbols("fp fq brp brq bzp bzq", real=True)
     fp, fq, brp, brq, bzp, bzq = v
-    det = brp * bzq - brq * bzp
-    s1 = (fp * bzq - fq * bzp) / det
-    s2 = (fq * brp - fp * brq) / det
-    phi = sp.sqrt(s1**2 + s2**2)
+    s = through_displacement(sp.Matrix([[fp, fq]]), sp.Matrix([[brp, brq], [bzp, bzq]]))
+    phi = sp.sqrt(sp.cancel(s[0]) ** 2 + sp.cancel(s[1]) ** 2)
     d1 = [sp.diff(phi, a) for a in v]
     d2 = [[sp.diff(g, a) for a in v] for g in d1]
     return (sp.lambdify(v, phi, "numpy", cse=True), sp.lambdify(v, d1, "numpy", cse=True),
@@ -88,7 +101,7 @@ def dF_dB(models: ModelSet, t, theta, H, G=1.0) -> np.ndarray:
     jets = _jets(models, t, theta, H, 1)
     J = np.stack([jets["B_r"][1], jets["B_z"][1]], axis=-2)  # (..., 2 [B], 2 [p, q])
     dfx = np.stack([jets["f_r"][1], jets["f_z"][1]], axis=-2)  # (..., 2 [f], 2 [p, q])
-    return G * (dfx @ np.linalg.inv(J))
+    return G * through_displacement(dfx, J)
 
 
 def gamma(models: ModelSet, t, theta, H, G) -> tuple[np.ndarray, np.ndarray]:
@@ -97,8 +110,7 @@ def gamma(models: ModelSet, t, theta, H, G) -> tuple[np.ndarray, np.ndarray]:
     Γ_r = |∂F_r/∂B|, Γ_z = |∂F_z/∂B| (docs/method.md §6) under the model set's definition
     (see :func:`dF_dB`); finite at t = 0 (see the module notes).
     """
-    S = dF_dB(models, t, theta, H, G)
-    return np.hypot(S[..., 0, 0], S[..., 0, 1]), np.hypot(S[..., 1, 0], S[..., 1, 1])
+    return row_norms(dF_dB(models, t, theta, H, G))
 
 
 class Responses:
@@ -218,7 +230,7 @@ class PublishedResponsesAtH(ResponsesAtH):
             return self.models[name].jet(t, theta, self.H, order)
         f = "f_r" if name == "gamma_r" else "f_z"
         (sr, sz) = self.models[f].partials(t, theta, self.H, order)
-        g = np.hypot(sr[0], sz[0])
+        g = np.hypot(sr[0], sz[0])  # the row norm of ∂f/∂B, as in row_norms
         out = [g]
         if order >= 1:
             with np.errstate(invalid="ignore", divide="ignore"):
@@ -247,27 +259,13 @@ class PublishedResponsesAtH(ResponsesAtH):
         return _to_ttheta_hess(t, theta, gx, hx)
 
 
-def _jx(t, theta):
-    t, theta = np.broadcast_arrays(np.asarray(t, float), np.asarray(theta, float))
-    sec2 = 1.0 / np.cos(theta) ** 2
-    J = np.zeros(t.shape + (2, 2))
-    J[..., 0, 0] = 1.0
-    J[..., 1, 0] = np.tan(theta)
-    J[..., 1, 1] = t * sec2
-    return J, t, theta, sec2
-
-
 def _to_ttheta(t, theta, gx):
     """∇_(t,θ) g = Jxᵀ ∇_x g."""
-    J = _jx(t, theta)[0]
-    return np.einsum("...ki,...k->...i", J, gx)
+    return np.einsum("...ki,...k->...i", feature_jacobian(t, theta), gx)
 
 
 def _to_ttheta_hess(t, theta, gx, hx):
     """∇²_(t,θ) g = Jxᵀ ∇²_x g Jx + g_q ∇²_(t,θ) q."""
-    J, t, theta, sec2 = _jx(t, theta)
-    out = np.einsum("...ki,...kl,...lj->...ij", J, hx, J)
-    out[..., 0, 1] += gx[..., 1] * sec2
-    out[..., 1, 0] += gx[..., 1] * sec2
-    out[..., 1, 1] += gx[..., 1] * 2.0 * t * sec2 * np.tan(theta)
-    return out
+    J = feature_jacobian(t, theta)
+    return (np.einsum("...ki,...kl,...lj->...ij", J, hx, J)
+            + gx[..., 1, None, None] * q_hessian(t, theta))

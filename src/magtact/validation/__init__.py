@@ -9,11 +9,11 @@ from ._filter import FilterSettings, bandpass
 from ._io import RESPONSES, UNITS, Curve, DataError, Experiment, read_experiment
 from ._model import PathModel
 from ._outputs import write_outputs
-from ._stats import ResponseStats, Validation, excluded_ranges, validate
+from ._stats import N_GRID, ResponseStats, Validation, excluded_ranges, validate
 from ._synthetic import SYNTHETIC_DIR, synthetic_files
 
 __all__ = [
-    "RESPONSES", "SYNTHETIC_DIR", "UNITS", "Curve", "DataError", "Experiment", "FilterSettings",
-    "PathModel", "ResponseStats", "Validation", "bandpass", "excluded_ranges", "read_experiment",
-    "synthetic_files", "validate", "write_outputs",
+    "N_GRID", "RESPONSES", "SYNTHETIC_DIR", "UNITS", "Curve", "DataError", "Experiment",
+    "FilterSettings", "PathModel", "ResponseStats", "Validation", "bandpass",
+    "excluded_ranges", "read_experiment", "synthetic_files", "validate", "write_outputs",
 ]

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
+from .._floor import RELATIVE_FLOOR, above_floor
+from ..geometry import shear_displacement
 from ._filter import FilterSettings, bandpass
 from ._io import RESPONSES, UNITS, DataError, Experiment
 from ._model import PathModel
@@ -18,7 +20,7 @@ N_GRID = 201
 #: Most points of the common grid (a bound on the work of one validation).
 MAX_GRID = 100_001
 #: Default guard: a ratio is evaluated only where |denominator| > FLOOR × max |denominator|.
-FLOOR = 0.05
+FLOOR = RELATIVE_FLOOR
 
 
 @dataclass(frozen=True)
@@ -209,7 +211,7 @@ def validate(experiment: Experiment, model: PathModel, *,
     if all(c.u_r is not None for c in curves):
         u_r = resampled["u_r"].mean(axis=0)
     else:
-        u_r = -grid * np.tan(experiment.theta)
+        u_r = shear_displacement(grid, experiment.theta)
         if any(c.u_r is not None for c in curves):
             notes.append("u_r from the loading path (−u_z tan θ): not every file has u_r")
 
@@ -232,8 +234,7 @@ def validate(experiment: Experiment, model: PathModel, *,
 
 def _guarded_max(num, den, grid, floor):
     """max |num/den| × 100 over points where |den| > floor·max|den| → (value, where, excluded)."""
-    scale = np.max(np.abs(den))
-    excluded = np.abs(den) <= floor * scale if scale > 0 else np.ones(den.shape, bool)
+    excluded = ~above_floor(den, floor=floor)
     if excluded.all():
         return float("nan"), float("nan"), excluded
     ratio = np.where(excluded, -np.inf, np.abs(num) / np.where(excluded, 1.0, np.abs(den)))

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..geometry import shear_displacement
 from ..study import MESH_DENSITIES, Study, load_study
 from ._io import RESPONSES, UNITS
 from ._model import PathModel
@@ -91,7 +92,7 @@ def make_synthetic(model: PathModel, u_z_end: float, *, n_sensors: int = 4, n_re
             clean = model(commanded)
             frac = np.linspace(0.0, 1.0, n_samples)
             test = {"sensor": f"S{s}", "repeat": str(j), "u_z": u_z,
-                    "u_r": -u_z * np.tan(model.theta)}
+                    "u_r": shear_displacement(u_z, model.theta)}
             for r in RESPONSES:
                 if r.startswith("B"):
                     y = (g_B * g_j * clean[r] + offset[r]
