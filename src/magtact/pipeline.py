@@ -9,7 +9,6 @@ why. A failed stage does not stop the run; the stages that need its output are m
 
 from __future__ import annotations
 
-import json
 import os
 import platform
 import shutil
@@ -24,6 +23,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from ._errors import MissingFileError
+from ._files import write_json
 from ._versions import package_versions
 from .study import Study
 
@@ -339,6 +339,4 @@ def _copy_evidence(source: Path, folder: Path) -> None:
 
 
 def _write_json(path: Path, data: dict) -> None:
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(data, indent=1, ensure_ascii=False), encoding="utf-8")
-    tmp.replace(path)
+    write_json(path, data, indent=1, ensure_ascii=False)

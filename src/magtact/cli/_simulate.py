@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import math
 from enum import StrEnum
 from typing import Annotated
@@ -10,6 +9,7 @@ from typing import Annotated
 import typer
 
 from .._errors import MagtactError
+from .._files import write_csv
 from ..study import MESH_DENSITIES
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 
@@ -54,12 +54,10 @@ def simulate_command(
                                 progress=lambda tt: bar.update(task, completed=tt))
         except PathFailed as exc:
             raise MagtactError(str(exc)) from exc
-    with open(folder / "forces.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["t", "u_r_mm", "u_z_mm", "F_r_N", "F_z_N"])
-        for row in zip(res.t, from_si(res.u_r, "mm"), from_si(res.u_z, "mm"), res.F_r, res.F_z,
-                       strict=True):
-            w.writerow([f"{v + 0.0:.10g}" for v in row])  # + 0.0: no "-0"
+    write_csv(folder / "forces.csv", ["t", "u_r_mm", "u_z_mm", "F_r_N", "F_z_N"],
+              zip(res.t, from_si(res.u_r, "mm"), from_si(res.u_z, "mm"), res.F_r, res.F_z,
+                  strict=True),
+              cell=lambda v: f"{v + 0.0:.10g}")  # + 0.0: no "-0"
     import meshio
 
     m = meshio.read(vtu)

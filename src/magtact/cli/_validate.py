@@ -12,7 +12,7 @@ from rich.table import Table
 
 from .._errors import MagtactError
 from .._floor import RELATIVE_FLOOR
-from ..study import MESH_DENSITIES, PRESETS, Study, checked_si
+from ..study import MESH_DENSITIES, PRESETS, Study, checked_si, to_si
 from ..validation import N_GRID
 from ._app import app, check_out, console, get_study, out_dir
 
@@ -115,7 +115,8 @@ def validate_command(
         if not (math.isfinite(value) and 0.0 <= value <= MAX_CYCLES_PER_MM):
             raise MagtactError(f"{name} must be between 0 and {MAX_CYCLES_PER_MM:g} cycles per mm "
                                f"(--f-hi 0: no low-pass), got {value!r}")
-    filt = FilterSettings(f_lo=f_lo * 1e3, f_hi=f_hi * 1e3 if f_hi > 0 else None)
+    filt = FilterSettings(f_lo=to_si(f_lo, "per_mm"),
+                          f_hi=to_si(f_hi, "per_mm") if f_hi > 0 else None)
     experiment = read_experiment(data)
     H_m, G_pa = experiment.design(H_m, G_pa)
     folder = out_dir(out)  # a folder that cannot be written is refused before the work

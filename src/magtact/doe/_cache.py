@@ -19,7 +19,6 @@ import hashlib
 import io
 import json
 import os
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
+from .._files import write_bytes
 
 MAGIC = b"MAGTACT-CACHE"
 FORMAT = 1
@@ -103,20 +103,7 @@ class JobCache:
 
     def put(self, kind: str, key: str, entry: Entry) -> Path:
         """Write ``entry`` atomically (temporary file + rename); return its path."""
-        path = self.path(kind, key)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        data = _encode(entry, kind, key)
-        fd, tmp = tempfile.mkstemp(prefix=f".{key}.", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(data)
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        return path
+        return write_bytes(self.path(kind, key), _encode(entry, kind, key), fsync=True)
 
     def keys(self, kind: str) -> list[str]:
         """Keys of the entries of one kind present on disk (not verified)."""

@@ -8,10 +8,8 @@ netCDF-safe: strings and numbers, structured values as JSON text).
 
 from __future__ import annotations
 
-import csv
 import json
 import os
-import tempfile
 from datetime import UTC, datetime
 from importlib import resources
 from pathlib import Path
@@ -20,6 +18,8 @@ import numpy as np
 import xarray as xr
 
 from .._errors import MagtactError, MissingFileError
+from .._files import atomic_path
+from .._files import write_csv as _write_csv
 from ..study import Study, from_si
 from ._cache import Entry
 from ._jobs import FieldJob, PathJob, versions
@@ -128,18 +128,10 @@ def provenance(study: Study, field_job: FieldJob, field: Entry | None, path_jobs
 
 def save_dataset(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     """Write ``ds`` to netCDF-4 (h5netcdf, compressed) atomically; return the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars}
+    encoding = {name: {"zlib": True, "complevel": 4} for name in ds.data_vars}
+    with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    return Path(path)
 
 
 def load_dataset(path: str | os.PathLike) -> xr.Dataset:
@@ -192,12 +184,9 @@ def write_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         return from_si(ds[var].broadcast_like(ds["F_r"]).transpose(*DIMS).values.ravel(), unit)
 
     full = {name: column(var, unit) for name, (var, unit) in CSV_COLUMNS.items()}
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(CSV_COLUMNS)
-        for row in zip(*(full[name].tolist() for name in CSV_COLUMNS), strict=True):
-            writer.writerow([repr(x + 0.0) for x in row])  # + 0.0: no '-0.0'
-    return path
+    return _write_csv(path, list(CSV_COLUMNS),
+                     zip(*(full[name].tolist() for name in CSV_COLUMNS), strict=True),
+                     cell=lambda x: repr(x + 0.0))  # + 0.0: no '-0.0'; shortest exact form
 
 
 #: Study sections that determine a DOE data set (the others may differ from the data set's).

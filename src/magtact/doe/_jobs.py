@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._versions import package_versions as versions
-from ..study import Study, mm
+from ..study import Study, kpa, mm
 from ._cache import Entry
 
 #: Arrays a path result must provide, each of shape (n_t,): SI units.
@@ -66,7 +66,7 @@ class PathJob:
     @property
     def label(self) -> str:
         """Short human-readable name, in user units."""
-        g = "" if self.G is None else f", G={self.G / 1e3:.4g} kPa"
+        g = "" if self.G is None else f", G={kpa(self.G):.4g} kPa"
         return f"path θ={self.theta:.4f} rad, H={mm(self.H):.4g} mm{g}"
 
 

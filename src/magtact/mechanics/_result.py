@@ -6,6 +6,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..study import mm
+
 
 class PathFailed(RuntimeError):
     """A loading path could not be completed.
@@ -23,7 +25,7 @@ class PathFailed(RuntimeError):
     def __init__(self, t: float, theta: float, H: float, t_converged: float, reason: str = ""):
         self.t, self.theta, self.H, self.t_converged = t, theta, H, t_converged
         msg = (f"structural path failed at t = {t:.5g} (theta = {theta:.4f} rad, "
-               f"H = {H * 1e3:.4g} mm); last converged t = {t_converged:.5g}")
+               f"H = {mm(H):.4g} mm); last converged t = {t_converged:.5g}")
         super().__init__(msg + (f": {reason}" if reason else ""))
 
 

@@ -43,7 +43,7 @@ import sympy as sp
 from .._errors import MagtactError
 from .._floor import above_floor
 from ..geometry import hall_from_magnet_centre, loading_path
-from ..study import Study
+from ..study import Study, mm, mt
 from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._regressor import SymbolicRegressor
@@ -176,8 +176,8 @@ def hall_features(study: Study) -> tuple[sp.Expr, sp.Expr]:
     a0, a1 = _affine_in_H(lambda h: float(loading_path(study, 1.0, 0.0, h)[1]), study)
     x0, x1 = _affine_in_H(lambda h: float(hall_from_magnet_centre(study, 0.0, 0.0, h)[1]), study)
     a = sp.Float(a0) + sp.Float(a1) * H  # u_z per unit t [m]
-    X = -(-a * q) * 1000      # x = −u_r, u_r = −a q
-    Z = (sp.Float(x0) + sp.Float(x1) * H - a * p) * 1000  # z = −(centre + u_z)
+    X = mm(-(-a * q))      # x = −u_r, u_r = −a q
+    Z = mm(sp.Float(x0) + sp.Float(x1) * H - a * p)  # z = −(centre + u_z)
     return sp.expand(X), sp.expand(Z)
 
 
@@ -329,9 +329,8 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
     published = field_models is not None and name in ("f_r", "f_z")
     if published:
         # field in mT and H in mm: inputs of order one for the GP
-        feats = {"b_r": B_r * 1000, "b_z": B_z * 1000, "p": p, "q": q, "h": H * 1000}
-        cols = np.column_stack([table["B_r"] * 1000, table["B_z"] * 1000, pv, qv,
-                                table["H"] * 1000])
+        feats = {"b_r": mt(B_r), "b_z": mt(B_z), "p": p, "q": q, "h": mm(H)}
+        cols = np.column_stack([mt(table["B_r"]), mt(table["B_z"]), pv, qv, mm(table["H"])])
         transform = "identity"
     elif name.startswith("B"):
         X_, Z_ = hall_features(study)
@@ -339,8 +338,8 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
         Xv, Zv = (np.broadcast_to(a, pv.shape) for a in fx(pv, qv, table["H"]))
         feats, cols = {"X": X_, "Z": Z_}, np.column_stack([Xv, Zv])
     else:
-        feats = {"p": p, "q": q, "h": H * 1000}
-        cols = np.column_stack([pv, qv, table["H"] * 1000])
+        feats = {"p": p, "q": q, "h": mm(H)}
+        cols = np.column_stack([pv, qv, mm(table["H"])])
     train = ~test_mask  # accuracy on all training points; the GP sees ``fit_on`` ⊆ train
     rejected, best, tries = [], None, 0
     t0 = time.perf_counter()

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import sympy as sp
 
+from ..study import mm
 from ._fit import FitResult
 from ._parse import format_expression
 
@@ -32,7 +33,7 @@ def write_markdown(result: FitResult, path: str | Path, *, title: str = "Metamod
              "point relative to the magnet's centre (X, Z) in mm. f = F / G [N/Pa].", "",
              f"Training data SHA-256: `{result.data_hash}`.", "",
              "Held-out (θ [rad], H [mm]) paths: "
-             + ", ".join(f"({a:.4g}, {b * 1e3:.4g})" for a, b in result.holdout), "",
+             + ", ".join(f"({a:.4g}, {mm(b):.4g})" for a, b in result.holdout), "",
              "## Accuracy", "",
              "| model | transform | R² (held out) | max abs err / range | max rel err (abs) "
              "| max abs err | train: max abs err / range | fit time [s] | seed (tries) |",

@@ -10,6 +10,7 @@ import numpy as np
 import symengine as se
 import sympy as sp
 
+from ..study import mm
 from ._symbols import PQ_TO_TTH, PQH, SYMBOLS, TTH, TTH_TO_PQ, features, p, q
 
 #: Names of the four responses of a :class:`ModelSet` and their SI units.
@@ -253,7 +254,7 @@ class ModelSet:
             if bad.size:
                 i = np.unravel_index(bad[0], T.shape)
                 raise MagtactError(f"model {name} is not finite ({v[i]}) at t = {T[i]:.4g}, "
-                                   f"theta = {TH[i]:.4g} rad, H = {HH[i] * 1e3:.4g} mm ({bad.size}"
+                                   f"theta = {TH[i]:.4g} rad, H = {mm(HH[i]):.4g} mm ({bad.size}"
                                    f" of {v.size} points of the study's domain)")
 
     def fields(self, t, theta, H) -> tuple[np.ndarray, np.ndarray]:

@@ -7,13 +7,13 @@ once per height H (:class:`HeightResult`) and scaled by G for a design (:class:`
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .._errors import MagtactError
+from .._files import significant, write_csv
 from ..metamodel import ModelSet
 from ..sensitivity import Responses, ResponsesAtH
 from ..study import Study, from_si
@@ -356,20 +356,13 @@ class DesignMaps:
 
     def to_csv(self, path: str | Path) -> Path:
         """Write one row per design in user units (mm, kPa, N, N/T, rad); return the path."""
-        path = Path(path)
         cols = ["H_mm", "G_kPa", "F_r_min_N", "F_z_max_N", "Gamma_r_max_N_per_T",
                 "Gamma_z_max_N_per_T", "t_m", "theta_m_rad", "degenerate"]
-        with path.open("w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(cols)
-            for i in range(self.H.size):
-                for j in range(self.G.size):
-                    d = self.design(i, j)
-                    w.writerow([f"{from_si(d.H, 'mm'):.12g}", f"{from_si(d.G, 'kPa'):.12g}",
-                                f"{d.F_r_min:.12g}", f"{d.F_z_max:.12g}",
-                                f"{d.Gamma_r_max:.12g}", f"{d.Gamma_z_max:.12g}",
-                                f"{d.t_m:.12g}", f"{d.theta_m:.12g}", d.degenerate or ""])
-        return path
+        rows = ([from_si(d.H, "mm"), from_si(d.G, "kPa"), d.F_r_min, d.F_z_max, d.Gamma_r_max,
+                 d.Gamma_z_max, d.t_m, d.theta_m, d.degenerate or ""]
+                for d in (self.design(i, j) for i in range(self.H.size)
+                          for j in range(self.G.size)))
+        return write_csv(path, cols, rows, cell=significant(12))
 
 
 def design_maps(models: Responses | ModelSet, study: Study) -> DesignMaps:

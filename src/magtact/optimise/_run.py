@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import json
 import time
 import warnings
@@ -13,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
+from .._files import significant, write_csv
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study, from_si
@@ -149,12 +149,7 @@ class Optimisation:
 
 
 def _csv(path: Path, header: list[str], rows) -> Path:
-    with path.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        for row in rows:
-            w.writerow([f"{v:.12g}" if isinstance(v, float | np.floating) else v for v in row])
-    return path
+    return write_csv(path, header, rows, cell=significant(12))
 
 
 def _design_json(d: DesignResult) -> dict:

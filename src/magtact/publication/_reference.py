@@ -7,9 +7,13 @@ de Boer et al., "Design Optimisation of a Magnetic Field Based Soft Tactile Sens
 
 from __future__ import annotations
 
+from ..study import to_si
+
 #: Designs of the publication: (H [mm], G as printed [kPa]).
 ORIGINAL = (3.0, 2.94)
 FABRICATED = (4.1, 2.94)
+#: Height of the fabricated sensor [m] (the material is the original design's).
+H_FABRICATED = to_si(FABRICATED[0], "mm")
 
 #: Per design: Γ_r,max, Γ_z,max [N/T], F_r,min, F_z,max [N]; G as printed.
 DESIGNS: dict[str, dict[str, float]] = {

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import os
@@ -13,6 +12,7 @@ from pathlib import Path
 from tempfile import mkdtemp
 
 from .._errors import MagtactError
+from .._files import write_csv, write_text
 from ..study import Study
 from ._compare import FIGURES, cell_text, comparison, publication_text, spread
 from ._seeds import DEFINITIONS, seed_study
@@ -68,18 +68,18 @@ class Reproduction:
         rows = [[r["definition"], r["seed"], r["ok"], r.get("fit_time_s", math.nan)]
                 + [_fmt(_path(r, p)) for *_, p in FIGURES] + [r.get("gamma_z_trend", "")]
                 for r in self.records]
-        files.append(_csv(out / "seeds.csv", ["definition", "seed", "ok", "fit_time_s"]
+        files.append(write_csv(out / "seeds.csv", ["definition", "seed", "ok", "fit_time_s"]
                           + [k for k, *_ in FIGURES] + ["gamma_z_trend"], rows))
         rows = [[d, f["label"], f["unit"], f["n"], _fmt(f["min"]), _fmt(f["max"]),
                  _fmt(f["max_over_min"])]
                 for d, figs in self.spread.items() for k, f in figs.items() if "min" in f]
-        files.append(_csv(out / "spread.csv", ["definition", "figure", "unit", "seeds", "min",
+        files.append(write_csv(out / "spread.csv", ["definition", "figure", "unit", "seeds", "min",
                                                "max", "max_over_min"], rows))
         cols = [k for k in self.comparison[0] if "/" in k] if self.comparison else []
         rows = [[r["quantity"], r["unit"], "yes" if r["scale_free"] else "no",
                  publication_text(r["publication"])] + [cell_text(r[c]) for c in cols]
                 for r in self.comparison]
-        files.append(_csv(out / "comparison.csv", ["quantity", "unit", "scale_free",
+        files.append(write_csv(out / "comparison.csv", ["quantity", "unit", "scale_free",
                                                    "publication"] + cols, rows))
         return files
 
@@ -173,15 +173,4 @@ def _finite(x):
 
 
 def _write(path: Path, text: str) -> Path:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(text + "\n", encoding="utf-8")
-    tmp.replace(path)
-    return path
-
-
-def _csv(path: Path, header: list[str], rows) -> Path:
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        w.writerows(rows)
-    return path
+    return write_text(path, text + "\n")

@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
+from .._files import write_json
 from ..study import Study, from_si, study_from_dict
+from . import _reference as published
 
 #: Sensitivity definitions compared.
 DEFINITIONS = ("jacobian", "published")
-#: Height of the publication's fabricated sensor [m] (clipped to the study's H bounds).
-H_FABRICATED = 4.1e-3
 #: Points along t of the Γ_z curve at the tallest height.
 N_T_CURVE = 41
 
@@ -149,11 +149,7 @@ def _cached(cache, key, definition, seed) -> dict | None:
 def _store(cache, key, definition, seed, rec) -> None:
     if cache is None:
         return
-    path = _cache_file(cache, key, definition, seed)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(rec, allow_nan=True), encoding="utf-8")
-    tmp.replace(path)
+    write_json(_cache_file(cache, key, definition, seed), rec, allow_nan=True)
 
 
 def _line(rec: dict, done: int, total: int) -> str:
@@ -216,7 +212,7 @@ def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definit
     d = study.design
     # batched per-height extrema (projected Newton, checked against the GA + trust-region
     # method in the tests): the seed study needs many designs, not the last digit of each
-    H_fab = min(max(H_FABRICATED, d.H[0]), d.H[1])
+    H_fab = min(max(published.H_FABRICATED, d.H[0]), d.H[1])  # within the study's bounds
     designs = heights_batch(R, [d.H_original, H_fab], study)
     rec["original"] = _row(designs, 0, d.G_original)
     rec["fabricated"] = _row(designs, 1, d.G_original)

@@ -31,14 +31,14 @@ def fig_doe(ds: xr.Dataset, path: str | Path, *, G: float | None = None) -> list
     g = ds.G.values[len(ds.G) // 2] if G is None else G
     forces = ds.sel(G=g, method="nearest")
     colours = colormap(CMAP_SEQ)(np.linspace(0.0, 0.85, ds.sizes["H"]))
-    panels = [("F_z", 0, "$F_z$ [N]", 1.0), ("F_r", -1, "$F_r$ [N]", 1.0),
-              ("B_z", 0, "$B_z$ [mT]", 1e3), ("B_r", -1, "$B_r$ [mT]", 1e3)]
+    panels = [("F_z", 0, "$F_z$ [N]", "N"), ("F_r", -1, "$F_r$ [N]", "N"),
+              ("B_z", 0, "$B_z$ [mT]", "mT"), ("B_r", -1, "$B_r$ [mT]", "mT")]
     with style():
         fig, axes = subplots(2, 2, figsize=(6.6, 4.8), sharex=True)
-        for ax, (name, i_theta, label, factor) in zip(axes.flat, panels, strict=True):
+        for ax, (name, i_theta, label, unit) in zip(axes.flat, panels, strict=True):
             da = (forces if name.startswith("F") else ds)[name].isel(theta=i_theta)
             for k, colour in enumerate(colours):
-                ax.plot(ds.t, factor * da.isel(H=k), color=colour, marker="o", ms=2,
+                ax.plot(ds.t, from_si(da.isel(H=k), unit), color=colour, marker="o", ms=2,
                         label=f"H = {from_si(float(ds.H[k]), 'mm'):.3g} mm")
             title = f"θ = {float(ds.theta[i_theta]):.3g} rad"
             if name.startswith("F"):

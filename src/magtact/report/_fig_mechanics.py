@@ -9,6 +9,7 @@ from matplotlib import cm, colors
 from matplotlib.figure import Figure
 from matplotlib.tri import Triangulation
 
+from ..study import mm
 from ._style import CMAP_SEQ, colormap, save, style
 
 _FACES = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6],
@@ -50,8 +51,8 @@ def fig_deformed_body(points: np.ndarray, cells: np.ndarray, displacement: np.nd
     list of Path
         The written files.
     """
-    x = (points + displacement) * 1e3  # mm
-    mag = np.linalg.norm(displacement, axis=1) * 1e3
+    x = mm(points + displacement)
+    mag = mm(np.linalg.norm(displacement, axis=1))
     norm = colors.Normalize(vmin=0.0, vmax=max(float(mag.max()), 1e-12))
     cmap = colormap(CMAP_SEQ)
     faces = _boundary_faces(cells)
@@ -85,7 +86,7 @@ def fig_deformed_body(points: np.ndarray, cells: np.ndarray, displacement: np.nd
         edges = np.concatenate([sec[:, [0, 1]], sec[:, [1, 2]], sec[:, [2, 3]], sec[:, [3, 0]]])
         key, counts = np.unique(np.sort(edges, axis=1), axis=0, return_counts=True)
         outline = key[counts == 1]
-        p0 = points * 1e3
+        p0 = mm(points)
         for a, b in outline:
             ax2.plot(p0[[a, b], 0], p0[[a, b], 2], "k--", lw=0.5, dashes=(2, 2))
         ax2.set(xlabel="x [mm]", ylabel="z [mm]", aspect="equal")

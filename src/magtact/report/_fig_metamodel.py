@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..geometry import loading_path
-from ..study import Study, kpa, mm
+from ..study import LABEL, Study, from_si, kpa, mm
 from ._style import CMAP_DIV, CMAP_SEQ, save, style, subplots
 
 
@@ -77,18 +77,18 @@ def fig_gamma(models, study: Study, H: float, G: float, path: str | Path) -> lis
 
 def fig_parity(models, table: dict, test_mask: np.ndarray, path: str | Path) -> list[Path]:
     """Model against data for the four responses; held-out paths in orange."""
-    names = [("B_r", "mT", 1e3), ("B_z", "mT", 1e3), ("f_r", "N/kPa", 1e3), ("f_z", "N/kPa", 1e3)]
+    names = [("B_r", "mT"), ("B_z", "mT"), ("f_r", "N_per_kPa"), ("f_z", "N_per_kPa")]
     label = {"B_r": "$B_r$", "B_z": "$B_z$", "f_r": "$f_r = F_r/G$", "f_z": "$f_z = F_z/G$"}
     with style():
         fig, axes = subplots(1, 4, figsize=(7.2, 2.1))
-        for ax, (k, unit, s) in zip(axes, names, strict=True):
-            y = table[k] * s
-            y_hat = models[k].value(table["t"], table["theta"], table["H"]) * s
+        for ax, (k, unit) in zip(axes, names, strict=True):
+            y = from_si(np.asarray(table[k]), unit)
+            y_hat = from_si(models[k].value(table["t"], table["theta"], table["H"]), unit)
             ax.plot(y[~test_mask], y_hat[~test_mask], ".", ms=2, color="C0", label="train")
             ax.plot(y[test_mask], y_hat[test_mask], ".", ms=2, color="C1", label="held out")
             lo, hi = y.min(), y.max()
             ax.plot([lo, hi], [lo, hi], "k-", lw=0.6)
-            ax.set_title(f"{label[k]} [{unit}]")
+            ax.set_title(f"{label[k]} [{LABEL.get(unit, unit)}]")
             ax.set_xlabel("data")
         axes[0].set_ylabel("model")
         axes[0].legend(frameon=False, markerscale=3)

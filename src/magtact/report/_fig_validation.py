@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ..study import from_si, mm
 from ._style import save, style, subplots
 
-#: (response, abscissa, scale to plot units, unit label) of the four panels.
-PANELS = (("B_r", "u_r", 1e3, "mT"), ("B_z", "u_z", 1e3, "mT"),
-          ("F_r", "u_r", 1.0, "N"), ("F_z", "u_z", 1.0, "N"))
+#: (response, abscissa, plot unit) of the four panels.
+PANELS = (("B_r", "u_r", "mT"), ("B_z", "u_z", "mT"), ("F_r", "u_r", "N"), ("F_z", "u_z", "N"))
 
 
 def fig_validation(validation, path: str | Path) -> list[Path]:
@@ -30,9 +30,10 @@ def fig_validation(validation, path: str | Path) -> list[Path]:
     """
     with style():
         fig, axes = subplots(2, 2, figsize=(6.8, 5.0))
-        for ax, (name, x_name, scale, unit) in zip(axes.flat, PANELS, strict=True):
+        for ax, (name, x_name, unit) in zip(axes.flat, PANELS, strict=True):
             s = validation.stats[name]
-            x = (validation.u_r if x_name == "u_r" else validation.u_z) * 1e3
+            scale = from_si(1.0, unit)
+            x = mm(validation.u_r if x_name == "u_r" else validation.u_z)
             for k, y in enumerate(s.curves):
                 ax.plot(x, y * scale, color="0.75", lw=0.5,
                         label=f"tests (N = {validation.n_tests})" if k == 0 else None)

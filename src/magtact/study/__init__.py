@@ -15,11 +15,11 @@ from ._model import (
     Sensitivity,
     Study,
 )
-from ._units import MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, to_si
+from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
-    "DOE", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints", "Design", "Loading",
+    "DOE", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints", "Design", "Loading",
     "Magnet", "Magnetics", "Material", "Mechanics", "PHYSICAL", "Sensitivity", "Study",
     "StudyError", "check_si", "checked_si", "from_si", "kpa", "load_study", "magone",
-    "magone_printed", "mm", "study_from_dict", "to_si",
+    "magone_printed", "mm", "mt", "study_from_dict", "to_si",
 ]

@@ -13,10 +13,17 @@ from .._errors import MagtactError
 #: Value in SI = value in the user unit × num / den (kept as two integers so that a value such
 #: as 2.97 mm becomes exactly the float nearest to 0.00297 m).
 SCALE: dict[str, tuple[int, int]] = {
+    "m": (1, 1),
     "mm": (1, 1000),
+    "um": (1, 1_000_000),
     "kPa": (1000, 1),
+    "Pa": (1, 1),
     "mT": (1, 1000),
+    "uT": (1, 1_000_000),
     "N": (1, 1),
+    "mN": (1, 1000),
+    "per_mm": (1000, 1),
+    "N_per_kPa": (1, 1000),
     "T": (1, 1),
     "rad": (1, 1),
     "A_per_m": (1, 1),
@@ -38,22 +45,37 @@ PHYSICAL: dict[str, tuple[float, float]] = {
 }
 
 #: Printable form of each unit suffix.
-LABEL: dict[str, str] = {"A_per_m": "A/m", "": "-"}
+LABEL: dict[str, str] = {"A_per_m": "A/m", "um": "µm", "uT": "µT", "per_mm": "1/mm",
+                         "N_per_kPa": "N/kPa", "": "-"}
 
 #: Permeability of free space used throughout [T·m/A] (docs/method.md §1).
 MU0 = 1.257e-6
 
 
+#: Angle unit whose factor is not a ratio of integers.
+DEG = math.pi / 180.0
+
+
 def to_si(value, unit: str):
     """Convert ``value`` given in the user unit ``unit`` (e.g. ``"mm"``) to SI."""
+    if unit == "deg":
+        return _scaled_float(value, DEG)
     num, den = SCALE[unit]
     return _scaled(value, num, den)
 
 
 def from_si(value, unit: str):
     """Convert an SI ``value`` to the user unit ``unit`` (e.g. metres to ``"mm"``)."""
+    if unit == "deg":
+        return _scaled_float(value, 1.0 / DEG)
     num, den = SCALE[unit]
     return _scaled(value, den, num)
+
+
+def _scaled_float(value, factor: float):
+    if isinstance(value, (list, tuple)):
+        return type(value)(v * factor for v in value)
+    return value * factor
 
 
 def _scaled(value, num: int, den: int):
@@ -74,8 +96,14 @@ def kpa(value):
     return from_si(value, "kPa")
 
 
+def mt(value):
+    """Tesla → millitesla (for tables and plot axes)."""
+    return from_si(value, "mT")
+
+
 #: SI unit of each user unit, for messages.
-SI_LABEL: dict[str, str] = {"mm": "m", "kPa": "Pa", "mT": "T", "A_per_m": "A/m"}
+SI_LABEL: dict[str, str] = {"mm": "m", "um": "m", "kPa": "Pa", "mT": "T", "uT": "T", "mN": "N",
+                            "A_per_m": "A/m", "deg": "rad", "per_mm": "1/m"}
 
 
 def bounds_text(unit: str, lo: float, hi: float) -> str:

@@ -34,14 +34,15 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError, MissingFileError
-from ..study import check_si
+from ..study import check_si, mm, to_si
 
 #: The measured responses and the unit suffix of their columns.
 RESPONSES: tuple[str, ...] = ("B_r", "B_z", "F_r", "F_z")
 UNITS: dict[str, str] = {"B_r": "T", "B_z": "T", "F_r": "N", "F_z": "N"}
-#: Unit suffix → factor to SI, for displacement and shear angle columns / metadata keys.
-_LENGTH = {"mm": 1e-3, "m": 1.0}
-_ANGLE = {"rad": 1.0, "deg": math.pi / 180.0}
+#: Unit suffixes accepted for displacement and shear angle columns (converted by
+#: :func:`magtact.study.to_si`).
+_LENGTH = ("mm", "m")
+_ANGLE = ("rad", "deg")
 #: Fewest samples a test must have.
 MIN_SAMPLES = 4
 #: Two shear angles closer than this [rad] are the same.
@@ -135,10 +136,10 @@ class Experiment:
         MagtactError
             If a value is neither given nor in the metadata, or the metadata is not a number.
         """
-        return (H if H is not None else self._meta_si("design_h_mm", 1e-3, "H", "mm"),
-                G if G is not None else self._meta_si("design_g_kpa", 1e3, "G", "kPa"))
+        return (H if H is not None else self._meta_si("design_h_mm", "H", "mm"),
+                G if G is not None else self._meta_si("design_g_kpa", "G", "kPa"))
 
-    def _meta_si(self, key: str, factor: float, name: str, unit: str) -> float:
+    def _meta_si(self, key: str, name: str, unit: str) -> float:
         where = self.sources[0] if self.curves else "the data"
         if key not in self.metadata:
             raise MagtactError(f"give the design's {name} (--{name}): {where} has no metadata "
@@ -149,7 +150,7 @@ class Experiment:
         except ValueError:
             raise MagtactError(f"{where}: metadata '{key}' is not a number: "
                              f"{_clip(text)!r}") from None
-        return check_si(value * factor, unit, f"{where}: metadata '{key}'", value)
+        return check_si(to_si(value, unit), unit, f"{where}: metadata '{key}'", value)
 
     @property
     def sources(self) -> tuple[str, ...]:
@@ -343,7 +344,6 @@ def _numbers(path: Path, rows, header: list[str], column: str) -> np.ndarray:
     """One column as SI floats; every cell must be a finite number."""
     k = header.index(column)
     unit = column.rsplit("_", 1)[1]
-    factor = _LENGTH.get(unit, _ANGLE.get(unit, 1.0))
     kind = "length" if unit in _LENGTH else "angle" if unit in _ANGLE else unit
     lo, hi, si = PHYSICAL_RANGE.get(kind, (-math.inf, math.inf, ""))
     out = np.empty(len(rows))
@@ -357,7 +357,7 @@ def _numbers(path: Path, rows, header: list[str], column: str) -> np.ndarray:
         if not math.isfinite(value):
             raise DataError(f"{path}: line {line}, column {column!r}: {cell!r} is not a finite "
                             "number")
-        out[n] = value * factor
+        out[n] = to_si(value, unit)
         if not lo <= out[n] <= hi:
             raise DataError(f"{path}: line {line}, column {column!r}: {cell} is outside the "
                             f"physical range [{lo:g}, {hi:g}] {si} (in SI)")
@@ -367,11 +367,11 @@ def _numbers(path: Path, rows, header: list[str], column: str) -> np.ndarray:
 def _theta(path, rows, header, columns, numeric, meta, meta_line):
     """The file's shear angle [rad] from its column or its metadata, and where it was read."""
     from_meta = None
-    for unit, factor in _ANGLE.items():
+    for unit in _ANGLE:
         key = f"theta_{unit}"
         if key in meta:
             try:
-                from_meta = float(meta[key]) * factor
+                from_meta = to_si(float(meta[key]), unit)
             except ValueError:
                 raise DataError(f"{path}: line {meta_line[key]}, metadata {key!r}: not a number: "
                                 f"{meta[key]!r}") from None
@@ -405,6 +405,6 @@ def _monotonic(path: Path, u_z: np.ndarray, line_nos: list[int], column: str) ->
     if bad.size:
         k = bad[0] + 1
         raise DataError(f"{path}: line {line_nos[k]}, column {column!r}: displacement is not "
-                        f"strictly monotonic ({u_z[k - 1] * 1e3:.6g} mm on line "
-                        f"{line_nos[k - 1]}, then {u_z[k] * 1e3:.6g} mm); give the loading "
+                        f"strictly monotonic ({mm(u_z[k - 1]):.6g} mm on line "
+                        f"{line_nos[k - 1]}, then {mm(u_z[k]):.6g} mm); give the loading "
                         "branch only, one sample per displacement")

@@ -16,7 +16,7 @@ import numpy as np
 
 from .._errors import MagtactError
 from ..geometry import loading_path
-from ..study import Study
+from ..study import Study, kpa, mm
 from ._io import RESPONSES
 
 
@@ -55,7 +55,7 @@ class PathModel:
             bad = np.flatnonzero(~np.isfinite(v))
             if bad.size:
                 raise MagtactError(f"model {self.label!r} gives a non-finite {r} ({v[bad[0]]}) at "
-                                 f"u_z = {u_z.flat[bad[0]] * 1e3:.6g} mm ({bad.size} of "
+                                 f"u_z = {mm(u_z.flat[bad[0]]):.6g} mm ({bad.size} of "
                                  f"{v.size} points)")
         return values
 
@@ -114,7 +114,7 @@ class PathModel:
                     "F_r": G * models.f_r.value(t, theta, H),
                     "F_z": G * models.f_z.value(t, theta, H)}
 
-        name = label or f"metamodels, H = {H * 1e3:.3g} mm, G = {G * 1e-3:.3g} kPa"
+        name = label or f"metamodels, H = {mm(H):.3g} mm, G = {kpa(G):.3g} kPa"
         return cls(fn=fn, theta=float(theta), label=name, u_z_range=(u_z1, 0.0))
 
     @classmethod
@@ -154,6 +154,6 @@ class PathModel:
             B_r, B_z = hall_field(study, u_z / u_z1, theta, H, solver=solver)
             return {"B_r": B_r, "B_z": B_z, **{k: s(u_z) for k, s in forces.items()}}
 
-        name = label or (f"simulation ({solver} field, FE forces), H = {H * 1e3:.3g} mm, "
-                         f"G = {G * 1e-3:.3g} kPa")
+        name = label or (f"simulation ({solver} field, FE forces), H = {mm(H):.3g} mm, "
+                         f"G = {kpa(G):.3g} kPa")
         return cls(fn=fn, theta=float(theta), label=name, u_z_range=(u_z1, 0.0))

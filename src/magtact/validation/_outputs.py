@@ -7,6 +7,7 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
+from ..study import from_si, mm
 from ._stats import Validation
 
 
@@ -47,12 +48,12 @@ def write_outputs(validation: Validation, out: str | Path, *, sources=(),
         "n_tests": validation.n_tests,
         "sensors": list(validation.sensors),
         "model": validation.model_label,
-        "filter_cycles_per_mm": [validation.filter.f_lo * 1e-3,
+        "filter_cycles_per_mm": [from_si(validation.filter.f_lo, "per_mm"),
                                  None if validation.filter.f_hi is None
-                                 else validation.filter.f_hi * 1e-3],
+                                 else from_si(validation.filter.f_hi, "per_mm")],
         "floor": validation.floor,
         "n_grid": int(validation.u_z.size),
-        "u_z_range_mm": [float(validation.u_z.min() * 1e3), float(validation.u_z.max() * 1e3)],
+        "u_z_range_mm": [float(mm(validation.u_z.min())), float(mm(validation.u_z.max()))],
         "notes": list(validation.notes),
         "sources": [str(s) for s in sources],
         "rows": [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)

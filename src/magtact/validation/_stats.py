@@ -2,15 +2,16 @@
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .._errors import MagtactError
+from .._files import significant, write_csv
 from .._floor import RELATIVE_FLOOR, above_floor
 from ..geometry import shear_displacement
+from ..study import mm
 from ._filter import FilterSettings, bandpass
 from ._io import RESPONSES, UNITS, DataError, Experiment
 from ._model import PathModel
@@ -113,8 +114,8 @@ class Validation:
             out.append({
                 "data": "synthetic" if self.synthetic else "experiment",
                 "response": r, "unit": s.unit, "n_tests": self.n_tests,
-                "c_v_percent": s.c_v, "c_v_at_u_z_mm": s.c_v_at * 1e3,
-                "eps_percent": s.eps, "eps_at_u_z_mm": s.eps_at * 1e3,
+                "c_v_percent": s.c_v, "c_v_at_u_z_mm": mm(s.c_v_at),
+                "eps_percent": s.eps, "eps_at_u_z_mm": mm(s.eps_at),
                 "c_v_excluded": _ranges_text(self.u_z, s.cv_excluded),
                 "eps_excluded": _ranges_text(self.u_z, s.eps_excluded),
                 "model": self.model_label,
@@ -123,16 +124,9 @@ class Validation:
 
     def write_csv(self, path: str | Path) -> Path:
         """Write :meth:`rows` as CSV; return the path."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         rows = self.rows()
-        with path.open("w", newline="", encoding="utf-8") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            for row in rows:
-                w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v)
-                            for k, v in row.items()})
-        return path
+        return write_csv(path, list(rows[0]), [list(r.values()) for r in rows],
+                         cell=significant(6))
 
 
 def validate(experiment: Experiment, model: PathModel, *,
@@ -187,14 +181,14 @@ def validate(experiment: Experiment, model: PathModel, *,
     if model.u_z_range is not None:
         m_lo, m_hi = model.u_z_range
         if lo < m_lo - 1e-12 or hi > m_hi + 1e-12:
-            notes.append(f"grid clipped to the model's range u_z in [{m_lo * 1e3:.4g}, "
-                         f"{m_hi * 1e3:.4g}] mm (data common range [{lo * 1e3:.4g}, "
-                         f"{hi * 1e3:.4g}] mm)")
+            notes.append(f"grid clipped to the model's range u_z in [{mm(m_lo):.4g}, "
+                         f"{mm(m_hi):.4g}] mm (data common range [{mm(lo):.4g}, "
+                         f"{mm(hi):.4g}] mm)")
         lo, hi = max(lo, m_lo), min(hi, m_hi)
     if not hi > lo:
         raise DataError("the tests share no displacement range (u_z): "
-                        + "; ".join(f"{c.source}, line {c.line}: [{c.u_z.min() * 1e3:.4g}, "
-                                    f"{c.u_z.max() * 1e3:.4g}] mm" for c in curves))
+                        + "; ".join(f"{c.source}, line {c.line}: [{mm(c.u_z.min()):.4g}, "
+                                    f"{mm(c.u_z.max()):.4g}] mm" for c in curves))
     grid = np.linspace(hi, lo, n_grid)  # loading order: from the top downwards
 
     resampled = {r: np.empty((len(curves), n_grid)) for r in (*RESPONSES, "u_r")}
@@ -263,5 +257,5 @@ def _ranges_text(u_z: np.ndarray, mask: np.ndarray) -> str:
         return "none"
     if mask.all():
         return "all points (denominator vanishes)"
-    parts = [f"{a * 1e3:.3g}..{b * 1e3:.3g} mm" for a, b in excluded_ranges(u_z, mask)]
+    parts = [f"{mm(a):.3g}..{mm(b):.3g} mm" for a, b in excluded_ranges(u_z, mask)]
     return f"{int(mask.sum())} pts, u_z " + "; ".join(parts)

@@ -1,0 +1,77 @@
+"""Writing result files: every file appears whole or not at all.
+
+A file is written to a temporary sibling and renamed over the target (``os.replace`` is atomic
+on one file system), so an interrupted run never leaves a half-written table, JSON or data set
+that a later run or reader would take for a finished one.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import tempfile
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+
+@contextmanager
+def atomic_path(path: str | os.PathLike, fsync: bool = False) -> Iterator[Path]:
+    """A temporary sibling of ``path`` to write; it replaces ``path`` when the block succeeds.
+
+    On any exception the temporary file is removed and ``path`` is left as it was. With
+    ``fsync`` the data reach the disk before the rename (for caches that must survive a crash
+    of the machine, not only of the process).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        if fsync:
+            with open(tmp, "rb") as fh:
+                os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_bytes(path: str | os.PathLike, data: bytes, fsync: bool = False) -> Path:
+    """Write ``data`` to ``path`` atomically; return the path."""
+    with atomic_path(path, fsync=fsync) as tmp:
+        tmp.write_bytes(data)
+    return Path(path)
+
+
+def write_text(path: str | os.PathLike, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically; return the path."""
+    return write_bytes(path, text.encode("utf-8"))
+
+
+def write_json(path: str | os.PathLike, data, **dumps) -> Path:
+    """Write ``data`` as JSON (``json.dumps`` keywords, e.g. ``indent``) atomically."""
+    return write_text(path, json.dumps(data, **dumps) + "\n")
+
+
+def write_csv(path: str | os.PathLike, header: Sequence[str], rows: Iterable[Sequence],
+              cell: Callable[[object], object] | None = None) -> Path:
+    """Write a header and rows as CSV atomically; ``cell`` formats each value (default: str)."""
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(header)
+    for row in rows:
+        w.writerow(row if cell is None else [cell(v) for v in row])
+    return write_text(path, buf.getvalue())
+
+
+def significant(digits: int) -> Callable[[object], object]:
+    """A ``cell`` formatter for :func:`write_csv`: floats to ``digits`` significant digits."""
+    import numpy as np
+
+    def cell(v):
+        return f"{v:.{digits}g}" if isinstance(v, float | np.floating) else v
+    return cell
