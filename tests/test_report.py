@@ -134,3 +134,27 @@ def test_evidence_json_with_a_convergence_study_becomes_a_table(tmp_path):
     assert "No benchmark results" not in text
     assert ("<tr><th>h_mm</th><th>err</th><th>rate</th></tr><tr><td>0.5</td><td>0.1</td>"
             "<td></td></tr><tr><td>0.25</td><td>0.03</td><td>1.7</td></tr>") in text
+
+
+def test_force_map_draws_the_optimisers_stable_shear_box(monkeypatch):
+    """The star sits at the optimiser's (t_m, θ_m) and the title quotes its F_r,min."""
+    import numpy as np
+
+    from magtact.metamodel import load_models, prefitted_dir
+    from magtact.optimise import per_design
+    from magtact.report import _fig_metamodel as fm
+
+    study = load_study("magone")
+    models = load_models(prefitted_dir())
+    H, G = 3e-3, 29.4e3
+    design = per_design(models, H, G, study)
+    seen = {}
+    monkeypatch.setattr(fm, "save", lambda fig, path: seen.setdefault("fig", fig) and [])
+    fm.fig_force_map(models, study, H, G, "unused")
+    ax = seen["fig"].axes[0]
+    stars = [ln for ln in ax.get_lines() if ln.get_marker() == "*"]
+    assert len(stars) == 1
+    np.testing.assert_allclose([stars[0].get_xdata()[0], stars[0].get_ydata()[0]],
+                               [design.t_m, np.degrees(design.theta_m)], rtol=1e-12)
+    assert f"{design.F_r_min:.3g} N" in seen["fig"]._suptitle.get_text()
+    assert ax.get_xlabel() == "load $t$ [-]"

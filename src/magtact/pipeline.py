@@ -24,14 +24,8 @@ from pathlib import Path
 
 from ._errors import MissingFileError
 from ._files import write_json
-from ._versions import package_versions
+from ._versions import RUN, package_versions
 from .study import Study
-
-#: Packages whose versions the report lists.
-PACKAGES = ("magtact", "numpy", "scipy", "xarray", "h5netcdf", "gmsh", "scikit-fem", "felupe",
-            "pypardiso", "pyoperon", "sympy", "pymoo", "scikit-learn", "matplotlib", "dask",
-            "typer", "rich")
-
 
 #: File in each stage folder naming the run (``run.json``'s ``run_id``) that wrote the folder.
 RUN_STAMP = ".magtact-run"
@@ -199,10 +193,10 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
 
 
 def versions() -> dict[str, str]:
-    """Versions of Python, the platform and the packages in :data:`PACKAGES`."""
+    """Versions of Python, the platform and the packages in :data:`magtact._versions.RUN`."""
     out = {"python": sys.version.split()[0], "platform": platform.platform(),
            "machine": platform.machine(), "cpus": str(os.cpu_count())}
-    return out | package_versions(PACKAGES)
+    return out | package_versions(RUN)
 
 
 # ---- stages ----------------------------------------------------------------------------------

@@ -20,6 +20,7 @@ import xarray as xr
 from .._errors import MagtactError, MissingFileError
 from .._files import atomic_path
 from .._files import write_csv as _write_csv
+from .._versions import DOE
 from ..study import Study, from_si
 from ._cache import Entry
 from ._jobs import FieldJob, PathJob, versions
@@ -42,9 +43,6 @@ CSV_COLUMNS = {
     "u_r_mm": ("u_r", "mm"), "u_z_mm": ("u_z", "mm"), "B_r_T": ("B_r", "T"),
     "B_z_T": ("B_z", "T"), "F_r_N": ("F_r", "N"), "F_z_N": ("F_z", "N"),
 }
-#: Libraries whose versions are recorded in the provenance.
-PROVENANCE_LIBS = ("magtact", "numpy", "scipy", "felupe", "scikit-fem", "gmsh", "pypardiso",
-                   "magpylib", "xarray", "h5netcdf", "dask", "distributed")
 BUNDLED_NAME = "magone_doe.nc"
 
 
@@ -109,7 +107,7 @@ def provenance(study: Study, field_job: FieldJob, field: Entry | None, path_jobs
         "title": f"magtact design of experiments: {study.name}",
         "study_name": study.name,
         "study_toml": study.to_toml(),
-        "versions": json.dumps(versions(PROVENANCE_LIBS), sort_keys=True),
+        "versions": json.dumps(versions(DOE), sort_keys=True),
         "created_utc": datetime.now(UTC).isoformat(timespec="seconds"),
         "field_solver": field_job.solver,
         "field_key": field_job.key,

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._versions import FIELD, MECHANICS
 from .._versions import package_versions as versions
 from ..study import Study, kpa, mm
 from ._cache import Entry
@@ -39,9 +40,6 @@ from ._cache import Entry
 PATH_ARRAYS = ("t", "u_r", "u_z", "F_r", "F_z")
 #: Scalars a path result must provide (beyond the arrays).
 PATH_SCALARS = ("G", "newton_iterations", "cutbacks", "wall_time", "n_dofs", "n_cells")
-#: Libraries whose version is part of a path (resp. field) job's key.
-PATH_LIBS = ("numpy", "scipy", "felupe", "gmsh", "pypardiso")
-FIELD_LIBS = ("numpy", "scipy", "scikit-fem", "gmsh", "magpylib")
 #: magtact sub-package whose MODEL_VERSION is part of a path (resp. field) job's key.
 PATH_MODEL = "mechanics"
 FIELD_MODEL = "magnetics"
@@ -132,7 +130,7 @@ def path_key_inputs(study: Study, solver: dict) -> dict:
     return {
         "kind": "path",
         "solver": solver,
-        "versions": versions(PATH_LIBS),
+        "versions": versions(MECHANICS),
         "body": _section(study, "body"),
         "magnet": _section(study, "magnet"),
         "loading": _section(study, "loading", drop=("theta_max",)),
@@ -146,7 +144,7 @@ def field_key_inputs(study: Study, solver: dict) -> dict:
     return {
         "kind": "field",
         "solver": solver,
-        "versions": versions(FIELD_LIBS),
+        "versions": versions(FIELD),
         "body": _section(study, "body"),
         "magnet": _section(study, "magnet"),
         "loading": _section(study, "loading", drop=("theta_max", "mu_f")),

@@ -17,21 +17,21 @@ def _grid(study: Study, n: int = 121):
     return np.meshgrid(t, th, indexing="ij")
 
 
-def stable_region(F_r: np.ndarray, T: np.ndarray, TH: np.ndarray) -> tuple[float, float, float]:
-    """(F_r,min, t_m, θ_m) of a gridded F_r: the grid minimum and where it is."""
-    k = np.unravel_index(np.argmin(F_r), F_r.shape)
-    return float(F_r[k]), float(T[k]), float(TH[k])
-
-
-def fig_force_map(models, study: Study, H: float, G: float, path: str | Path) -> list[Path]:
+def fig_force_map(models, study: Study, H: float, G: float, path: str | Path,
+                  design=None) -> list[Path]:
     """F_r over (t, θ) and over (u_r, u_z) at design (H [m], G [Pa]).
 
-    Shades the region F_r < 0, draws the line F_r = 0 and the stable region t ≤ t_m, θ ≤ θ_m
-    up to the minimum of F_r (grid minimum, marked by a star).
+    Shades the region F_r < 0, draws the line F_r = 0 and the optimiser's stable-shear box
+    t ≤ t_m, θ ≤ θ_m up to the minimum of F_r (marked by a star). ``design`` is the
+    optimiser's :class:`magtact.optimise.DesignResult` at (H, G); computed when not given.
     """
+    if design is None:
+        from ..optimise import per_design
+
+        design = per_design(models, H, G, study)
     T, TH = _grid(study)
     F_r, _ = models.forces(T, TH, H, G)
-    fmin, tm, thm = stable_region(F_r, T, TH)
+    fmin, tm, thm = design.F_r_min, design.t_m, design.theta_m
     u_r, u_z = loading_path(study, T, TH, H)
     lim = np.max(np.abs(F_r))
     with style():
@@ -45,8 +45,9 @@ def fig_force_map(models, study: Study, H: float, G: float, path: str | Path) ->
             stable = (T <= tm) & (TH <= thm)
             ax.contour(x, y, stable.astype(float), levels=[0.5], colors="C2", linewidths=1.2,
                        linestyles="--")
-            k = np.unravel_index(np.argmin(F_r), F_r.shape)
-            ax.plot(x[k], y[k], "*", color="C2", ms=9, mec="k", mew=0.5)
+            star = ((tm, np.degrees(thm)) if x is T else
+                    tuple(mm(v) for v in loading_path(study, tm, thm, H)))
+            ax.plot(*star, "*", color="C2", ms=9, mec="k", mew=0.5)
             ax.set_xlabel(xl)
             ax.set_ylabel(yl)
         cb = fig.colorbar(cs, ax=axes, shrink=0.9)
