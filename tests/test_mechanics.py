@@ -254,3 +254,52 @@ def test_layer_under_the_magnet_is_graded_towards_the_base(graded_face):
         assert dz[-1] == pytest.approx(dz[0])
     else:  # the cell under the magnet is the thickest of the layer
         assert dz[-1] == pytest.approx(dz.max()) and dz[-1] > dz.mean()
+
+
+def _cylinder_model(solver="superlu"):
+    return HalfBodyModel(half_cylinder_mesh(6e-3, 6e-3, density="coarse"), 10e3, 5000.0, 0.0,
+                         base="sliding", solver=solver)
+
+
+def test_a_step_that_does_not_converge_is_cut_back_until_dt_min(monkeypatch):
+    """Non-convergence (NewtonFailed) halves the step until dt_min, then fails the path."""
+    from magtact.mechanics._model import NewtonFailed, StepFailure, Stepping
+
+    model = _cylinder_model()
+
+    def never(*args):
+        raise NewtonFailed("synthetic non-convergence")
+
+    monkeypatch.setattr(model, "_newton", never)
+    st = Stepping(dt_initial=0.1, dt_min=0.02, cutback=0.5)
+    with pytest.raises(StepFailure, match="synthetic non-convergence"):
+        model.solve_path(lambda t: (0.0, -1e-3 * t), [1.0], stepping=st)
+    tried = [t_try for _, t_try, n in model.log if n == -1]
+    np.testing.assert_allclose(tried, [0.1, 0.05, 0.025])  # 0.0125 < dt_min is not tried
+
+
+@pytest.mark.parametrize("error", [ValueError("a bug"), np.linalg.LinAlgError("a bug"),
+                                   ZeroDivisionError("a bug")])
+def test_an_internal_error_in_a_step_is_not_taken_for_non_convergence(monkeypatch, error):
+    model = _cylinder_model()
+
+    def broken(*args):
+        raise error
+
+    monkeypatch.setattr(model, "_newton", broken)
+    with pytest.raises(type(error), match="a bug"):
+        model.solve_path(lambda t: (0.0, -1e-3 * t), [1.0])
+    assert model.log == []  # no cut-back was tried
+
+
+def test_a_singular_tangent_is_non_convergence(monkeypatch):
+    from magtact.mechanics._model import NewtonFailed
+
+    model = _cylinder_model()
+
+    def singular(A):
+        raise RuntimeError("Factor is exactly singular")
+
+    monkeypatch.setattr(model._linear, "factorize", singular)
+    with pytest.raises(NewtonFailed, match="singular tangent"):
+        model._jacobian()

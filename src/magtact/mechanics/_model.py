@@ -80,6 +80,18 @@ class _SuperLU:
         self.lu = None
 
 
+def _singular_errors() -> tuple[type[BaseException], ...]:
+    """Exceptions by which the linear solvers report a singular matrix: SuperLU raises
+    RuntimeError ("Factor is exactly singular"), PARDISO its PyPardisoError."""
+    errors: tuple[type[BaseException], ...] = (RuntimeError, np.linalg.LinAlgError)
+    try:
+        from pypardiso.pardiso_wrapper import PyPardisoError
+    except ImportError:
+        return errors
+    return (*errors, PyPardisoError)
+
+
+
 def _linear_solver(name: str, threads: int):
     if name == "pardiso":
         return _Pardiso(threads)
@@ -279,7 +291,10 @@ class HalfBodyModel:
         K = K.tocsr()
         rows = K[self.dof1]
         t0 = time.perf_counter()
-        self._linear.factorize(rows[:, self.dof1])
+        try:
+            self._linear.factorize(rows[:, self.dof1])
+        except _singular_errors() as exc:  # a singular tangent: no convergence from here
+            raise NewtonFailed(f"singular tangent ({type(exc).__name__}: {exc})") from exc
         self.timings["factorization"] += time.perf_counter() - t0
         self._K10 = rows[:, self.dof0].tocsr()
         self.jacobians += 1
@@ -343,7 +358,10 @@ class HalfBodyModel:
             du = np.zeros(self.n_dofs)
             du[self.dof0] = ext[self.dof0] - u[self.dof0]
             t0 = time.perf_counter()
-            du[self.dof1] = self._linear.solve(-f[self.dof1] - self._K10 @ du[self.dof0])
+            try:
+                du[self.dof1] = self._linear.solve(-f[self.dof1] - self._K10 @ du[self.dof0])
+            except _singular_errors() as exc:
+                raise NewtonFailed(f"linear solve failed ({type(exc).__name__}: {exc})") from exc
             self.timings["solve"] += time.perf_counter() - t0
             u += du
             f, fnorm = self._line_search(u, du, st.line_search, fnorm if cycling else np.inf)
@@ -409,8 +427,7 @@ class HalfBodyModel:
                 chk = self._checkpoint()
                 try:
                     n_it = self._newton(*path(t_try), st)
-                except (NewtonFailed, ValueError, FloatingPointError, np.linalg.LinAlgError,
-                        RuntimeError) as exc:
+                except NewtonFailed as exc:  # anything else is a bug: it propagates
                     self._restore(chk)
                     self._K10 = None  # the tangent belongs to the failed state
                     self.log.append((t, t_try, -1))
