@@ -91,6 +91,7 @@ class _Context:
     dataset: object = None
     models: object = None
     chosen: object = None
+    card: object = None
     doe_source: str = "none"
 
 
@@ -278,7 +279,21 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
             ctx.log(f"      WARNING: {w.message}")
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    ctx.card = design_card(ctx.models, ctx.study, ctx.chosen, ctx.folder / "optimise")
     return "design chosen"
+
+
+def design_card(models, study, choice, folder) -> dict:
+    """The designer's answer for the chosen and the original design, written to
+    ``folder/card.json``; returns the card (header, rows, answers)."""
+    from .designer import answer
+    from .report import read_card, write_card
+
+    answers = [answer(models, study, choice.design.H, choice.design.G, "chosen"),
+               answer(models, study, study.design.H_original, study.design.G_original,
+                      "original")]
+    write_card(answers, folder, choice.constraints, rtol=study.optimise.active_rtol)
+    return read_card(folder)
 
 
 def _stage_validation(ctx: _Context, rec: StageRecord) -> str:

@@ -75,6 +75,7 @@ def optimise_command(
     Writes OUT/design.json, pareto.csv, reduction.csv, maps.csv and the figures.
     """
     from ..optimise import force_constraints, optimise
+    from ..pipeline import design_card
     from ..report import optimise_figures
 
     s = get_study(study)
@@ -89,7 +90,21 @@ def optimise_command(
         result = optimise(m, s, constraints)
     result.write(folder, figures=optimise_figures)
     print_choice(result)
+    print_card(design_card(m, s, result.choice, folder))
     console.print(f"written to {folder}", highlight=False)
+
+
+def print_card(card: dict | None, stdout: Console | None = None) -> None:
+    """Print the design card (rows of :func:`magtact.report.card_rows`) as a rich table."""
+    if not card:
+        return
+    table = Table(title="Design card", show_lines=False)
+    for k, h in enumerate(card["header"]):
+        table.add_column(escape(h or "answer"), justify="left", overflow="fold",
+                         ratio=2 if k == 0 else 1)
+    for row in card["rows"]:
+        table.add_row(*(escape(str(c)) for c in row))
+    (stdout or Console()).print(table)
 
 
 def print_choice(result, stdout: Console | None = None) -> None:

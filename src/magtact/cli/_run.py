@@ -42,6 +42,10 @@ def run_command(
                        workers=workers, command="magtact " + " ".join(sys.argv[1:]),
                        evidence=evidence,
                        log=lambda m: console.print(m, highlight=False, markup=False))
+    from ..report import read_card
+    from ._optimise import print_card
+
+    print_card(read_card(result.folder / "optimise"))
     console.print(f"report: {result.report} ({result.wall_time_s:.1f} s)", highlight=False)
     bad = [r for r in result.stages if r.status != "ok"]
     if bad:

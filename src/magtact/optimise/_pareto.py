@@ -36,6 +36,9 @@ class ForceConstraints:
     F_z_c: float
     source: str = "values"
     reference: DesignResult | None = None
+    #: Fabrication tolerance δ of G the numbers include: F_r,c and F_z,c are the forces required
+    #: at G (1 − δ), divided by 1 − δ (docs/method.md §7).
+    tolerance: float = 0.0
 
     def margins(self, F_r_min, F_z_max) -> tuple[np.ndarray, np.ndarray]:
         """(g_r, g_z) = (F_r,min − F_r,c, F_z,c − F_z,max) [N]; ≤ 0 is feasible."""
@@ -59,6 +62,11 @@ def force_constraints(models: Responses | ModelSet, study: Study, *, F_r_c: floa
     reference : (H [m], G [Pa]), optional
         Use this design's F_r,min and F_z,max as F_r,c and F_z,c.
 
+    Notes
+    -----
+    With ``[constraints] G_tolerance`` δ > 0 the forces must be reached by the softest body,
+    G (1 − δ): since F ∝ G, that is F(G) against F_c / (1 − δ).
+
     Raises
     ------
     MagtactError
@@ -71,11 +79,13 @@ def force_constraints(models: Responses | ModelSet, study: Study, *, F_r_c: floa
     c = study.constraints
     if reference is None and not given and c.source == "reference":
         reference = (study.design.H_original, study.design.G_original)
+    k = 1.0 / (1.0 - c.G_tolerance)  # every force scales with G: F(G (1 − δ)) = (1 − δ) F(G)
     if reference is not None:
         d = per_design(models, reference[0], reference[1], study)
-        return ForceConstraints(d.F_r_min, d.F_z_max, "reference", d)
-    return ForceConstraints(c.F_r_c if F_r_c is None else float(F_r_c),
-                            c.F_z_c if F_z_c is None else float(F_z_c), "values")
+        return ForceConstraints(k * d.F_r_min, k * d.F_z_max, "reference", d, c.G_tolerance)
+    return ForceConstraints(k * (c.F_r_c if F_r_c is None else float(F_r_c)),
+                            k * (c.F_z_c if F_z_c is None else float(F_z_c)), "values",
+                            tolerance=c.G_tolerance)
 
 
 def feasible_G(f_r_min, f_z_max, constraints: ForceConstraints,

@@ -5,6 +5,7 @@ what the stages' writers accept as their ``figures`` argument (the stages themse
 nothing). :func:`build_report` turns a results folder into one self-contained HTML file.
 """
 
+from ._card import card_rows, read_card, write_card
 from ._fig_doe import fig_doe
 from ._fig_field import fig_field
 from ._fig_mechanics import fig_deformed_body
@@ -17,8 +18,8 @@ from ._stages import field_figures, fit_figures, optimise_figures, validation_fi
 from ._style import CMAP_DIV, CMAP_SEQ, save, style
 
 __all__ = [
-    "CMAP_DIV", "CMAP_SEQ", "build_report", "fig_deformed_body", "fig_doe", "fig_field",
-    "fig_force_map", "fig_gamma", "fig_maps", "fig_parity", "fig_pareto", "fig_validation",
-    "field_figures", "fit_figures", "optimise_figures", "publication_figures", "save", "style",
-    "validation_figures",
+    "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "read_card", "write_card",
+    "fig_deformed_body", "fig_doe", "fig_field", "fig_force_map", "fig_gamma", "fig_maps",
+    "fig_parity", "fig_pareto", "fig_validation", "field_figures", "fit_figures",
+    "optimise_figures", "publication_figures", "save", "style", "validation_figures",
 ]

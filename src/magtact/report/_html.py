@@ -22,6 +22,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from .._errors import MissingFileError
+from ._card import read_card
 from ._publication import publication_section
 
 #: Stages in pipeline order: (folder, title, what it is).
@@ -111,6 +112,8 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
         parts.append('<div class="banner"><b>SYNTHETIC validation data.</b> The validation '
                      "section compares the model with a generated example data set (model plus "
                      "noise, drift and scatter), not with measurements.</div>")
+    if _of_run(folder / "optimise", manifest.get("run_id")):
+        parts.append(_card(folder / "optimise"))
     toc = " · ".join(f'<a href="#{k}">{_e(t)}</a>' for k, t, _ in STAGES)
     parts.append(f'<p><a href="#summary">Summary</a> · <a href="#chosen">Chosen design</a> · '
                  f'{toc} · <a href="#publication">The publication</a> · '
@@ -138,6 +141,20 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
 
 
 # ---- sections ------------------------------------------------------------------------------
+
+
+def _card(folder: Path) -> str:
+    """The design card (written by the optimisation stage), or nothing."""
+    card = read_card(folder)
+    if not card or not isinstance(card.get("rows"), list):
+        return ""
+    head = "".join(f'<th class="l">{_e(h)}</th>' for h in card.get("header", []))
+    rows = "".join("<tr>" + "".join(f'<td class="l">{_e(c)}</td>' for c in r) + "</tr>"
+                   for r in card["rows"] if isinstance(r, list))
+    return (f'<h2 id="card">Design card</h2><table class="card"><tr>{head}</tr>{rows}</table>'
+            "<p>Resolution: 1 σ force noise from the chip's RMS field noise, "
+            "σ_F = √diag(J Σ_B Jᵀ) with J = ∂F/∂B; unloaded (t = 0) and worst over the stable "
+            "region. Every number in <code>optimise/card.json</code>.</p>")
 def _method() -> str:
     """The method (docs/method.md, shipped with the package) as the report's appendix."""
     from importlib import resources

@@ -269,3 +269,21 @@ def _to_ttheta_hess(t, theta, gx, hx):
     J = feature_jacobian(t, theta)
     return (np.einsum("...ki,...kl,...lj->...ij", J, hx, J)
             + gx[..., 1, None, None] * q_hessian(t, theta))
+
+
+def force_noise(models: ModelSet, t, theta, H, G, sigma_B) -> tuple[np.ndarray, np.ndarray]:
+    """Force noise σ_Fr, σ_Fz [N] from field noise, at (t, θ, H, G) (broadcast).
+
+    .. math:: σ_F = \\sqrt{\\operatorname{diag}(J Σ_B J^T)},\\quad J = ∂F/∂B,
+
+    with Σ_B the covariance of the field noise [T²]: a (2, 2) matrix over (B_x, B_z), or
+    (σ_x, σ_z) [T] for independent axes, Σ_B = diag(σ_x², σ_z²) (docs/method.md §10). For
+    isotropic noise σ this is Γ σ. J follows the model set's definition (see :func:`dF_dB`).
+    """
+    S = np.asarray(sigma_B, dtype=float)
+    cov = np.diag(S**2) if S.shape == (2,) else S
+    if cov.shape != (2, 2):
+        raise ValueError(f"sigma_B must be (σ_x, σ_z) or a 2 x 2 covariance, got shape {S.shape}")
+    J = dF_dB(models, t, theta, H, G)
+    var = np.einsum("...ij,jk,...ik->...i", J, cov, J)
+    return np.sqrt(var[..., 0]), np.sqrt(var[..., 1])

@@ -244,6 +244,9 @@ def _si(full: str, f, value: float, source) -> float:
 def _check_consistency(s: Study, source) -> None:
     """Checks that involve several keys; each names the key a user would change."""
     b, mg, ld = s.body, s.magnet, s.loading
+    if not s.constraints.G_tolerance < 0.5:
+        raise StudyError("constraints.G_tolerance", f"must be in [0, 0.5), got "
+                                                    f"{s.constraints.G_tolerance:g}", source)
     if mg.R_m >= b.R:
         raise StudyError("magnet.R_m_mm", f"the magnet ({_mm(mg.R_m)} mm radius) must be narrower "
                                           f"than the body (body.R_mm = {_mm(b.R)})", source)

@@ -173,6 +173,9 @@ class Constraints:
     F_z_c: float = setting(5.0, "N", positive=True, doc="F_z,max must be at least this")
     source: str = setting("values", choices=("values", "reference"),
                           doc="'values': numbers above; 'reference': original design")
+    G_tolerance: float = setting(0.0, minimum=0.0, maximum=0.5, bounds=(0.0, 0.5),
+                                 doc="fabrication tolerance δ of G: the force constraints must "
+                                     "hold at G (1 − δ); Γ and σ_F are reported at G (1 + δ)")
 
 
 @dataclass(frozen=True)
@@ -207,6 +210,29 @@ class Metamodel:
 #: the partial derivative in B of a force model F(B_r, B_z, t, θ, H) at fixed (t, θ, H), as in
 #: de Boer et al. (Sensors 2017), a property of the fitted expression as much as of the sensor.
 SENSITIVITY_DEFINITIONS = ("jacobian", "published")
+
+
+#: Hall chips with presets (docs/method.md §10), and "custom" for a chip of the user's.
+HALL_CHIPS = ("MLX90393", "TLE493D", "custom")
+
+
+@dataclass(frozen=True)
+class Hall:
+    """The 3-axis Hall chip under the magnet: field noise and measuring range per axis
+    (docs/method.md §10). A zero takes the chip preset's figure; a preset without a figure
+    asks for it."""
+
+    chip: str = setting("MLX90393", choices=HALL_CHIPS,
+                        doc="Hall chip preset, or 'custom' (give all four figures)")
+    noise_x: float = setting(0.0, "uT", minimum=0.0, bounds=(0.0, 1.0),
+                             doc="RMS field noise along x (the shear direction) at your chip "
+                                 "setting; 0: the preset's")
+    noise_z: float = setting(0.0, "uT", minimum=0.0, bounds=(0.0, 1.0),
+                             doc="RMS field noise along z at your chip setting; 0: the preset's")
+    range_x: float = setting(0.0, "mT", minimum=0.0, bounds=(0.0, 100.0),
+                             doc="measuring range ± along x; 0: the preset's")
+    range_z: float = setting(0.0, "mT", minimum=0.0, bounds=(0.0, 100.0),
+                             doc="measuring range ± along z; 0: the preset's")
 
 
 @dataclass(frozen=True)
@@ -264,6 +290,7 @@ class Study:
     constraints: Constraints = field(default_factory=Constraints)
     metamodel: Metamodel = field(default_factory=Metamodel)
     sensitivity: Sensitivity = field(default_factory=Sensitivity)
+    hall: Hall = field(default_factory=Hall)
     optimise: Optimise = field(default_factory=Optimise)
 
     # ---- DOE levels (SI) -------------------------------------------------------------------

@@ -1,0 +1,16 @@
+"""The designer's answer: force resolution with a named Hall chip, measuring range, the chip's
+limits, and the margin for the fabrication tolerance of G (docs/method.md §10)."""
+
+from ._answer import (
+    DesignAnswer,
+    Resolution,
+    Saturation,
+    answer,
+    answer_json,
+    resolution,
+    saturation,
+)
+from ._hall import PRESETS, HallChip, HallPreset, hall_chip
+
+__all__ = ["PRESETS", "DesignAnswer", "HallChip", "HallPreset", "Resolution", "Saturation",
+           "answer", "answer_json", "hall_chip", "resolution", "saturation"]

@@ -1,0 +1,195 @@
+"""The designer's answer for one design: resolution with a named Hall chip, measuring range,
+the chip's limits along the paths, and the margin for the tolerance of G (docs/method.md §10).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ..metamodel import ExactField, ModelSet
+from ..optimise import DesignResult, per_design
+from ..sensitivity import force_noise
+from ..study import Study, StudyError, from_si, mm, mt
+from ._hall import HallChip, hall_chip
+
+#: Points per side of the grid over the stable box (the worst σ_F starts from its best point).
+N_BOX = 41
+#: Load levels and angles of the saturation scan along the paths.
+N_T, N_THETA = 201, 21
+
+
+@dataclass(frozen=True)
+class Resolution:
+    """Force noise σ_F [N] from the chip's field noise (1 σ, RMS)."""
+
+    sigma_r_0: float
+    sigma_z_0: float
+    sigma_r_worst: float
+    sigma_z_worst: float
+    #: (t, θ [rad]) of each worst value.
+    where_r: tuple[float, float]
+    where_z: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Saturation:
+    """The largest field along the paths against the chip's range."""
+
+    B_max_x: float
+    B_max_z: float
+    #: First load t (and its θ, axis, forces [N]) at which the chip saturates; None: never.
+    t: float | None = None
+    theta: float | None = None
+    axis: str | None = None
+    F_r: float | None = None
+    F_z: float | None = None
+
+    @property
+    def saturates(self) -> bool:
+        return self.t is not None
+
+
+@dataclass(frozen=True)
+class DesignAnswer:
+    """What a designer asks of design (H, G) with the study's Hall chip.
+
+    Attributes
+    ----------
+    label : str
+    design : DesignResult
+        Extrema in the stable box: F_r,min, F_z,max [N], Γ_r,max, Γ_z,max [N/T], t_m, θ_m.
+    chip : HallChip
+    resolution : Resolution or None
+        None when the chip's noise is not known (``chip.missing`` names the keys to give).
+    saturation : Saturation
+    tolerance : float
+        δ of ``[constraints] G_tolerance``; the worst case is the stiffest body, G (1 + δ),
+        where Γ and σ_F are (1 + δ) times larger (both ∝ G).
+    """
+
+    label: str
+    design: DesignResult
+    chip: HallChip
+    resolution: Resolution | None
+    saturation: Saturation
+    tolerance: float
+
+    @property
+    def H(self) -> float:
+        return self.design.H
+
+    @property
+    def G(self) -> float:
+        return self.design.G
+
+    @property
+    def worst_factor(self) -> float:
+        """Γ and σ_F at G (1 + δ) over their nominal values."""
+        return 1.0 + self.tolerance
+
+
+def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design"
+           ) -> DesignAnswer:
+    """The designer's answer for design (H [m], G [Pa]) with the study's ``[hall]`` chip.
+
+    Raises
+    ------
+    StudyError
+        If the chip's range is below the field at rest (the sensor cannot read anything).
+    """
+    chip = hall_chip(study)
+    design = per_design(models, H, G, study)
+    sat = saturation(study, models, H, G, chip)
+    res = None if chip.noise is None else resolution(models, study, design, chip)
+    return DesignAnswer(label, design, chip, res, sat, study.constraints.G_tolerance)
+
+
+def resolution(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
+               ) -> Resolution:
+    """σ_F at t = 0 and its largest value over the stable box t ≤ t_m, θ ≤ θ_m."""
+    H, G = design.H, design.G
+
+    def sigma(t, theta):
+        return force_noise(models, t, theta, H, G, chip.noise)
+
+    s0 = sigma(0.0, 0.0)
+    T, TH = np.meshgrid(np.linspace(0.0, design.t_m, N_BOX),
+                        np.linspace(0.0, design.theta_m, N_BOX), indexing="ij")
+    grid = sigma(T, TH)
+    worst, where = [], []
+    for k in range(2):
+        i = np.unravel_index(np.nanargmax(grid[k]), T.shape)
+        x0 = np.array([T[i], TH[i]])
+        best = (float(grid[k][i]), (float(x0[0]), float(x0[1])))
+        bounds = [(0.0, design.t_m), (0.0, design.theta_m)]
+        if design.t_m > 0 and design.theta_m > 0:  # polish the grid's best point
+            r = minimize(lambda x, k=k: -float(sigma(x[0], x[1])[k]), x0, method="L-BFGS-B",
+                         bounds=bounds)
+            if np.isfinite(r.fun) and -r.fun > best[0]:
+                best = (float(-r.fun), (float(r.x[0]), float(r.x[1])))
+        worst.append(best[0])
+        where.append(best[1])
+    return Resolution(float(s0[0]), float(s0[1]), worst[0], worst[1], where[0], where[1])
+
+
+def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChip
+               ) -> Saturation:
+    """The exact field along every path (t ∈ [0, 1], θ ∈ [0, θ_max]) against the chip's range.
+
+    Raises
+    ------
+    StudyError
+        If the field at rest already exceeds the range (naming the key of that axis).
+    """
+    t = np.linspace(0.0, 1.0, N_T)
+    th = np.linspace(0.0, study.loading.theta_max, N_THETA)
+    T, TH = np.meshgrid(t, th, indexing="ij")
+    B = {"x": np.abs(ExactField(study, "B_r").value(T, TH, H)),
+         "z": np.abs(ExactField(study, "B_z").value(T, TH, H))}
+    limit = {"x": chip.range_x, "z": chip.range_z}
+    for axis in ("x", "z"):
+        if B[axis][0, 0] > limit[axis]:
+            raise StudyError(f"hall.range_{axis}_mT",
+                             f"{mt(limit[axis]):.4g} mT is below the field at rest "
+                             f"(|B_{axis}| = {mt(B[axis][0, 0]):.4g} mT at H = {mm(H):.3g} mm): "
+                             f"the {chip.name} would read nothing but its limit")
+    over = (B["x"] > limit["x"]) | (B["z"] > limit["z"])
+    out = dict(B_max_x=float(B["x"].max()), B_max_z=float(B["z"].max()))
+    if not over.any():
+        return Saturation(**out)
+    i = int(np.argmax(over.any(axis=1)))  # first load level with a saturated angle
+    j = int(np.argmax(over[i]))
+    axis = "x" if B["x"][i, j] > limit["x"] else "z"
+    F_r, F_z = models.forces(t[i], th[j], H, G)
+    return Saturation(**out, t=float(t[i]), theta=float(th[j]), axis=axis,
+                      F_r=float(F_r), F_z=float(F_z))
+
+
+def answer_json(a: DesignAnswer) -> dict:
+    """Every number of an answer, in user units with the unit in each key (for files)."""
+    r, s = a.resolution, a.saturation
+    out = {
+        "label": a.label, "H_mm": mm(a.H), "G_kPa": from_si(a.G, "kPa"),
+        "chip": a.chip.name, "chip_setting": a.chip.setting, "chip_source": a.chip.source,
+        "noise_x_uT": None if a.chip.noise_x is None else from_si(a.chip.noise_x, "uT"),
+        "noise_z_uT": None if a.chip.noise_z is None else from_si(a.chip.noise_z, "uT"),
+        "range_x_mT": mt(a.chip.range_x), "range_z_mT": mt(a.chip.range_z),
+        "F_r_min_N": a.design.F_r_min, "F_z_max_N": a.design.F_z_max,
+        "Gamma_r_max_N_per_T": a.design.Gamma_r_max, "Gamma_z_max_N_per_T": a.design.Gamma_z_max,
+        "t_m": a.design.t_m, "theta_m_rad": a.design.theta_m,
+        "B_max_x_mT": mt(s.B_max_x), "B_max_z_mT": mt(s.B_max_z),
+        "saturates": s.saturates, "saturation_t": s.t, "saturation_theta_rad": s.theta,
+        "saturation_axis": s.axis, "saturation_F_r_N": s.F_r, "saturation_F_z_N": s.F_z,
+        "G_tolerance": a.tolerance, "worst_case_factor": a.worst_factor,
+        "missing": list(a.chip.missing),
+    }
+    if r is not None:
+        out |= {"sigma_Fr_0_mN": from_si(r.sigma_r_0, "mN"),
+                "sigma_Fz_0_mN": from_si(r.sigma_z_0, "mN"),
+                "sigma_Fr_worst_mN": from_si(r.sigma_r_worst, "mN"),
+                "sigma_Fz_worst_mN": from_si(r.sigma_z_worst, "mN"),
+                "sigma_Fr_worst_at": list(r.where_r), "sigma_Fz_worst_at": list(r.where_z)}
+    return out
