@@ -266,8 +266,11 @@ def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
 def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
+    from .designer import check_rest_field
     from .optimise._run import FrontGapWarning, write_optimise_outputs
     from .report import optimise_figures
+
+    check_rest_field(ctx.study)
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", FrontGapWarning)

@@ -74,6 +74,7 @@ def optimise_command(
 
     Writes OUT/design.json, pareto.csv, reduction.csv, maps.csv and the figures.
     """
+    from ..designer import check_rest_field
     from ..optimise import force_constraints, optimise
     from ..pipeline import design_card
     from ..report import optimise_figures
@@ -84,6 +85,7 @@ def optimise_command(
     reference = (parse_design(constraints_from, "--constraints-from")
                  if constraints_from is not None else None)
     folder = out_dir(out)  # a folder that cannot be written is refused before the work
+    check_rest_field(s)  # a chip that cannot read any design is refused before the work
     m = study_models(s, models)
     constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
     with console.status("optimising"):

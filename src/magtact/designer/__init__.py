@@ -7,10 +7,11 @@ from ._answer import (
     Saturation,
     answer,
     answer_json,
+    check_rest_field,
     resolution,
     saturation,
 )
 from ._hall import PRESETS, HallChip, HallPreset, hall_chip
 
 __all__ = ["PRESETS", "DesignAnswer", "HallChip", "HallPreset", "Resolution", "Saturation",
-           "answer", "answer_json", "hall_chip", "resolution", "saturation"]
+           "answer", "answer_json", "check_rest_field", "hall_chip", "resolution", "saturation"]

@@ -91,14 +91,34 @@ class DesignAnswer:
         return 1.0 + self.tolerance
 
 
-def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design"
-           ) -> DesignAnswer:
-    """The designer's answer for design (H [m], G [Pa]) with the study's ``[hall]`` chip.
+def check_rest_field(study: Study) -> None:
+    """Refuse a chip range below the field at rest of every design in the study's range.
+
+    The field at rest is weakest at the tallest body (the magnet farthest from the chip).
 
     Raises
     ------
     StudyError
-        If the chip's range is below the field at rest (the sensor cannot read anything).
+        Naming ``hall.range_x_mT`` or ``hall.range_z_mT``.
+    """
+    chip = hall_chip(study)
+    H = study.design.H[1]
+    for axis, name in (("x", "B_r"), ("z", "B_z")):
+        b = abs(float(ExactField(study, name).value(0.0, 0.0, H)))
+        limit = chip.range_x if axis == "x" else chip.range_z
+        if b > limit:
+            raise StudyError(f"hall.range_{axis}_mT",
+                             f"{mt(limit):.4g} mT is below the field at rest of every design "
+                             f"(|B_{axis}| = {mt(b):.4g} mT even at the tallest, H = "
+                             f"{mm(H):.3g} mm): the {chip.name} would read nothing but its "
+                             "limit")
+
+
+def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design"
+           ) -> DesignAnswer:
+    """The designer's answer for design (H [m], G [Pa]) with the study's ``[hall]`` chip.
+
+    A chip range below this design's field at rest shows as saturation at t = 0.
     """
     chip = hall_chip(study)
     design = per_design(models, H, G, study)
@@ -139,10 +159,8 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
                ) -> Saturation:
     """The exact field along every path (t ∈ [0, 1], θ ∈ [0, θ_max]) against the chip's range.
 
-    Raises
-    ------
-    StudyError
-        If the field at rest already exceeds the range (naming the key of that axis).
+    A range below the field at rest shows as saturation at t = 0 (see
+    :func:`check_rest_field` for the study-wide check).
     """
     t = np.linspace(0.0, 1.0, N_T)
     th = np.linspace(0.0, study.loading.theta_max, N_THETA)
@@ -150,12 +168,6 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
     B = {"x": np.abs(ExactField(study, "B_r").value(T, TH, H)),
          "z": np.abs(ExactField(study, "B_z").value(T, TH, H))}
     limit = {"x": chip.range_x, "z": chip.range_z}
-    for axis in ("x", "z"):
-        if B[axis][0, 0] > limit[axis]:
-            raise StudyError(f"hall.range_{axis}_mT",
-                             f"{mt(limit[axis]):.4g} mT is below the field at rest "
-                             f"(|B_{axis}| = {mt(B[axis][0, 0]):.4g} mT at H = {mm(H):.3g} mm): "
-                             f"the {chip.name} would read nothing but its limit")
     over = (B["x"] > limit["x"]) | (B["z"] > limit["z"])
     out = dict(B_max_x=float(B["x"].max()), B_max_z=float(B["z"].max()))
     if not over.any():

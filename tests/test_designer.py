@@ -1,0 +1,164 @@
+"""The designer's answer: force noise from field noise, the chip's range, the tolerance of G."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from magtact.designer import answer, hall_chip
+from magtact.metamodel import load_models, prefitted_dir
+from magtact.sensitivity import dF_dB, force_noise, gamma
+from magtact.study import StudyError, load_study, study_from_dict
+
+H0, G0 = 3e-3, 29.4e3
+
+
+@pytest.fixture(scope="module")
+def models():
+    return load_models(prefitted_dir())
+
+
+@pytest.fixture(scope="module")
+def study():
+    return load_study("magone")
+
+
+def _hall(study, **kw):
+    return replace(study, hall=replace(study.hall, **kw))
+
+
+def test_isotropic_noise_gives_gamma_times_sigma(models):
+    t, th = np.meshgrid(np.linspace(0, 1, 7), np.linspace(0, 0.4, 5), indexing="ij")
+    sigma = 3e-6
+    s_r, s_z = force_noise(models, t, th, H0, G0, (sigma, sigma))
+    g_r, g_z = gamma(models, t, th, H0, G0)
+    np.testing.assert_allclose(s_r, g_r * sigma, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(s_z, g_z * sigma, rtol=1e-12, atol=0)
+
+
+def test_force_noise_matches_monte_carlo_through_the_inverse_map(models):
+    """10⁵ noisy fields B + δ mapped back to the displacement (p, q) by Newton's method on the
+    field models, then to the force: the spread of F equals σ_F of the linear formula."""
+    t0, th0 = 0.5, 0.2
+    sigma = np.array([20e-6, 35e-6])
+    rng = np.random.default_rng(1)
+    n = 100_000
+    p0, q0 = t0, t0 * np.tan(th0)
+    B0 = np.array([models["B_r"].value(t0, th0, H0), models["B_z"].value(t0, th0, H0)])
+    target = B0[:, None] + sigma[:, None] * rng.standard_normal((2, n))
+    p, q = np.full(n, p0), np.full(n, q0)
+    for _ in range(8):  # Newton in the features, where the models are smooth
+        t, th = p, np.arctan2(q, p)
+        jr, jz = (models[k].jet(t, th, H0, 1) for k in ("B_r", "B_z"))
+        res = np.stack([jr[0] - target[0], jz[0] - target[1]])
+        J = np.stack([jr[1], jz[1]], axis=-2)  # (n, 2 [B], 2 [p, q])
+        step = np.linalg.solve(J, res.T[..., None])[..., 0]
+        p, q = p - step[:, 0], q - step[:, 1]
+    assert np.max(np.abs(res)) < 1e-12
+    F_r, F_z = models.forces(p, np.arctan2(q, p), H0, G0)
+    s_r, s_z = force_noise(models, t0, th0, H0, G0, sigma)
+    assert np.std(F_r) == pytest.approx(float(s_r), rel=0.02)
+    assert np.std(F_z) == pytest.approx(float(s_z), rel=0.02)
+    # and a full covariance is taken as such
+    cov = np.diag(sigma**2)
+    np.testing.assert_allclose(force_noise(models, t0, th0, H0, G0, cov), (s_r, s_z))
+    assert dF_dB(models, t0, th0, H0, G0).shape == (2, 2)
+
+
+def test_tolerant_design_is_the_closed_form(models, study):
+    """With δ, the force constraints hold at G (1 − δ): G*_δ = G* / (1 − δ), same H*."""
+    from magtact.optimise import as_responses, choose, exact_reduction, force_constraints, sweep
+
+    R = as_responses(models)
+    table = sweep(R, study)
+    tolerant = replace(study, constraints=replace(study.constraints, G_tolerance=0.1))
+    c0, c1 = force_constraints(R, study), force_constraints(R, tolerant)
+    assert (c1.F_r_c, c1.F_z_c) == pytest.approx((c0.F_r_c / 0.9, c0.F_z_c / 0.9), rel=1e-15)
+    ch0 = choose(R, study, exact_reduction(R, study, c0, table))
+    ch1 = choose(R, tolerant, exact_reduction(R, tolerant, c1, table))
+    assert ch0.active  # the closed form holds where a force constraint is active
+    assert ch1.design.H == ch0.design.H
+    assert ch1.design.G == pytest.approx(ch0.design.G / 0.9, rel=1e-9)
+    # the softest body of the tolerance band still meets the constraint
+    assert 0.9 * ch1.design.F_r_min <= c0.F_r_c + 1e-9 * abs(c0.F_r_c)
+
+
+def test_resolution_and_range_of_a_design(models, study):
+    s = _hall(study, noise_x=1e-6, noise_z=2e-6)
+    a = answer(models, s, H0, G0, "original")
+    r = a.resolution
+    J0 = dF_dB(models, 0.0, 0.0, H0, G0)
+    assert r.sigma_r_0 == pytest.approx(np.hypot(J0[0, 0] * 1e-6, J0[0, 1] * 2e-6), rel=1e-12)
+    assert r.sigma_z_worst >= r.sigma_z_0 and r.sigma_r_worst >= r.sigma_r_0
+    t, th = r.where_z
+    assert 0 <= t <= a.design.t_m and 0 <= th <= a.design.theta_m
+    assert a.design.F_z_max > 0 > a.design.F_r_min
+
+
+def test_a_strong_field_saturates_the_chip_with_t_and_force_named(models, study):
+    from magtact.metamodel import ExactField
+
+    strong = _hall(study, chip="custom", noise_x=1e-6, noise_z=1e-6, range_x=0.08,
+                   range_z=0.08)
+    a = answer(models, strong, H0, G0)
+    s = a.saturation
+    assert s.saturates and 0 < s.t < 1 and s.axis == "z"
+    bz = abs(float(ExactField(strong, "B_z").value(s.t, s.theta, H0)))
+    assert bz > 0.08  # saturated where it says
+    assert abs(float(ExactField(strong, "B_z").value(s.t - 1 / 200, s.theta, H0))) <= 0.08
+    assert s.F_z == pytest.approx(float(models.forces(s.t, s.theta, H0, G0)[1]))
+    wide = _hall(strong, range_x=1.0, range_z=1.0)
+    assert not answer(models, wide, H0, G0).saturation.saturates
+
+
+def test_card_asks_for_the_noise_the_preset_lacks(models, study):
+    from magtact.report import card_rows
+
+    a = answer(models, study, H0, G0, "original")
+    assert a.resolution is None and hall_chip(study).missing == ("hall.noise_x_uT",
+                                                                 "hall.noise_z_uT")
+    header, rows = card_rows([a])
+    text = " ".join(" ".join(r) for r in rows)
+    assert "give hall.noise_x_uT and hall.noise_z_uT" in text
+    assert "None" not in text and "Gamma_" not in text
+
+
+@pytest.mark.parametrize(("table", "key"), [
+    ({"hall": {"noise_x_uT": -1.0}}, "hall.noise_x_uT"),
+    ({"hall": {"chip": "HMC5883"}}, "hall.chip"),
+    ({"constraints": {"G_tolerance": 0.5}}, "constraints.G_tolerance"),
+    ({"constraints": {"G_tolerance": -0.1}}, "constraints.G_tolerance"),
+])
+def test_bad_hall_and_tolerance_settings_name_the_key(table, key):
+    with pytest.raises(StudyError, match=rf"\[{key}\]"):
+        study_from_dict(table)
+
+
+def test_a_range_below_the_field_at_rest(models, study):
+    """Below this design's rest field: saturated at t = 0; below every design's: refused."""
+    from magtact.designer import check_rest_field
+
+    low = _hall(study, chip="custom", noise_x=1e-6, noise_z=1e-6, range_x=0.1, range_z=0.03)
+    s = answer(models, low, H0, G0).saturation
+    assert s.saturates and s.t == 0.0 and s.axis == "z"
+    check_rest_field(low)  # the tallest designs still read below 30 mT at rest
+    tiny = _hall(low, range_z=1e-3)
+    with pytest.raises(StudyError, match=r"\[hall.range_z_mT\] 1 mT is below the field at rest"):
+        check_rest_field(tiny)
+
+
+def test_cli_refuses_a_useless_chip_in_one_line_before_the_work(tmp_path):
+    import subprocess
+    import sys
+
+    study = tmp_path / "s.toml"
+    study.write_text("[hall]\nchip = 'custom'\nnoise_x_uT = 1.0\nnoise_z_uT = 1.0\n"
+                     "range_x_mT = 0.5\nrange_z_mT = 0.5\n")
+    res = subprocess.run([sys.executable, "-m", "magtact", "optimise", str(study), "--out",
+                          str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 2
+    assert "[hall.range_z_mT]" in res.stdout + res.stderr
+    assert "Traceback" not in res.stdout + res.stderr
+    assert not (tmp_path / "o" / "design.json").exists()
