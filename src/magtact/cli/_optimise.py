@@ -140,6 +140,7 @@ def compare_command(
     models: ModelsOpt = None,
 ) -> None:
     """Percentage changes of Γ_r,max, Γ_z,max, F_r,min, F_z,max from design 1 to design 2."""
+    from ..designer import hall_chip, resolution
     from ..optimise import compare, per_design
 
     d1 = parse_design(first, "first design")
@@ -152,4 +153,20 @@ def compare_command(
         table.add_column(col, justify="left" if col == "quantity" else "right")
     for label, unit, v1, v2, pct in cmp.rows:
         table.add_row(escape(f"{label} [{unit}]"), f"{v1:.5g}", f"{v2:.5g}", f"{pct:+.2f}")
+    chip = hall_chip(s)
+    if chip.noise is None:
+        table.caption = (f"resolution with the {chip.name}: give "
+                         f"{' and '.join(chip.missing)} in the study (RMS noise, µT)")
+    else:
+        r1, r2 = (resolution(m, s, per_design(m, *d, s), chip) for d in (d1, d2))
+        for label, a, b in (("σ_Fr at t = 0", r1.sigma_r_0, r2.sigma_r_0),
+                            ("σ_Fz at t = 0", r1.sigma_z_0, r2.sigma_z_0),
+                            ("σ_Fr, worst in the stable region", r1.sigma_r_worst,
+                             r2.sigma_r_worst),
+                            ("σ_Fz, worst in the stable region", r1.sigma_z_worst,
+                             r2.sigma_z_worst)):
+            v1, v2 = from_si(a, "mN"), from_si(b, "mN")
+            table.add_row(escape(f"{label} [mN]"), f"{v1:.5g}", f"{v2:.5g}",
+                          f"{100 * (v2 - v1) / v1:+.2f}")
+        table.caption = f"σ_F with the {chip.name} ({chip.setting}), noise from the study"
     Console().print(table)
