@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import re
 from dataclasses import replace
+from html import escape
 
 import pytest
 from typer.testing import CliRunner
@@ -43,6 +44,14 @@ def check_run(tmp_path, study_file):
     assert "No chosen design" not in html and "SYNTHETIC" in html
     assert (out / "validation" / "validation_synthetic.csv").is_file()
     assert (out / "optimise" / "chosen.json").is_file()
+    # the design card: at the top of the report, in the terminal, every number in card.json
+    card = json.loads((out / "optimise" / "card.json").read_text())
+    chosen = json.loads((out / "optimise" / "chosen.json").read_text())
+    assert [a["label"] for a in card["answers"]] == ["chosen", "original"]
+    assert card["answers"][0]["H_mm"] == pytest.approx(chosen["H_mm"])
+    assert html.index('id="card"') < html.index('id="summary"')
+    assert all(escape(c) in html for row in card["rows"] for c in row)
+    assert "Design card" in result.output and "normal force range" in result.output
     # the report is rebuilt from the folder alone
     (out / "report.html").unlink()
     assert CliRunner().invoke(app, ["report", str(out)]).exit_code == 0
