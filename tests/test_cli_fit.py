@@ -9,11 +9,11 @@ import sys
 import pytest
 from typer.testing import CliRunner
 
+from conftest import synthetic_doe
 from magtact.cli import app
 from magtact.doe import save_dataset
 from magtact.metamodel import load_models
 from magtact.study import load_study
-from test_metamodel_data import synthetic_doe
 
 
 @pytest.fixture(scope="module")

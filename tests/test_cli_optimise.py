@@ -8,11 +8,11 @@ import json
 import pytest
 from typer.testing import CliRunner
 
+from conftest import synthetic_models
 from magtact.cli import app, main
 from magtact.metamodel import save_models
 from magtact.optimise import per_design
 from magtact.study import load_study
-from test_optimise import synthetic_models
 
 SMALL = """
 base = "magone"

@@ -73,8 +73,8 @@ def test_run_end_to_end_with_stand_in_doe(tmp_path, monkeypatch):
     """Every stage after the DOE on an analytic stand-in data set (the chain, not the numbers):
     its constraints are set so that the stand-in's forces can meet them."""
     import magtact.doe
+    from conftest import synthetic_doe
     from magtact.study import Constraints
-    from test_metamodel_data import synthetic_doe
 
     study_file = fast_study(tmp_path, constraints=Constraints(F_r_c=-0.05, F_z_c=1.0))
     ds = synthetic_doe(load_study(study_file), n_t=6)

@@ -6,12 +6,13 @@ against its formula; the real solvers are exercised in ``test_doe_acceptance.py`
 
 import csv
 import os
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import xarray as xr
 
+from conftest import fake_field, fake_forces, fake_path, run, tiny
 from magtact.doe import (
     CacheCorruptWarning,
     DOEFailed,
@@ -23,61 +24,12 @@ from magtact.doe import (
 )
 from magtact.doe._cache import Entry
 from magtact.geometry import loading_path
-from magtact.study import from_si, study_from_dict
-
-C_R, C_Z = 3e-4, -7e-4  # force per unit G [N/Pa] of the stand-in, times a shape function
-
-
-@dataclass(frozen=True)
-class FakePath:
-    t: np.ndarray
-    u_r: np.ndarray
-    u_z: np.ndarray
-    F_r: np.ndarray
-    F_z: np.ndarray
-    G: float
-    newton_iterations: int
-    cutbacks: int
-    wall_time: float
-    n_dofs: int
-    n_cells: int
-    mesh: str
-
-
-def fake_forces(t, theta, H, G):
-    """Closed-form stand-in forces [N], proportional to G like the real model."""
-    return (C_R * G * t * np.tan(theta) * H / 3e-3, C_Z * G * t**1.5 * (3e-3 / H))
-
-
-def fake_path(study, H, theta, *, G=None, mesh=None, t=None, vtu=None):
-    if os.environ.get("MAGTACT_TEST_FAIL") and theta > 0 and H == study.H_levels[-1]:
-        raise RuntimeError(f"no convergence at theta={theta:.3f}, H={H}")
-    G = study.material.G_ref if G is None else G
-    t = study.t_levels if t is None else np.asarray(t)
-    u_r, u_z = loading_path(study, t, theta, H)
-    F_r, F_z = fake_forces(t, theta, H, G)
-    return FakePath(t, u_r, u_z, F_r, F_z, G, 3 * len(t), 0, 0.01, 1000, 100, "fake")
+from magtact.study import from_si
 
 
 def nan_path(study, H, theta, *, G=None, mesh=None, t=None, vtu=None):
     res = fake_path(study, H, theta, G=G, t=t)
     return replace(res, F_z=res.F_z * np.nan)
-
-
-def fake_field(study, t, theta, H, solver="fe"):
-    u_r, u_z = loading_path(study, t, theta, H)
-    return 1e3 * u_r, 0.1 + 1e2 * u_z
-
-
-def tiny(**doe):
-    levels = {"n_t": 4, "n_theta": 2, "n_H": 2, "n_G": 3, **doe}
-    return study_from_dict({"doe": levels})
-
-
-def run(study, tmp_path=None, **kw):
-    kw.setdefault("workers", 0)
-    return run_doe(study, cache=tmp_path, path_solver=kw.pop("path_solver", fake_path),
-                   field_solver=fake_field, **kw)
 
 
 # ---- the data set ------------------------------------------------------------------------------

@@ -159,7 +159,9 @@ def test_bundled_dataset_present_documented_and_fast():
     start = time.perf_counter()
     ds = load_bundled()
     elapsed = time.perf_counter() - start
-    assert elapsed < 1.0, f"loading the bundled data set took {elapsed:.2f} s"
+    # reading the 86 kB file takes a few tenths of a second (with the first import of the netCDF
+    # back end); recomputing the DOE it holds takes hours: 10 s leaves a loaded machine room
+    assert elapsed < 10.0, f"loading the bundled data set took {elapsed:.2f} s"
     assert dict(ds.sizes) == {"t": 21, "theta": 5, "H": 5, "G": 5}
     assert ds.attrs["complete"] == 1 and ds.attrs["mesh"] == "default"
     # it is the DOE of the current built-in study: every setting it records that a DOE reads

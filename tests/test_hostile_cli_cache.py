@@ -1,6 +1,6 @@
 """Hostile output folders, command options and DOE caches: one message, or a recomputation.
 
-The DOE tests use the analytic stand-in solvers of ``test_doe.py``.
+The DOE tests use the analytic stand-in solvers of ``conftest.py``.
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from conftest import fake_field, fake_path, run, tiny
 from magtact.doe import CacheCorruptWarning, CacheError, JobCache
 from magtact.doe._cache import Entry, _encode
 from magtact.doe._jobs import plan
-from test_doe import fake_field, fake_path, run, tiny
 
 
 def magtact(*args: str) -> subprocess.CompletedProcess:
@@ -157,18 +157,18 @@ def test_two_processes_computing_the_same_cache(tmp_path):
         import sys, time
         from pathlib import Path
         sys.path.insert(0, {str(Path(__file__).parent)!r})
-        import test_doe
+        import conftest
         from magtact.doe import run_doe, save_dataset
 
         def slow_path(*args, **kwargs):
             time.sleep(0.15)
-            return test_doe.fake_path(*args, **kwargs)
+            return conftest.fake_path(*args, **kwargs)
 
         Path(sys.argv[1] + ".ready").touch()  # start together, once both have imported
         while len(list(Path({str(tmp_path)!r}).glob("*.ready"))) < 2:
             time.sleep(0.01)
-        ds = run_doe(test_doe.tiny(n_theta=3, n_H=4), cache={str(cache)!r}, workers=0,
-                     path_solver=slow_path, field_solver=test_doe.fake_field)
+        ds = run_doe(conftest.tiny(n_theta=3, n_H=4), cache={str(cache)!r}, workers=0,
+                     path_solver=slow_path, field_solver=conftest.fake_field)
         save_dataset(ds, sys.argv[1])
         print(ds.attrs["run_paths_computed"], ds.attrs["run_cache_corrupt"])
         """)

@@ -20,12 +20,17 @@ import sympy as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from conftest import known_set
 from magtact.metamodel import load_model, load_models, parse_expression, save_models
 from magtact.metamodel._parse import MAX_CHARS, MAX_DEPTH, MAX_EXPONENT, MAX_TOKENS
-from test_metamodel import known_set
+
+# A parse or refusal takes milliseconds; evaluating what the bounds refuse takes minutes to
+# forever (9**9**8 alone takes ~100 s, 9**9**9 about an hour, sin(exp(exp(30))) exactly never),
+# so a few seconds still catch an evaluation and leave a loaded, shared machine ample room.
+PARSE_SECONDS = 5.0
 
 
-def refused(text: str, *fragments: str, seconds: float = 1.0) -> str:
+def refused(text: str, *fragments: str, seconds: float = PARSE_SECONDS) -> str:
     start = time.perf_counter()
     with pytest.raises(ValueError) as info:
         parse_expression(text)
@@ -38,7 +43,7 @@ def refused(text: str, *fragments: str, seconds: float = 1.0) -> str:
 
 
 # ---- the bounds, each with its message --------------------------------------------------------
-def test_power_tower_refused_within_a_second():
+def test_power_tower_refused_without_evaluating_it():
     refused("9**9**9*t", "exponent '387420489'", f"largest allowed magnitude {MAX_EXPONENT}")
     refused("t**(9**9)", "exponent '387420489'")
     refused("2^2^2^2^2*t", "exponent '65536'")
@@ -97,12 +102,12 @@ def tampered(tmp_path, **changes):
     return path
 
 
-def test_model_file_with_power_tower_refused_within_a_second(tmp_path):
+def test_model_file_with_power_tower_refused_without_evaluating_it(tmp_path):
     tampered(tmp_path, expression="9**9**9*t", expression_pq="9**9**9*p")
     start = time.perf_counter()
     with pytest.raises(ValueError, match=r"f_r.json: model expression: exponent '387420489'"):
         load_models(tmp_path)
-    assert time.perf_counter() - start < 1.0
+    assert time.perf_counter() - start < PARSE_SECONDS
 
 
 def test_cli_validate_refuses_power_tower_model(tmp_path):
@@ -179,7 +184,7 @@ def parse_or_refuse(text: str):
         assert len(str(exc)) < 1000
         return None
     finally:
-        assert time.perf_counter() - start < 1.0, text[:200]
+        assert time.perf_counter() - start < PARSE_SECONDS, text[:200]
     assert_accepted(expr)
     return expr
 

@@ -7,11 +7,11 @@ from dataclasses import replace
 import pytest
 
 import magtact.optimise._run as run_module
+from conftest import synthetic_models
 from magtact._errors import MagtactError
 from magtact.optimise import optimise
 from magtact.sensitivity import Responses
 from magtact.study import load_study
-from test_optimise import synthetic_models
 
 
 def test_disagreement_between_nsga2_and_exact_reduction_is_loud(monkeypatch):

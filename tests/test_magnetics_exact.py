@@ -5,35 +5,17 @@ import pytest
 from scipy.integrate import quad
 from scipy.special import ellipe, ellipk
 
+from conftest import H_M, M_Z, R_M, acceptance_points, rel_diff
 from magtact.magnetics import cel, cylinder_field
 from magtact.study import MU0
 
 magpy = pytest.importorskip("magpylib")
-
-R_M, H_M, M_Z = 2.5e-3, 2e-3, 1.2e6
-
-
-def acceptance_points():
-    """Points below, above and beside the magnet (magnet frame) [m]."""
-    r = np.linspace(0.0, 3e-3, 13)
-    gap = np.linspace(2.97e-3, 12e-3, 20)
-    rr, gg = np.meshgrid(r, gap)
-    below = (rr.ravel(), -H_M / 2 - gg.ravel())
-    above = (rr.ravel(), H_M / 2 + gg.ravel())
-    rb, zb = np.meshgrid(R_M + gap, np.linspace(-H_M / 2 - 2e-3, H_M / 2 + 2e-3, 9))
-    beside = (rb.ravel(), zb.ravel())
-    return {"below": below, "above": above, "beside": beside}
-
 
 def magpylib_field(r, z, R_m=R_M, H_m=H_M, M_z=M_Z):
     """(B_r, B_z) of magpylib's cylinder with the same polarisation μ0 M_z (MU0 of magtact)."""
     magnet = magpy.magnet.Cylinder(dimension=(2 * R_m, H_m), polarization=(0, 0, MU0 * M_z))
     B = magnet.getB(np.column_stack([r, np.zeros_like(r), z]))
     return B[:, 0], B[:, 2]
-
-
-def rel_diff(B, ref):
-    return np.linalg.norm(np.subtract(B, ref), axis=0) / np.linalg.norm(ref, axis=0)
 
 
 @pytest.mark.parametrize("region", ["below", "above", "beside"])

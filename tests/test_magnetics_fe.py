@@ -5,10 +5,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from conftest import H_M, M_Z, R_M, acceptance_points, rel_diff
 from magtact.geometry import field_mesh
 from magtact.magnetics import cylinder_field, solve_fe, solve_field
 from magtact.study import StudyError, load_study
-from test_magnetics_exact import H_M, M_Z, R_M, acceptance_points, rel_diff
 
 
 @pytest.fixture(scope="module")

@@ -6,42 +6,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from conftest import rel_diff, spec_hall_field
 from magtact.magnetics import hall_field, magnet_field
 from magtact.study import StudyError, load_study
-
-magpy = pytest.importorskip("magpylib")
-
-MU0 = 1.257e-6  # docs/method.md §1
-R_M, H_M, M_Z, H_G, DZ_SAT = 2.5e-3, 2e-3, 1.2e6, 4.97e-3, 2.97e-3
-
-
-def spec_hall_field(t, theta, H, placement="covered"):
-    """B (B_x, B_z) at the Hall point (the origin) from docs/method.md §1, with magpylib.
-
-    Unloaded, Δz0 = H + H_g − H_m is the height of the magnet's centre ("covered") or of its
-    lower face ("flush"); the magnet moves by u_z = t (Δz_sat + H_m − H − H_g) and
-    u_r = −u_z tan θ along +x.
-    """
-    t, theta, H = np.broadcast_arrays(t, theta, H)
-    u_z = t * (DZ_SAT + H_M - H - H_G)
-    u_r = -u_z * np.tan(theta)
-    dz = H + H_G - H_M + u_z
-    centre_z = dz if placement == "covered" else dz + H_M / 2
-    out = np.empty((2,) + t.shape)
-    for idx in np.ndindex(t.shape):
-        magnet = magpy.magnet.Cylinder(dimension=(2 * R_M, H_M), polarization=(0, 0, MU0 * M_Z),
-                                       position=(u_r[idx], 0.0, centre_z[idx]))
-        B = magnet.getB((0.0, 0.0, 0.0))
-        out[0][idx], out[1][idx] = B[0], B[2]
-    return out
 
 
 def grid(study):
     return np.meshgrid(study.t_levels, study.theta_levels, study.H_levels, indexing="ij")
-
-
-def rel(B, ref):
-    return np.linalg.norm(np.subtract(B, ref), axis=0) / np.linalg.norm(ref, axis=0)
 
 
 @pytest.mark.parametrize("placement", ["covered", "flush"])
@@ -50,7 +21,7 @@ def test_exact_hall_field_matches_spec_geometry(placement):
     s = replace(s, magnet=replace(s.magnet, placement=placement))
     t, theta, H = grid(s)
     B = hall_field(s, t, theta, H, solver="exact")
-    assert rel(B, spec_hall_field(t, theta, H, placement)).max() <= 1e-9
+    assert rel_diff(B, spec_hall_field(t, theta, H, placement)).max() <= 1e-9
 
 
 def test_fe_hall_field_matches_spec_geometry():
@@ -58,7 +29,7 @@ def test_fe_hall_field_matches_spec_geometry():
     t, theta, H = grid(s)
     B = hall_field(s, t, theta, H)  # the study's default solver: FE
     assert s.magnetics.solver == "fe"
-    assert rel(B, spec_hall_field(t, theta, H)).max() <= 2e-3
+    assert rel_diff(B, spec_hall_field(t, theta, H)).max() <= 2e-3
 
 
 def test_sign_conventions():

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from conftest import known_set, synthetic_doe
 from magtact.metamodel import (
     ExactField,
     Metamodel,
@@ -31,19 +32,8 @@ from magtact.metamodel import q as qs
 from magtact.metamodel import t as ts
 from magtact.metamodel import theta as ths
 from magtact.study import load_study
-from test_metamodel_data import synthetic_doe
 
 STUDY = load_study(None)
-
-
-def known_set() -> ModelSet:
-    h = Hs * 1000
-    return ModelSet.from_exprs({
-        "B_r": sp.Float(0.0123456789012345) * qs * sp.exp(-0.5 * ps) / h,
-        "B_z": 0.05 * sp.exp(0.8 * ps / h) + 0.001 * qs**2,
-        "f_r": -0.3e-4 * qs + 1e-5 * ps * qs,
-        "f_z": -1e-4 * ps - 3e-5 * ps**2 * h + 1e-6 * qs**2,
-    })
 
 
 # ---- Metamodel / ModelSet -----------------------------------------------------------------

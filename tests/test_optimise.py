@@ -1,10 +1,11 @@
 """Optimisation stage (docs/method.md §7) on metamodels given as known formulas.
 
-The model set below has a stable-shear minimum f_r,min known in closed form: with c = 0.4 + 100 H,
-f_r = k_r [(p − c)² − c² + 4 (q − 0.12)² − 0.0576] (p = t, q = t tan θ) is smallest at p = c,
-q = 0.12 while c ≤ 1 (interior: t_m = c, θ_m = atan(0.12 / c)) and on the edge t = 1 beyond
-(H > 6 mm: t_m = 1, θ_m = atan(0.12)). f_z grows with p and q, so its maximum is the corner
-(t_m, θ_m). Γ has no closed form: it is checked against a dense brute-force grid.
+The model set (``synthetic_models`` of ``conftest.py``) has a stable-shear minimum f_r,min known
+in closed form: with c = 0.4 + 100 H, f_r = k_r [(p − c)² − c² + 4 (q − 0.12)² − 0.0576] (p = t,
+q = t tan θ) is smallest at p = c, q = 0.12 while c ≤ 1 (interior: t_m = c, θ_m = atan(0.12 / c))
+and on the edge t = 1 beyond (H > 6 mm: t_m = 1, θ_m = atan(0.12)). f_z grows with p and q, so
+its maximum is the corner (t_m, θ_m). Γ has no closed form: it is checked against a dense
+brute-force grid.
 """
 
 from __future__ import annotations
@@ -16,7 +17,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from magtact.metamodel import H, ModelSet, p, q
+from conftest import K_Z, synthetic_models
+from magtact.metamodel import p, q
 from magtact.optimise import (
     ForceConstraints,
     InfeasibleError,
@@ -37,8 +39,6 @@ from magtact.optimise import (
 from magtact.sensitivity import Responses
 from magtact.study import load_study
 
-K_Z = 1.5e-4
-
 
 def k_r(h):
     return 6e-5 * (3e-3 / h)
@@ -46,21 +46,6 @@ def k_r(h):
 
 def c_of(h):
     return 0.4 + 100 * h
-
-
-def synthetic_models(f_r=None) -> ModelSet:
-    """B models with an invertible Jacobian everywhere; f_r, f_z as in the module notes."""
-    c = sp.Rational(2, 5) + 100 * H
-    a_r = 0.08 * sp.exp(-(H - 3e-3) / 2e-3)
-    a_z = -0.1 * (H / 3e-3)
-    f_r_default = 6e-5 * (3e-3 / H) * ((p - c) ** 2 - c**2 + 4 * (q - sp.Rational(3, 25)) ** 2
-                                       - sp.Rational(36, 625))
-    return ModelSet.from_exprs({
-        "B_r": a_r * q * (1 + sp.Rational(3, 10) * p),
-        "B_z": 0.05 + a_z * p * (1 + p / 5) + a_z * q**2 / 10,
-        "f_r": f_r_default if f_r is None else f_r,
-        "f_z": K_Z * (p**2 + p / 2 + 3 * q**2 / 10),
-    })
 
 
 @pytest.fixture(scope="module")

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from conftest import AREA, K_DIPOLE, synthetic_doe
 from magtact.metamodel import ExactField, ModelSet, fit_models, hall_features
 from magtact.metamodel import H as Hs
 from magtact.metamodel import p as ps
 from magtact.metamodel import q as qs
 from magtact.sensitivity import Responses, compare_with_data, dF_dB, gamma, gamma_from_data
 from magtact.study import load_study
-from test_metamodel_data import AREA, K_DIPOLE, synthetic_doe
 
 STUDY = load_study(None)
 
