@@ -42,6 +42,7 @@ def test_pipeline_says_the_disagreement_in_the_report(monkeypatch, tmp_path):
         return "chosen"
 
     monkeypatch.setattr(run_module, "write_optimise_outputs", fake_write)
+    monkeypatch.setattr(pipeline, "design_card", lambda *args: None)  # no models to answer with
     ctx = pipeline._Context(study=load_study(None), folder=tmp_path, recompute=False,
                             refit=False, data=None, cache=None, workers=None,
                             log=lambda m: None, models=object())
