@@ -44,6 +44,12 @@ class ForceConstraints:
         """(g_r, g_z) = (F_r,min − F_r,c, F_z,c − F_z,max) [N]; ≤ 0 is feasible."""
         return np.asarray(F_r_min) - self.F_r_c, self.F_z_c - np.asarray(F_z_max)
 
+    def active(self, F_r_min: float, F_z_max: float, rtol: float) -> tuple[str, ...]:
+        """``"F_r"`` and/or ``"F_z"``: the constraints with |margin| ≤ ``rtol`` |limit|."""
+        g_r, g_z = (float(v) for v in self.margins(F_r_min, F_z_max))
+        return tuple(name for name, g, lim in (("F_r", g_r, self.F_r_c), ("F_z", g_z, self.F_z_c))
+                     if abs(g) <= rtol * max(abs(lim), 1e-300))
+
 
 def force_constraints(models: Responses | ModelSet, study: Study, *, F_r_c: float | None = None,
                       F_z_c: float | None = None,
@@ -394,10 +400,8 @@ def choose(models: Responses | ModelSet, study: Study, candidates: ParetoSet | R
     c = candidates.constraints
     d = per_design(models, float(H), float(G), study)
     g_r, g_z = (float(v) for v in c.margins(d.F_r_min, d.F_z_max))
-    rtol = study.optimise.active_rtol
-    active = tuple(name for name, g, lim in (("F_r", g_r, c.F_r_c), ("F_z", g_z, c.F_z_c))
-                   if abs(g) <= rtol * max(abs(lim), 1e-300))
-    return Choice(d, index, c, g_r, g_z, active)
+    return Choice(d, index, c, g_r, g_z,
+                  c.active(d.F_r_min, d.F_z_max, study.optimise.active_rtol))
 
 
 #: Quantities of :func:`compare`: attribute, label, unit.

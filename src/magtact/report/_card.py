@@ -71,11 +71,9 @@ def _saturation_text(a) -> str:
 
 
 def _active(a, constraints, rtol: float) -> str:
-    g_r, g_z = constraints.margins(a.design.F_r_min, a.design.F_z_max)
-    names = [n for n, g, lim in (("shear", g_r, constraints.F_r_c),
-                                 ("normal force", g_z, constraints.F_z_c))
-             if abs(float(g)) <= rtol * abs(lim)]
-    return ", ".join(names) if names else "none"
+    names = {"F_r": "shear", "F_z": "normal force"}
+    active = constraints.active(a.design.F_r_min, a.design.F_z_max, rtol)
+    return ", ".join(names[k] for k in active) or "none"
 
 
 def write_card(answers, folder, constraints=None, rtol: float = 1e-2) -> Path:
