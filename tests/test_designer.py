@@ -130,6 +130,7 @@ def test_card_asks_for_the_noise_the_preset_lacks(models, study):
     ({"hall": {"chip": "HMC5883"}}, "hall.chip"),
     ({"constraints": {"G_tolerance": 0.5}}, "constraints.G_tolerance"),
     ({"constraints": {"G_tolerance": -0.1}}, "constraints.G_tolerance"),
+    ({"constraints": {"chip_range": "yes"}}, "constraints.chip_range"),
 ])
 def test_bad_hall_and_tolerance_settings_name_the_key(table, key):
     with pytest.raises(StudyError, match=rf"\[{key}\]"):
@@ -162,3 +163,93 @@ def test_cli_refuses_a_useless_chip_in_one_line_before_the_work(tmp_path):
     assert "[hall.range_z_mT]" in res.stdout + res.stderr
     assert "Traceback" not in res.stdout + res.stderr
     assert not (tmp_path / "o" / "design.json").exists()
+
+
+def test_chip_range_as_a_constraint_moves_the_design_to_where_the_chip_reads(models, study):
+    """With ``chip_range`` the exact reduction keeps exactly the force-feasible heights whose
+    stable region the chip reads, and NSGA-II agrees with it."""
+    from magtact.optimise import (
+        as_responses,
+        chip_margin,
+        choose,
+        exact_reduction,
+        feasible_G,
+        force_constraints,
+        front_gap,
+        pareto_nsga2,
+        sweep,
+    )
+
+    R = as_responses(models)
+    s = replace(study, constraints=replace(study.constraints, chip_range=True),
+                optimise=replace(study.optimise, sweep_n=201, population=60,
+                                 nsga2_generations=40))
+    table = sweep(R, s)
+    c = force_constraints(R, s)
+    m = chip_margin(s, table.H, table.t_m, table.theta_m)
+    low, high = feasible_G(table.f_r_min, table.f_z_max, c, s.design.G)
+    red = exact_reduction(R, s, c, table)
+    np.testing.assert_array_equal(red.feasible, (low <= high) & (m <= 0))
+    assert (m > 0).any() and (m <= 0).any()  # the MLX90393's ±50 mT bites on MagOne
+    free = choose(R, study, exact_reduction(R, study, c, table)).design
+    bound = choose(R, s, red).design
+    assert chip_margin(s, free.H, free.t_m, free.theta_m)[0] > 0 >= chip_margin(
+        s, bound.H, bound.t_m, bound.theta_m)[0] - 1e-3
+    # the card's saturation scan says the same of the chosen design's stable region
+    a = answer(models, s, bound.H, bound.G)
+    assert not a.saturation.in_region and answer(models, s, free.H, free.G).saturation.in_region
+    pareto = pareto_nsga2(R, s, c, table)
+    assert front_gap(pareto, red) < 0.01
+    assert (np.interp(pareto.H, table.H, m) <= 0).all()
+
+
+def test_a_chip_that_reads_no_stable_region_is_an_error_naming_the_keys(models, study):
+    from magtact.optimise import InfeasibleError, optimise
+
+    s = replace(_hall(study, chip="custom", noise_x=1e-6, noise_z=1e-6, range_x=0.02,
+                      range_z=0.02),
+                constraints=replace(study.constraints, chip_range=True))
+    with pytest.raises(InfeasibleError, match=r"saturates inside the stable region of every "
+                                              r"feasible height.*constraints.chip_range"):
+        optimise(models, s)
+
+
+def test_seed_records_hold_the_chosen_designs_force_noise(models, study):
+    """Isotropic noise σ: the worst σ_F of a design is its worst Γ times σ."""
+    from magtact.optimise import per_design
+    from magtact.publication._seeds import _resolution
+
+    sigma = 2e-6
+    assert _resolution(models, study, H0, G0) == {}  # the preset's noise is not known
+    rec = _resolution(models, _hall(study, noise_x=sigma, noise_z=sigma), H0, G0)
+    d = per_design(models, H0, G0, study)
+    assert rec["sigma_Fr_worst_mN"] == pytest.approx(d.Gamma_r_max * sigma * 1e3, rel=1e-6)
+    assert rec["sigma_Fz_worst_mN"] == pytest.approx(d.Gamma_z_max * sigma * 1e3, rel=1e-6)
+
+
+def test_card_shows_the_seed_spread_of_a_reproduce_run_of_the_same_study(tmp_path, models,
+                                                                         study):
+    import json
+
+    from magtact.publication import spread
+    from magtact.report import read_card, write_card
+
+    answers = [answer(models, study, H0, G0, "chosen"), answer(models, study, H0, G0, "orig")]
+    write_card(answers, tmp_path / "optimise", study=study)
+    rows = read_card(tmp_path / "optimise")["rows"]
+    assert rows[-1][0] == "seed spread of the answer" and "magtact reproduce" in rows[-1][1]
+    records = [{"definition": "jacobian", "seed": k, "ok": True,
+                "chosen": {"H_mm": h, "G_kPa": g},
+                "original": {"Gamma_r_max": 10.0 + k, "Gamma_z_max": 20.0}}
+               for k, (h, g) in enumerate([(3.0, 22.5), (3.2, 24.0), (3.1, 23.0)])]
+    pub = tmp_path / "publication"
+    pub.mkdir()
+    doc = {"study": study.name, "spread": spread(records)}
+    (pub / "publication.json").write_text(json.dumps(doc))
+    text = {r[0]: r[1:] for r in read_card(tmp_path / "optimise")["rows"]}
+    assert text["height H over 3 GP seeds (min – max)"] == ["3 – 3.2 mm", "(fixed)"]
+    assert text["shear modulus G over 3 GP seeds (min – max)"][0] == "22.5 – 24 kPa"
+    assert not any("seed spread of the answer" in k for k in text)
+    doc["study"] = "another"  # a seed study of another study is not this answer's spread
+    (pub / "publication.json").write_text(json.dumps(doc))
+    assert read_card(tmp_path / "optimise")["rows"][-1][0] == "seed spread of the answer"

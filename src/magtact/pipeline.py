@@ -295,7 +295,8 @@ def design_card(models, study, choice, folder) -> dict:
     answers = [answer(models, study, choice.design.H, choice.design.G, "chosen"),
                answer(models, study, study.design.H_original, study.design.G_original,
                       "original")]
-    write_card(answers, folder, choice.constraints, rtol=study.optimise.active_rtol)
+    write_card(answers, folder, choice.constraints, rtol=study.optimise.active_rtol,
+               study=study)
     return read_card(folder)
 
 

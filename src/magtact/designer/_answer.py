@@ -4,16 +4,15 @@ the chip's limits along the paths, and the margin for the tolerance of G (docs/m
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import minimize
 
 from ..metamodel import ExactField, ModelSet
-from ..optimise import DesignResult, per_design
+from ..optimise import DesignResult, chip_margin, per_design
 from ..sensitivity import force_noise
-from ..study import Study, StudyError, from_si, mm, mt
-from ._hall import HallChip, hall_chip
+from ..study import HallChip, Study, StudyError, from_si, hall_chip, mm, mt
 
 #: Points per side of the grid over the stable box (the worst σ_F starts from its best point).
 N_BOX = 41
@@ -46,10 +45,18 @@ class Saturation:
     axis: str | None = None
     F_r: float | None = None
     F_z: float | None = None
+    #: :func:`magtact.optimise.chip_margin` over the design's stable region (≤ 0: the chip reads
+    #: all of it); NaN when not computed.
+    region_margin: float = float("nan")
 
     @property
     def saturates(self) -> bool:
         return self.t is not None
+
+    @property
+    def in_region(self) -> bool:
+        """Whether the chip saturates inside the stable region (where the sensor is used)."""
+        return bool(self.region_margin > 0)
 
 
 @dataclass(frozen=True)
@@ -122,7 +129,8 @@ def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "des
     """
     chip = hall_chip(study)
     design = per_design(models, H, G, study)
-    sat = saturation(study, models, H, G, chip)
+    sat = replace(saturation(study, models, H, G, chip),
+                  region_margin=float(chip_margin(study, H, design.t_m, design.theta_m)[0]))
     res = None if chip.noise is None else resolution(models, study, design, chip)
     return DesignAnswer(label, design, chip, res, sat, study.constraints.G_tolerance)
 
@@ -195,6 +203,8 @@ def answer_json(a: DesignAnswer) -> dict:
         "B_max_x_mT": mt(s.B_max_x), "B_max_z_mT": mt(s.B_max_z),
         "saturates": s.saturates, "saturation_t": s.t, "saturation_theta_rad": s.theta,
         "saturation_axis": s.axis, "saturation_F_r_N": s.F_r, "saturation_F_z_N": s.F_z,
+        "chip_margin_stable_region": s.region_margin,
+        "saturates_in_stable_region": s.in_region,
         "G_tolerance": a.tolerance, "worst_case_factor": a.worst_factor,
         "missing": list(a.chip.missing),
     }

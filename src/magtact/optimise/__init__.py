@@ -7,6 +7,7 @@ reduction to a curve over H (:func:`exact_reduction`), the decision rule (:func:
 """
 
 from ._box import BatchOptimum, BoxOptimum, batch_optimum, box_optimum
+from ._chip import chip_margin
 from ._conditioning import ShearBoundConditioning, shear_bound_conditioning
 from ._design import (
     DesignMaps,
@@ -43,8 +44,8 @@ __all__ = [
     "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignResult",
     "ForceConstraints", "HeightResult", "HeightTable", "InfeasibleError", "Optimisation",
     "ParetoSet", "Reduction", "ShearBoundConditioning", "Timings", "as_responses",
-    "batch_optimum", "box_optimum", "choose", "compare", "decision_index", "design_maps",
-    "exact_reduction", "feasible_G", "force_constraints", "front_gap", "heights_batch",
-    "nondominated", "optimise", "pareto_nsga2", "per_design", "per_height",
+    "batch_optimum", "box_optimum", "chip_margin", "choose", "compare", "decision_index",
+    "design_maps", "exact_reduction", "feasible_G", "force_constraints", "front_gap",
+    "heights_batch", "nondominated", "optimise", "pareto_nsga2", "per_design", "per_height",
     "shear_bound_conditioning", "sweep", "write_optimise_outputs",
 ]

@@ -4,7 +4,9 @@ Problem (published study, Eq. 19)::
 
     minimise (Γ_r,max(H, G), Γ_z,max(H, G))
     subject to H ∈ [H_lo, H_hi], G ∈ [G_lo, G_hi],
-               g_r = F_r,min − F_r,c ≤ 0,   g_z = F_z,c − F_z,max ≤ 0.
+               g_r = F_r,min − F_r,c ≤ 0,   g_z = F_z,c − F_z,max ≤ 0,
+               and, with ``[constraints] chip_range``, the Hall chip within its range over the
+               stable region (a condition on H alone: :func:`chip_margin`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ import numpy as np
 from .._errors import MagtactError
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
-from ..study import Study, from_si
+from ..study import Study, from_si, hall_chip
+from ._chip import chip_margin
 from ._design import DesignResult, HeightTable, as_responses, heights_batch, per_design
 
 
@@ -142,6 +145,19 @@ def _infeasible_message(table: HeightTable, constraints: ForceConstraints, study
             + ("; each is reachable alone but not both in one design." if alone else "."))
 
 
+def _chip_message(table: HeightTable, study: Study) -> str:
+    """Why the chip's range leaves no feasible design: where it comes closest."""
+    chip = hall_chip(study)
+    m = chip_margin(study, table.H, table.t_m, table.theta_m)
+    k = int(np.argmin(m))
+    return (f"the force constraints can be met, but the {chip.name} (range "
+            f"{from_si(chip.range_x, 'mT'):g} / {from_si(chip.range_z, 'mT'):g} mT, x / z) "
+            "saturates inside the stable region of every feasible height "
+            "([constraints] chip_range = true); the field exceeds the range least at "
+            f"H = {from_si(table.H[k], 'mm'):.3f} mm, by {m[k]:.1%}: widen hall.range_x_mT / "
+            "hall.range_z_mT, choose another chip, or set constraints.chip_range = false")
+
+
 def nondominated(objectives: np.ndarray) -> np.ndarray:
     """Mask of the non-dominated rows of ``objectives`` (n, 2), both minimised.
 
@@ -232,6 +248,10 @@ def exact_reduction(models: Responses | ModelSet, study: Study, constraints: For
     ok = low <= high
     if not ok.any():
         raise InfeasibleError(_infeasible_message(table, constraints, study))
+    if study.constraints.chip_range:
+        ok &= chip_margin(study, table.H, table.t_m, table.theta_m) <= 0
+        if not ok.any():
+            raise InfeasibleError(_chip_message(table, study))
     G_star = np.where(ok, low, np.nan)
     Gr, Gz = G_star * table.gamma_r_max, G_star * table.gamma_z_max
     front = np.zeros(ok.size, bool)
@@ -284,7 +304,8 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
     -----
     Variables are scaled to [0, 1]² over the bounds; constraints enter NSGA-II as
     g_r / |F_r,c| ≤ 0 and g_z / |F_z,c| ≤ 0 (1 N where a limit is zero) so that both weigh alike
-    in the constraint violation. Population ``optimise.population``, ``nsga2_generations``
+    in the constraint violation; the chip's margin (already relative) is interpolated on the
+    sweep's heights. Population ``optimise.population``, ``nsga2_generations``
     generations, seed ``optimise.seed``; the same seed gives the same set.
     """
     from pymoo.algorithms.moo.nsga2 import NSGA2
@@ -297,6 +318,9 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
     (H_lo, H_hi), (G_lo, G_hi) = study.design.H, study.design.G
     s_r = abs(constraints.F_r_c) or 1.0
     s_z = abs(constraints.F_z_c) or 1.0
+    # the chip's margin depends on H alone: read it off the dense sweep
+    chip = (chip_margin(study, table.H, table.t_m, table.theta_m)
+            if study.constraints.chip_range else None)
 
     def designs(x):
         return H_lo + x[:, 0] * (H_hi - H_lo), G_lo + x[:, 1] * (G_hi - G_lo)
@@ -309,12 +333,16 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
 
     class _Designs(Problem):
         def __init__(self):
-            super().__init__(n_var=2, n_obj=2, n_ieq_constr=2, xl=np.zeros(2), xu=np.ones(2))
+            super().__init__(n_var=2, n_obj=2, n_ieq_constr=2 if chip is None else 3,
+                             xl=np.zeros(2), xu=np.ones(2))
 
         def _evaluate(self, x, out, *args, **kwargs):
-            _, G, tab, g_r, g_z = evaluate(x)
+            H, G, tab, g_r, g_z = evaluate(x)
             out["F"] = np.stack([G * tab.gamma_r_max, G * tab.gamma_z_max], axis=1)
-            out["G"] = np.stack([g_r / s_r, g_z / s_z], axis=1)
+            g = [g_r / s_r, g_z / s_z]
+            if chip is not None:
+                g.append(np.interp(H, table.H, chip))
+            out["G"] = np.stack(g, axis=1)
 
     res = minimize(_Designs(), NSGA2(pop_size=o.population), ("n_gen", o.nsga2_generations),
                    seed=o.seed, verbose=False)

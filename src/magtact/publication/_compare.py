@@ -42,6 +42,8 @@ FIGURES: tuple[tuple[str, str, str, str], ...] = (
     ("Gamma_z_star", "Γ_z,max* (default constraints)", "N/T", "chosen.Gamma_z_max"),
     ("H_star_ref", "H* (constraints of the original)", "mm", "chosen_reference.H_mm"),
     ("G_star_ref", "G* (constraints of the original)", "kPa", "chosen_reference.G_kPa"),
+    ("sigma_Fr_star", "worst σ_Fr* with the study's chip", "mN", "chosen.sigma_Fr_worst_mN"),
+    ("sigma_Fz_star", "worst σ_Fz* with the study's chip", "mN", "chosen.sigma_Fz_worst_mN"),
     ("branches", "Pareto branches (default constraints)", "-", "branches"),
 )
 

@@ -113,7 +113,7 @@ def seed_study(study: Study, ds, models_dir: str | Path, *, seeds: Sequence[int]
 
 #: Version of a seed-study record; bump it when what a record holds or how it is measured
 #: changes, so that cached records of the old kind are not reused.
-RECORD_VERSION = 1
+RECORD_VERSION = 2
 
 
 def _key(args: dict, ds, models_dir) -> str:
@@ -169,7 +169,8 @@ def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definit
     max |error| / range and R² of f_r, f_z), ``original``, ``fabricated`` (per design: H_mm,
     G_kPa, Gamma_r_max, Gamma_z_max [N/T], F_r_min, F_z_max [N], t_m, theta_m),
     ``chosen``/``chosen_reference`` (the chosen design under the default constraints / those of
-    the original design, or ``infeasible`` with the message), ``branches``/``branches_reference``
+    the original design, or ``infeasible`` with the message; ``chosen`` adds σ_F [mN] with the
+    study's Hall chip where its noise is known), ``branches``/``branches_reference``
     (Pareto branches of the exact reduction), ``gamma_z_curve`` (t, Γ_z [N/T] at the largest H,
     θ_max, G of the original design) and its ``gamma_z_trend``, and ``sweep`` (H_mm and the
     per-unit-G extrema γ_r,max, γ_z,max [N/(T·Pa)], f_r,min, f_z,max [N/Pa] over H).
@@ -239,6 +240,8 @@ def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definit
         active = [n for n, g, lim in (("F_r", g_r, c.F_r_c), ("F_z", g_z, c.F_z_c))
                   if abs(g) <= rtol * abs(lim)]
         rec["chosen" + key] = row | {"active": active, "F_r_c_N": c.F_r_c, "F_z_c_N": c.F_z_c}
+        if not key:
+            rec["chosen"] |= _resolution(models, study, table.H[k], red.G_star[k])
         rec["branches" + key] = count_branches(red.front)
     cond = shear_bound_conditioning(R, study, np.linspace(*d.H, 21))
     rec["conditioning"] = {"H_mm": from_si(cond.H, "mm").tolist(), "tol": cond.tol,
@@ -251,6 +254,20 @@ def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definit
     rec["gamma_z_trend"] = trend(gz)
     rec["ok"] = True
     return rec
+
+
+def _resolution(models, study: Study, H: float, G: float) -> dict:
+    """σ_F [mN] of design (H, G) with the study's chip, or nothing if its noise is not known."""
+    from ..designer import resolution
+    from ..optimise import per_design
+    from ..study import hall_chip
+
+    chip = hall_chip(study)
+    if chip.noise is None:
+        return {}
+    r = resolution(models, study, per_design(models, float(H), float(G), study), chip)
+    return {f"sigma_F{c}_{w}_mN": from_si(getattr(r, f"sigma_{c}_{w}"), "mN")
+            for c in "rz" for w in ("0", "worst")}
 
 
 def _row(table, k: int, G: float) -> dict:

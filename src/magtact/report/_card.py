@@ -14,13 +14,14 @@ def _mN(v: float) -> str:
     return f"{from_si(v, 'mN'):.3g} mN"
 
 
-def card_rows(answers, constraints=None, spread: dict | None = None, rtol: float = 1e-2
+def card_rows(answers, constraints=None, rtol: float = 1e-2
               ) -> tuple[list[str], list[list[str]]]:
     """Header and rows of the design card for a sequence of :class:`DesignAnswer`.
 
     ``constraints`` (a ``ForceConstraints``) adds which constraints are active at each design;
-    ``spread`` (figure → text) adds the seed spread of the answer, where a seed study ran;
-    a constraint is active where its margin is within ``rtol`` of its limit.
+    a constraint is active where its margin is within ``rtol`` of its limit (the chip's range
+    where the field's margin over the stable region is within ``rtol`` of the range).
+    The seed spread is added by :func:`read_card`.
     """
     header = ["", *(a.label for a in answers)]
     chip = answers[0].chip
@@ -56,8 +57,6 @@ def card_rows(answers, constraints=None, spread: dict | None = None, rtol: float
             lambda a: f"forces at G − {d:.0%}: {(1 - d) * a.design.F_z_max:.3g} N normal, "
                       f"{(1 - d) * a.design.F_r_min:.3g} N shear; Γ and σ_F × {1 + d:.3g} "
                       f"at G + {d:.0%}")
-    for name, text in (spread or {}).items():
-        rows.append([name, text, ""][: len(header)])
     return header, rows
 
 
@@ -66,31 +65,91 @@ def _saturation_text(a) -> str:
     if not s.saturates:
         return (f"not reached (largest |B| {from_si(s.B_max_x, 'mT'):.3g} / "
                 f"{from_si(s.B_max_z, 'mT'):.3g} mT)")
+    where = "inside" if s.in_region else "beyond"
     return (f"saturates ({'shear' if s.axis == 'x' else 'normal'} axis) at t = {s.t:.2f}, "
-            f"F_z = {s.F_z:.3g} N")
+            f"F_z = {s.F_z:.3g} N, {where} the stable region")
 
 
 def _active(a, constraints, rtol: float) -> str:
     names = {"F_r": "shear", "F_z": "normal force"}
-    active = constraints.active(a.design.F_r_min, a.design.F_z_max, rtol)
-    return ", ".join(names[k] for k in active) or "none"
+    active = [names[k] for k in constraints.active(a.design.F_r_min, a.design.F_z_max, rtol)]
+    if abs(a.saturation.region_margin) <= rtol:
+        active.append("chip range")
+    return ", ".join(active) or "none"
 
 
-def write_card(answers, folder, constraints=None, rtol: float = 1e-2) -> Path:
-    """Write ``card.json`` (the card's rows and every number of each answer) into ``folder``."""
+def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None) -> Path:
+    """Write ``card.json`` (the card's rows and every number of each answer) into ``folder``.
+
+    ``study`` names the study and its sensitivity definition, so that :func:`read_card` can add
+    the seed spread of a ``magtact reproduce`` run of the same study.
+    """
     from ..designer import answer_json
 
     header, rows = card_rows(answers, constraints, rtol=rtol)
-    return write_json(Path(folder) / "card.json",
-                      {"header": header, "rows": rows,
-                       "answers": [answer_json(a) for a in answers]}, indent=1,
-                      ensure_ascii=False)
+    doc = {"header": header, "rows": rows, "answers": [answer_json(a) for a in answers]}
+    if study is not None:
+        doc |= {"study": study.name, "definition": study.sensitivity.definition}
+    return write_json(Path(folder) / "card.json", doc, indent=1, ensure_ascii=False)
 
 
 def read_card(folder) -> dict | None:
-    """The card written by :func:`write_card`, or None."""
-    path = Path(folder) / "card.json"
+    """The card written by :func:`write_card`, or None.
+
+    Its rows end with the seed spread of the answer: from ``../publication/publication.json``
+    (written by ``magtact reproduce`` into the same results folder) when that holds the same
+    study, else a row saying how to measure it.
+    """
+    folder = Path(folder)
+    card = _load(folder / "card.json")
+    if not isinstance(card, dict) or not isinstance(card.get("rows"), list):
+        return None
+    pub = _load(folder.parent / "publication" / "publication.json")
+    card["rows"] = card["rows"] + spread_rows(pub, card, len(card.get("header", [])))
+    return card
+
+
+def _load(path: Path):
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
+
+
+#: Seed-study figures on the card: label, unit, key for the chosen and for the original design.
+SPREAD: tuple[tuple[str, str, str, str | None], ...] = (
+    ("height H", "mm", "H_star", None),
+    ("shear modulus G", "kPa", "G_star", None),
+    ("sensitivity Γ_r,max", "N/T", "Gamma_r_star", "Gamma_r_orig"),
+    ("sensitivity Γ_z,max", "N/T", "Gamma_z_star", "Gamma_z_orig"),
+    ("worst σ_Fr", "mN", "sigma_Fr_star", None),
+    ("worst σ_Fz", "mN", "sigma_Fz_star", None),
+)
+
+
+def spread_rows(publication: dict | None, card: dict, columns: int) -> list[list[str]]:
+    """Rows of the card for the seed spread (min – max over the GP seeds of a seed study)."""
+    pad = max(columns - 2, 0)
+    figs = None
+    if isinstance(publication, dict) and publication.get("study") == card.get("study"):
+        figs = (publication.get("spread") or {}).get(card.get("definition"))
+    if not isinstance(figs, dict):
+        return [["seed spread of the answer",
+                 "not measured: `magtact reproduce` refits the models with 8 GP seeds and "
+                 "adds it here", *[""] * pad]]
+    rows = []
+    for label, unit, chosen, original in SPREAD:
+        f = figs.get(chosen) or {}
+        if not f.get("n"):
+            continue
+        cells = [_range(f, unit)]
+        if pad:
+            o = figs.get(original) if original else None
+            cells.append(_range(o, unit) if o and o.get("n") else "(fixed)")
+        rows.append([f"{label} over {f['n']} GP seeds (min – max)", *cells,
+                     *[""] * max(pad - 1, 0)])
+    return rows
+
+
+def _range(f: dict, unit: str) -> str:
+    return f"{f['min']:.3g} – {f['max']:.3g} {unit}"

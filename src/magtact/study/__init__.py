@@ -1,5 +1,6 @@
 """Study settings: typed, immutable, loaded from TOML in user units, SI inside."""
 
+from ._hall import HALL_PRESETS, HallChip, HallPreset, hall_chip
 from ._load import PRESETS, StudyError, load_study, magone, magone_printed, study_from_dict
 from ._model import (
     DOE,
@@ -18,8 +19,9 @@ from ._model import (
 from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
-    "DOE", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints", "Design", "Loading",
-    "Magnet", "Magnetics", "Material", "Mechanics", "PHYSICAL", "Sensitivity", "Study",
-    "StudyError", "check_si", "checked_si", "from_si", "kpa", "load_study", "magone",
-    "magone_printed", "mm", "mt", "study_from_dict", "to_si",
+    "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
+    "Design", "HallChip", "HallPreset", "Loading", "Magnet", "Magnetics", "Material", "Mechanics",
+    "PHYSICAL", "Sensitivity", "Study", "StudyError", "check_si", "checked_si", "from_si",
+    "hall_chip", "kpa", "load_study", "magone", "magone_printed", "mm", "mt", "study_from_dict",
+    "to_si",
 ]

@@ -176,6 +176,9 @@ class Constraints:
     G_tolerance: float = setting(0.0, minimum=0.0, maximum=0.5, bounds=(0.0, 0.5),
                                  doc="fabrication tolerance δ of G: the force constraints must "
                                      "hold at G (1 − δ); Γ and σ_F are reported at G (1 + δ)")
+    chip_range: bool = setting(False, doc="true: the [hall] chip must stay within its range "
+                                          "over each design's stable region (a constraint of "
+                                          "the optimisation)")
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..study import Study, StudyError
+from ._load import StudyError
+from ._model import Study
 
 
 @dataclass(frozen=True)
@@ -26,7 +27,7 @@ class HallPreset:
 
 
 #: Chip presets (docs/method.md §10).
-PRESETS: dict[str, HallPreset] = {
+HALL_PRESETS: dict[str, HallPreset] = {
     "MLX90393": HallPreset(
         "Melexis MLX90393", 50e-3, 50e-3, None, None,
         setting="lowest gain (GAIN_SEL), the widest range",
@@ -79,7 +80,7 @@ def hall_chip(study: Study) -> HallChip:
         For a ``custom`` chip without a range (the range has no default).
     """
     h = study.hall
-    preset = PRESETS.get(h.chip)
+    preset = HALL_PRESETS.get(h.chip)
 
     def pick(value: float, attr: str):
         if value > 0:
