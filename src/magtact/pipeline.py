@@ -292,7 +292,8 @@ def design_card(models, study, choice, folder) -> dict:
     from .designer import answer
     from .report import read_card, write_card
 
-    answers = [answer(models, study, choice.design.H, choice.design.G, "chosen"),
+    answers = [answer(models, study, choice.design.H, choice.design.G, "chosen",
+                      choice.design.M_z),
                answer(models, study, study.design.H_original, study.design.G_original,
                       "original")]
     write_card(answers, folder, choice.constraints, rtol=study.optimise.active_rtol,

@@ -121,12 +121,14 @@ def print_choice(result, stdout: Console | None = None) -> None:
     table.add_column("NSGA-II + decision", justify="right")
     table.add_column("exact reduction", justify="right")
     e = result.reduction_choice.design
-    for label, a, b in (("H [mm]", from_si(d.H, "mm"), from_si(e.H, "mm")),
-                        ("G [kPa]", from_si(d.G, "kPa"), from_si(e.G, "kPa")),
-                        ("Γ_r,max [N/T]", d.Gamma_r_max, e.Gamma_r_max),
-                        ("Γ_z,max [N/T]", d.Gamma_z_max, e.Gamma_z_max),
-                        ("F_r,min [N]", d.F_r_min, e.F_r_min),
-                        ("F_z,max [N]", d.F_z_max, e.F_z_max)):
+    rows = [("H [mm]", from_si(d.H, "mm"), from_si(e.H, "mm")),
+            ("G [kPa]", from_si(d.G, "kPa"), from_si(e.G, "kPa"))]
+    if d.M_z is not None and e.M_z is not None:
+        rows.append(("M_z [MA/m]", from_si(d.M_z, "MA_per_m"), from_si(e.M_z, "MA_per_m")))
+    rows += [("Γ_r,max [N/T]", d.Gamma_r_max, e.Gamma_r_max),
+             ("Γ_z,max [N/T]", d.Gamma_z_max, e.Gamma_z_max),
+             ("F_r,min [N]", d.F_r_min, e.F_r_min), ("F_z,max [N]", d.F_z_max, e.F_z_max)]
+    for label, a, b in rows:
         table.add_row(escape(label), f"{a:.5g}", f"{b:.5g}")
     (stdout or Console()).print(table)
 

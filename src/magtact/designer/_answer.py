@@ -121,14 +121,18 @@ def check_rest_field(study: Study) -> None:
                              "limit")
 
 
-def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design"
-           ) -> DesignAnswer:
-    """The designer's answer for design (H [m], G [Pa]) with the study's ``[hall]`` chip.
+def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design",
+           M_z: float | None = None) -> DesignAnswer:
+    """The designer's answer for design (H [m], G [Pa][, M_z [A/m]]) with the study's
+    ``[hall]`` chip.
 
-    A chip range below this design's field at rest shows as saturation at t = 0.
+    A chip range below this design's field at rest shows as saturation at t = 0. ``M_z``
+    (where it is a design variable) scales the field and divides the force noise.
     """
     chip = hall_chip(study)
-    design = per_design(models, H, G, study)
+    design = per_design(models, H, G, study, M_z)
+    if M_z is not None:  # the exact field of this design's magnet
+        study = replace(study, magnet=replace(study.magnet, M_z=float(M_z)))
     sat = replace(saturation(study, models, H, G, chip),
                   region_margin=float(chip_margin(study, H, design.t_m, design.theta_m)[0]))
     res = None if chip.noise is None else resolution(models, study, design, chip)
@@ -140,8 +144,8 @@ def resolution(models: ModelSet, study: Study, design: DesignResult, chip: HallC
     """σ_F at t = 0 and its largest value over the stable box t ≤ t_m, θ ≤ θ_m."""
     H, G = design.H, design.G
 
-    def sigma(t, theta):
-        return force_noise(models, t, theta, H, G, chip.noise)
+    def sigma(t, theta):  # the models' Jacobian over the design's field scale
+        return np.asarray(force_noise(models, t, theta, H, G, chip.noise)) / design.field_scale
 
     s0 = sigma(0.0, 0.0)
     T, TH = np.meshgrid(np.linspace(0.0, design.t_m, N_BOX),
@@ -193,6 +197,7 @@ def answer_json(a: DesignAnswer) -> dict:
     r, s = a.resolution, a.saturation
     out = {
         "label": a.label, "H_mm": mm(a.H), "G_kPa": from_si(a.G, "kPa"),
+        "M_z_A_per_m": None if a.design.M_z is None else from_si(a.design.M_z, "A_per_m"),
         "chip": a.chip.name, "chip_setting": a.chip.setting, "chip_source": a.chip.source,
         "noise_x_uT": None if a.chip.noise_x is None else from_si(a.chip.noise_x, "uT"),
         "noise_z_uT": None if a.chip.noise_z is None else from_si(a.chip.noise_z, "uT"),

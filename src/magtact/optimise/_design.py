@@ -94,11 +94,18 @@ class DesignResult:
         Design [m], [Pa].
     height : HeightResult
         The per-unit-G extrema at H, with locations and refinement diagnostics.
+    M_z : float or None
+        Magnetisation [A/m] where it is a design variable (None: the magnet's own).
+    field_scale : float
+        The design's field over the models' field, M_z / magnet.M_z: B ∝ M_z, so every
+        sensitivity (∂F/∂B) is divided by it.
     """
 
     H: float
     G: float
     height: HeightResult
+    M_z: float | None = None
+    field_scale: float = 1.0
 
     @property
     def t_m(self) -> float:
@@ -128,12 +135,12 @@ class DesignResult:
     @property
     def Gamma_r_max(self) -> float:
         """Largest shear sensitivity Γ_r,max in the stable box [N/T]."""
-        return self.G * self.height.gamma_r_max.value
+        return self.G * self.height.gamma_r_max.value / self.field_scale
 
     @property
     def Gamma_z_max(self) -> float:
         """Largest normal sensitivity Γ_z,max in the stable box [N/T]."""
-        return self.G * self.height.gamma_z_max.value
+        return self.G * self.height.gamma_z_max.value / self.field_scale
 
 
 def per_height(models: Responses | ModelSet, H: float, study: Study) -> HeightResult:
@@ -175,17 +182,23 @@ def per_height(models: Responses | ModelSet, H: float, study: Study) -> HeightRe
     return HeightResult(float(H), fr, *rest)
 
 
-def per_design(models: Responses | ModelSet, H: float, G: float, study: Study) -> DesignResult:
-    """Extrema of the design (H [m], G [Pa]): :func:`per_height` at H, scaled by G.
+def per_design(models: Responses | ModelSet, H: float, G: float, study: Study,
+               M_z: float | None = None) -> DesignResult:
+    """Extrema of the design (H [m], G [Pa][, M_z [A/m]]): :func:`per_height` at H, forces and
+    sensitivities scaled by G, sensitivities divided by M_z / magnet.M_z.
 
     Raises
     ------
-    ValueError
-        If G is not positive.
+    MagtactError
+        If G or M_z is not positive.
     """
     if not G > 0:
         raise MagtactError(f"shear modulus G must be positive, got {G} Pa")
-    return DesignResult(float(H), float(G), per_height(models, H, study))
+    if M_z is not None and not M_z > 0:
+        raise MagtactError(f"magnetisation M_z must be positive, got {M_z} A/m")
+    scale = 1.0 if M_z is None else float(M_z) / study.magnet.M_z
+    return DesignResult(float(H), float(G), per_height(models, H, study),
+                        None if M_z is None else float(M_z), scale)
 
 
 @dataclass(frozen=True)

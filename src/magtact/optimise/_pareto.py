@@ -184,8 +184,11 @@ class Reduction:
         Per-unit-G extrema on the sweep of heights.
     G_star : numpy.ndarray, shape (n,)
         Smallest feasible G at each height [Pa] (NaN where none is feasible).
+    M_z_star : numpy.ndarray, shape (n,)
+        Best magnetisation at each height [A/m]: the largest in range the chip allows (the
+        magnet's own where M_z is not a design variable).
     Gamma_r, Gamma_z : numpy.ndarray, shape (n,)
-        Objectives at (H, G*(H)) [N/T] (NaN where infeasible).
+        Objectives at (H, G*(H), M_z*(H)) [N/T] (NaN where infeasible).
     front : numpy.ndarray of bool, shape (n,)
         The non-dominated feasible heights: the exact Pareto set.
     constraints : ForceConstraints
@@ -197,6 +200,7 @@ class Reduction:
     Gamma_z: np.ndarray
     front: np.ndarray
     constraints: ForceConstraints
+    M_z_star: np.ndarray | None = None
 
     @property
     def H(self) -> np.ndarray:
@@ -242,22 +246,48 @@ def exact_reduction(models: Responses | ModelSet, study: Study, constraints: For
     G*(H) = max(G_lo, F_r,c / f_r,min(H), F_z,c / f_z,max(H)) (with the signs of the defaults)
     can be Pareto-optimal. The Pareto set is the non-dominated part of the curve
     H ↦ (G* γ_r,max, G* γ_z,max).
+
+    With M_z a design variable the sensitivities scale as M_z,0 / M_z (B ∝ M_z; M_z,0 the
+    magnet's own, at which the models hold) and the forces do not depend on it, so the best
+    M_z is the largest the chip allows (:func:`best_magnetisation`).
     """
     table = sweep(models, study) if table is None else table
     low, high = feasible_G(table.f_r_min, table.f_z_max, constraints, study.design.G)
     ok = low <= high
     if not ok.any():
         raise InfeasibleError(_infeasible_message(table, constraints, study))
-    if study.constraints.chip_range:
-        ok &= chip_margin(study, table.H, table.t_m, table.theta_m) <= 0
-        if not ok.any():
-            raise InfeasibleError(_chip_message(table, study))
+    M_star = best_magnetisation(study, table)
+    ok &= np.isfinite(M_star)
+    if not ok.any():
+        raise InfeasibleError(_chip_message(table, study))
     G_star = np.where(ok, low, np.nan)
-    Gr, Gz = G_star * table.gamma_r_max, G_star * table.gamma_z_max
+    k = study.magnet.M_z / M_star
+    Gr, Gz = G_star * table.gamma_r_max * k, G_star * table.gamma_z_max * k
     front = np.zeros(ok.size, bool)
     idx = np.flatnonzero(ok)
     front[idx[nondominated(np.stack([Gr[idx], Gz[idx]], axis=1))]] = True
-    return Reduction(table, G_star, Gr, Gz, front, constraints)
+    return Reduction(table, G_star, Gr, Gz, front, constraints, M_star)
+
+
+def best_magnetisation(study: Study, table: HeightTable) -> np.ndarray:
+    """The largest magnetisation in range at each height of ``table`` that the chip allows
+    (NaN where none does) [A/m].
+
+    Notes
+    -----
+    Γ ∝ 1 / M_z, so without ``[constraints] chip_range`` it is the top of the range. With it,
+    the field's margin over the stable region scales as (M_z / M_z,0)(1 + m_0(H)) − 1, m_0 the
+    :func:`chip_margin` at the magnet's own M_z,0, so M_z ≤ M_z,0 / (1 + m_0(H)).
+    """
+    lo, hi = study.M_z_bounds
+    M = np.full(table.H.shape, float(hi))
+    if study.constraints.chip_range:
+        m0 = chip_margin(study, table.H, table.t_m, table.theta_m)
+        cap = study.magnet.M_z / (1.0 + m0)
+        # a range fixed at M_z,0 keeps its own value where the chip reads it
+        M = np.where(m0 <= 0, M, np.minimum(M, cap)) if lo == hi else np.minimum(M, cap)
+        M = np.where(M >= lo, M, np.nan)
+    return M
 
 
 @dataclass(frozen=True)
@@ -265,7 +295,8 @@ class ParetoSet:
     """NSGA-II's Pareto set over designs (H, G), sorted by H (arrays of shape (n,)).
 
     ``H`` [m], ``G`` [Pa], ``Gamma_r_max, Gamma_z_max`` [N/T], ``F_r_min, F_z_max`` [N];
-    ``constraints`` used; ``seed``, ``generations`` and ``evaluations`` of the run.
+    ``constraints`` used; ``seed``, ``generations`` and ``evaluations`` of the run; ``M_z``
+    [A/m] (the magnet's own where it is not a design variable).
     """
 
     H: np.ndarray
@@ -278,6 +309,7 @@ class ParetoSet:
     seed: int
     generations: int
     evaluations: int
+    M_z: np.ndarray | None = None
 
     @property
     def objectives(self) -> np.ndarray:
@@ -302,7 +334,8 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
 
     Notes
     -----
-    Variables are scaled to [0, 1]² over the bounds; constraints enter NSGA-II as
+    Variables (H, G and, where it is a design variable, M_z) are scaled to [0, 1] over the
+    bounds; constraints enter NSGA-II as
     g_r / |F_r,c| ≤ 0 and g_z / |F_z,c| ≤ 0 (1 N where a limit is zero) so that both weigh alike
     in the constraint violation; the chip's margin (already relative) is interpolated on the
     sweep's heights. Population ``optimise.population``, ``nsga2_generations``
@@ -316,32 +349,36 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
     o = study.optimise
     table = sweep(R, study) if table is None else table
     (H_lo, H_hi), (G_lo, G_hi) = study.design.H, study.design.G
+    (M_lo, M_hi), M0 = study.M_z_bounds, study.magnet.M_z
+    n_var = 3 if study.M_z_variable else 2
     s_r = abs(constraints.F_r_c) or 1.0
     s_z = abs(constraints.F_z_c) or 1.0
-    # the chip's margin depends on H alone: read it off the dense sweep
+    # the chip's margin at M_z,0 depends on H alone: read it off the dense sweep
     chip = (chip_margin(study, table.H, table.t_m, table.theta_m)
             if study.constraints.chip_range else None)
 
     def designs(x):
-        return H_lo + x[:, 0] * (H_hi - H_lo), G_lo + x[:, 1] * (G_hi - G_lo)
+        M = M_lo + x[:, 2] * (M_hi - M_lo) if n_var == 3 else np.full(x.shape[0], M0)
+        return H_lo + x[:, 0] * (H_hi - H_lo), G_lo + x[:, 1] * (G_hi - G_lo), M
 
     def evaluate(x):
-        H, G = designs(x)
+        H, G, M = designs(x)
         tab = heights_batch(R, H, study, warm=table, coarse_start=False)
         g_r, g_z = constraints.margins(G * tab.f_r_min, G * tab.f_z_max)
-        return H, G, tab, g_r, g_z
+        return H, G, M, tab, g_r, g_z
 
     class _Designs(Problem):
         def __init__(self):
-            super().__init__(n_var=2, n_obj=2, n_ieq_constr=2 if chip is None else 3,
-                             xl=np.zeros(2), xu=np.ones(2))
+            super().__init__(n_var=n_var, n_obj=2, n_ieq_constr=2 if chip is None else 3,
+                             xl=np.zeros(n_var), xu=np.ones(n_var))
 
         def _evaluate(self, x, out, *args, **kwargs):
-            H, G, tab, g_r, g_z = evaluate(x)
-            out["F"] = np.stack([G * tab.gamma_r_max, G * tab.gamma_z_max], axis=1)
+            H, G, M, tab, g_r, g_z = evaluate(x)
+            k = G * M0 / M
+            out["F"] = np.stack([k * tab.gamma_r_max, k * tab.gamma_z_max], axis=1)
             g = [g_r / s_r, g_z / s_z]
-            if chip is not None:
-                g.append(np.interp(H, table.H, chip))
+            if chip is not None:  # the field scales with M_z
+                g.append(M / M0 * (1.0 + np.interp(H, table.H, chip)) - 1.0)
             out["G"] = np.stack(g, axis=1)
 
     res = minimize(_Designs(), NSGA2(pop_size=o.population), ("n_gen", o.nsga2_generations),
@@ -354,10 +391,11 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
                               "increase optimise.nsga2_generations or optimise.population")
     X = np.atleast_2d(opt.get("X"))[feasible]
     X = X[np.argsort(X[:, 0], kind="stable")]
-    H, G, tab, _, _ = evaluate(X)
-    return ParetoSet(H, G, G * tab.gamma_r_max, G * tab.gamma_z_max, G * tab.f_r_min,
+    H, G, M, tab, _, _ = evaluate(X)
+    k = G * M0 / M
+    return ParetoSet(H, G, k * tab.gamma_r_max, k * tab.gamma_z_max, G * tab.f_r_min,
                      G * tab.f_z_max, constraints, o.seed, o.nsga2_generations,
-                     int(res.algorithm.evaluator.n_eval))
+                     int(res.algorithm.evaluator.n_eval), M)
 
 
 def front_gap(pareto: ParetoSet, reduction: Reduction) -> float:
@@ -422,11 +460,14 @@ def choose(models: Responses | ModelSet, study: Study, candidates: ParetoSet | R
         obj = np.stack([candidates.Gamma_r[idx], candidates.Gamma_z[idx]], axis=1)
         k = decision_index(obj)
         H, G, index = candidates.H[idx[k]], candidates.G_star[idx[k]], int(idx[k])
+        M = None if candidates.M_z_star is None else candidates.M_z_star[index]
     else:
         index = decision_index(candidates.objectives)
         H, G = candidates.H[index], candidates.G[index]
+        M = None if candidates.M_z is None else candidates.M_z[index]
     c = candidates.constraints
-    d = per_design(models, float(H), float(G), study)
+    M = float(M) if M is not None and study.M_z_variable else None
+    d = per_design(models, float(H), float(G), study, M)
     g_r, g_z = (float(v) for v in c.margins(d.F_r_min, d.F_z_max))
     return Choice(d, index, c, g_r, g_z,
                   c.active(d.F_r_min, d.F_z_max, study.optimise.active_rtol))

@@ -133,19 +133,25 @@ class Optimisation:
     def _write_pareto(self, path: Path) -> Path:
         p = self.pareto
         g_r, g_z = self.constraints.margins(p.F_r_min, p.F_z_max)
-        rows = zip(from_si(p.H, "mm"), from_si(p.G, "kPa"), p.Gamma_r_max, p.Gamma_z_max,
-                   p.F_r_min, p.F_z_max, g_r, g_z, strict=True)
-        return _csv(path, ["H_mm", "G_kPa", "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T",
-                           "F_r_min_N", "F_z_max_N", "g_r_N", "g_z_N"], rows)
+        cols = [from_si(p.H, "mm"), from_si(p.G, "kPa"), *self._M_z(p.M_z), p.Gamma_r_max,
+                p.Gamma_z_max, p.F_r_min, p.F_z_max, g_r, g_z]
+        return _csv(path, ["H_mm", "G_kPa", *self._M_z(["M_z_A_per_m"]),
+                           "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T", "F_r_min_N",
+                           "F_z_max_N", "g_r_N", "g_z_N"], zip(*cols, strict=True))
 
     def _write_reduction(self, path: Path) -> Path:
         r = self.reduction
         t = r.table
-        rows = zip(from_si(r.H, "mm"), from_si(r.G_star, "kPa"), r.Gamma_r, r.Gamma_z,
-                   r.G_star * t.f_r_min, r.G_star * t.f_z_max, t.t_m, t.theta_m,
-                   r.front.astype(int), strict=True)
-        return _csv(path, ["H_mm", "G_star_kPa", "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T",
-                           "F_r_min_N", "F_z_max_N", "t_m", "theta_m_rad", "on_front"], rows)
+        cols = [from_si(r.H, "mm"), from_si(r.G_star, "kPa"), *self._M_z(r.M_z_star), r.Gamma_r,
+                r.Gamma_z, r.G_star * t.f_r_min, r.G_star * t.f_z_max, t.t_m, t.theta_m,
+                r.front.astype(int)]
+        return _csv(path, ["H_mm", "G_star_kPa", *self._M_z(["M_z_star_A_per_m"]),
+                           "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T", "F_r_min_N",
+                           "F_z_max_N", "t_m", "theta_m_rad", "on_front"], zip(*cols, strict=True))
+
+    def _M_z(self, column) -> list:
+        """``[column]`` where M_z is a design variable, else nothing."""
+        return [column] if self.study.M_z_variable else []
 
 
 def _csv(path: Path, header: list[str], rows) -> Path:
@@ -153,10 +159,12 @@ def _csv(path: Path, header: list[str], rows) -> Path:
 
 
 def _design_json(d: DesignResult) -> dict:
-    return {"H_mm": from_si(d.H, "mm"), "G_kPa": from_si(d.G, "kPa"),
-            "Gamma_r_max_N_per_T": d.Gamma_r_max, "Gamma_z_max_N_per_T": d.Gamma_z_max,
-            "F_r_min_N": d.F_r_min, "F_z_max_N": d.F_z_max, "t_m": d.t_m,
-            "theta_m_rad": d.theta_m, "degenerate": d.degenerate}
+    out = {"H_mm": from_si(d.H, "mm"), "G_kPa": from_si(d.G, "kPa")}
+    if d.M_z is not None:  # a design variable
+        out["M_z_A_per_m"] = from_si(d.M_z, "A_per_m")
+    return out | {"Gamma_r_max_N_per_T": d.Gamma_r_max, "Gamma_z_max_N_per_T": d.Gamma_z_max,
+                  "F_r_min_N": d.F_r_min, "F_z_max_N": d.F_z_max, "t_m": d.t_m,
+                  "theta_m_rad": d.theta_m, "degenerate": d.degenerate}
 
 
 def _choice_json(c: Choice) -> dict:

@@ -32,6 +32,10 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
 
     row("height H", lambda a: f"{mm(a.H):.3g} mm")
     row("shear modulus G", lambda a: f"{kpa(a.G):.3g} kPa")
+    if any(a.design.M_z is not None for a in answers):
+        row("magnetisation M_z (magnet grade)",
+            lambda a: "the magnet's own" if a.design.M_z is None
+            else f"{from_si(a.design.M_z, 'MA_per_m'):.3g} MA/m")
     if chip.noise is None:
         keys = " and ".join(chip.missing)
         row(f"resolution with the {chip.name}",

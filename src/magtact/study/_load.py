@@ -148,9 +148,19 @@ def _unknown(key: str, allowed, what: str) -> str:
     return f"unknown {what}{hint} Expected one of: {', '.join(allowed)}"
 
 
+#: Geometric design variables that would each need a structural path per level and, for the
+#: magnet, a field solve per geometry; not design variables yet.
+GEOMETRIC = {"R_m_mm": "magnet.R_m_mm", "H_m_mm": "magnet.H_m_mm", "R_mm": "body.R_mm"}
+
+
 def _section(name: str, default, given: dict, complete: bool, source):
     spec = {key_of(f): f for f in fields(default)}
     for key in given:
+        if name == "design" and key in GEOMETRIC:
+            raise StudyError(f"design.{key}", "is not a design variable yet: of the geometry "
+                                              "only H is; set the fixed value in "
+                                              f"{GEOMETRIC[key]} and compare studies, or make "
+                                              "M_z_A_per_m a design variable", source)
         if key not in spec:
             raise StudyError(f"{name}.{_clip(str(key))}", _unknown(str(key), spec, "key"),
                              source)
@@ -193,6 +203,8 @@ def _convert(full: str, f, value, source):
         if not (isinstance(value, list) and len(value) == 2):
             raise StudyError(full, f"expected {_expected(f)}, got {_show(value)}", source)
         lo, hi = (_number(full, f, v, source) for v in value)
+        if m["minimum"] == 0 and lo == hi == 0:  # [0, 0]: not a design variable
+            return (0.0, 0.0)
         if not lo < hi:
             raise StudyError(full, f"range out of order: low {value[0]} must be below high "
                                    f"{value[1]}", source)
@@ -247,6 +259,9 @@ def _check_consistency(s: Study, source) -> None:
     if not s.constraints.G_tolerance < 0.5:
         raise StudyError("constraints.G_tolerance", f"must be in [0, 0.5), got "
                                                     f"{s.constraints.G_tolerance:g}", source)
+    if s.design.M_z[0] == 0 < s.design.M_z[1]:
+        raise StudyError("design.M_z_A_per_m", "must be [0, 0] (fixed at magnet.M_z_A_per_m) "
+                                               "or a positive range", source)
     if mg.R_m >= b.R:
         raise StudyError("magnet.R_m_mm", f"the magnet ({_mm(mg.R_m)} mm radius) must be narrower "
                                           f"than the body (body.R_mm = {_mm(b.R)})", source)

@@ -96,10 +96,15 @@ class Material:
 
 @dataclass(frozen=True)
 class Design:
-    """Design space (H, G) and the original design of the published sensor."""
+    """Design space (H, G and, optionally, M_z) and the original design of the published
+    sensor (docs/method.md §7)."""
 
     H: tuple[float, float] = setting((3e-3, 7e-3), "mm", positive=True, doc="range of H")
     G: tuple[float, float] = setting((10e3, 50e3), "kPa", positive=True, doc="range of G")
+    M_z: tuple[float, float] = setting((0.0, 0.0), "A_per_m", minimum=0.0, bounds=(1e3, 1e7),
+                                       doc="range of the magnetisation M_z (the magnet's "
+                                           "grade) as a design variable; [0, 0]: fixed at "
+                                           "magnet.M_z")
     H_original: float = setting(3e-3, "mm", positive=True, doc="H of the original sensor")
     G_original: float = setting(29.4e3, "kPa", positive=True, doc="G of the original sensor")
 
@@ -295,6 +300,17 @@ class Study:
     sensitivity: Sensitivity = field(default_factory=Sensitivity)
     hall: Hall = field(default_factory=Hall)
     optimise: Optimise = field(default_factory=Optimise)
+
+    # ---- design variables --------------------------------------------------------------------
+    @property
+    def M_z_variable(self) -> bool:
+        """Whether the magnetisation is a design variable (``[design] M_z_A_per_m``)."""
+        return self.design.M_z[1] > 0
+
+    @property
+    def M_z_bounds(self) -> tuple[float, float]:
+        """Range of M_z [A/m]: the design range, or the magnet's own M_z at both ends."""
+        return self.design.M_z if self.M_z_variable else (self.magnet.M_z, self.magnet.M_z)
 
     # ---- DOE levels (SI) -------------------------------------------------------------------
     @property
