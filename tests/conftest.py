@@ -187,3 +187,15 @@ def synthetic_models(f_r=None) -> ModelSet:
         "f_r": f_r_default if f_r is None else f_r,
         "f_z": K_Z * (ps**2 + ps / 2 + 3 * qs**2 / 10),
     })
+
+
+#: The original MagOne design (H [m], G [Pa]).
+H_ORIGINAL, G_ORIGINAL = 3e-3, 29.4e3
+
+
+@pytest.fixture(scope="session")
+def shipped_models():
+    """The metamodels shipped for the bundled MagOne data set."""
+    from magtact.metamodel import load_models, prefitted_dir
+
+    return load_models(prefitted_dir())

@@ -8,7 +8,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from magtact.metamodel import ExactField, ModelSet, load_models, prefitted_dir
+from conftest import G_ORIGINAL, H_ORIGINAL
+from magtact.metamodel import ExactField, ModelSet
 from magtact.optimise import (
     as_responses,
     best_magnetisation,
@@ -24,12 +25,12 @@ from magtact.optimise import (
 from magtact.sensitivity import gamma
 from magtact.study import StudyError, load_study, study_from_dict
 
-H0, G0 = 3e-3, 29.4e3
+H0, G0 = H_ORIGINAL, G_ORIGINAL
 
 
 @pytest.fixture(scope="module")
-def models():
-    return load_models(prefitted_dir())
+def models(shipped_models):
+    return shipped_models
 
 
 @pytest.fixture(scope="module")

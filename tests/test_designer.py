@@ -7,17 +7,17 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from conftest import G_ORIGINAL, H_ORIGINAL
 from magtact.designer import answer, hall_chip
-from magtact.metamodel import load_models, prefitted_dir
 from magtact.sensitivity import dF_dB, force_noise, gamma
 from magtact.study import StudyError, load_study, study_from_dict
 
-H0, G0 = 3e-3, 29.4e3
+H0, G0 = H_ORIGINAL, G_ORIGINAL
 
 
 @pytest.fixture(scope="module")
-def models():
-    return load_models(prefitted_dir())
+def models(shipped_models):
+    return shipped_models
 
 
 @pytest.fixture(scope="module")
