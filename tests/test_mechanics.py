@@ -95,6 +95,23 @@ def test_uniaxial_compression_matches_closed_form():
     assert 2 * out["upper"][-1, 2] == pytest.approx(-F_z, rel=1e-6)
 
 
+@pytest.mark.parametrize("mu", [0.1, 0.2])
+def test_a_block_dragged_over_a_plate_slides_at_the_coulomb_limit(mu):
+    """Cylinder clamped at its base, pressed by 20 % with the upper plate, which is then pulled
+    sideways by 0.6 h: once the whole top face slides, F_x / F_z on the plate is μ_f."""
+    R, h, G = 6e-3, 6e-3, 10e3
+    model = HalfBodyModel(half_cylinder_mesh(R, h, R_h=1e-3, density="coarse"), G, 5000.0, mu)
+
+    def path(t):  # press (t ≤ 1/2), then drag (t > 1/2)
+        return 0.6 * h * max(2 * t - 1, 0.0), -0.2 * h * min(2 * t, 1.0)
+
+    out = model.solve_path(path, [0.5, 0.6, 1.0])
+    F = out["upper"]
+    assert abs(F[0, 0]) < 1e-9 * abs(F[0, 2])  # pressing alone: no drag
+    assert abs(F[1, 0] / F[1, 2]) < 0.9 * mu  # early in the drag the top face still sticks
+    assert abs(F[-1, 0] / F[-1, 2]) == pytest.approx(mu, rel=0.01)
+
+
 # ---- G-scaling ------------------------------------------------------------------------------
 def test_forces_scale_with_G(study):
     s = _with(study, "mechanics", scale_in_G=False, mesh="coarse")
