@@ -283,9 +283,8 @@ def best_magnetisation(study: Study, table: HeightTable) -> np.ndarray:
     M = np.full(table.H.shape, float(hi))
     if study.constraints.chip_range:
         m0 = chip_margin(study, table.H, table.t_m, table.theta_m)
-        cap = study.magnet.M_z / (1.0 + m0)
-        # a range fixed at M_z,0 keeps its own value where the chip reads it
-        M = np.where(m0 <= 0, M, np.minimum(M, cap)) if lo == hi else np.minimum(M, cap)
+        # at a fixed M_z,0 (lo = hi) this keeps exactly the heights with m_0 ≤ 0
+        M = np.minimum(M, study.magnet.M_z / (1.0 + m0))
         M = np.where(M >= lo, M, np.nan)
     return M
 
