@@ -73,6 +73,31 @@ def test_named_densities_are_the_study_choices_and_grow_in_cells(study):
     assert cells == sorted(cells) and len(set(cells)) == len(cells)
 
 
+def test_triquadratic_mesh_has_the_trilinear_corners_and_its_mid_nodes_on_the_surfaces(study):
+    """The 27-node mesh adds nodes to the same cells: its first points and cell corners are the
+    8-node mesh's; its cavity nodes near the magnet's edge all lie on the fillet circle."""
+    H = 3e-3
+    q1, q2 = body_mesh(study, H, "coarse"), body_mesh(study, H, "coarse", order=2)
+    assert (q1.order, q2.order, q2.cells.shape[1]) == (1, 2, 27)
+    assert q2.n_corners == q1.n_points and q1.n_corners == q1.n_points
+    np.testing.assert_array_equal(q2.cells[:, :8], q1.cells)
+    np.testing.assert_allclose(q2.points[: q1.n_points], q1.points, rtol=0, atol=1e-15)
+    assert q2.volume() == pytest.approx(q1.volume(), rel=1e-12)
+    for name in ("surface", "cavity", "base", "symmetry"):  # the node sets grow
+        small, large = getattr(q1, name), getattr(q2, name)
+        assert np.isin(small, large).all() and len(large) > len(small)
+    # fillet of radius ρ at the magnet's lower edge (r = R_m, z = z_low), in the (r, z) plane
+    rho, (z_low, _) = study.mechanics.magnet_edge_radius, magnet_span(study, H)
+    alpha = math.pi / (4 * 3)  # the coarse mesh's segment angle: equal-area radius of R_m
+    c_r = study.magnet.R_m * math.sqrt(alpha / math.sin(alpha)) - rho
+    p = q2.points[q2.cavity]
+    r, z = np.hypot(p[:, 0], p[:, 1]), p[:, 2]
+    on_fillet = (r > c_r + 1e-12) & (z < z_low + rho - 1e-12)
+    assert on_fillet.sum() > np.isin(q1.cavity, q2.cavity[on_fillet]).sum() > 0
+    np.testing.assert_allclose(np.hypot(r[on_fillet] - c_r, z[on_fillet] - z_low - rho), rho,
+                               rtol=1e-9)
+
+
 def test_mesh_bad_inputs(study):
     with pytest.raises(ValueError, match="unknown mesh density 'medium'"):
         body_mesh(study, 3e-3, "medium")
@@ -80,6 +105,8 @@ def test_mesh_bad_inputs(study):
         half_cylinder_mesh(6e-3, 5e-3, R_h=1e-3, cavity=(5.5e-3, 1e-3, 2e-3))
     with pytest.raises(ValueError, match="edge radius"):
         half_cylinder_mesh(6e-3, 5e-3, R_h=6e-3)
+    with pytest.raises(ValueError, match="order must be 1 or 2, got 3"):
+        half_cylinder_mesh(6e-3, 5e-3, order=3)
 
 
 # ---- closed form ----------------------------------------------------------------------------
@@ -92,6 +119,21 @@ def test_uniaxial_compression_matches_closed_form():
     F_z = 2 * out["lower"][-1, 2]
     assert F_z == pytest.approx(G * math.pi * R**2 * (lam**-2 - lam), rel=0.01)
     # the upper plate carries the same force downwards
+    assert 2 * out["upper"][-1, 2] == pytest.approx(-F_z, rel=1e-6)
+
+
+@pytest.mark.slow
+def test_uniaxial_compression_with_27_node_cells_matches_closed_form():
+    """The same closed form with triquadratic hexahedra (contact on the mid-side nodes too)."""
+    R, h, G, lam = 6e-3, 6e-3, 10e3, 0.9
+    model = HalfBodyModel(half_cylinder_mesh(R, h, density="coarse", order=2), G, 5000.0, 0.0,
+                          base="sliding")
+    from magtact.mechanics._model import Stepping
+
+    out = model.solve_path(lambda t: (0.0, -(1 - lam) * h * t), [1.0],
+                           stepping=Stepping(dt_initial=1.0, dt_max=1.0))
+    F_z = 2 * out["lower"][-1, 2]
+    assert F_z == pytest.approx(G * math.pi * R**2 * (lam**-2 - lam), rel=1e-3)
     assert 2 * out["upper"][-1, 2] == pytest.approx(-F_z, rel=1e-6)
 
 

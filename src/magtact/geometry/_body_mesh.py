@@ -67,8 +67,10 @@ class BodyMesh:
     ----------
     points : (n_points, 3) ndarray
         Node coordinates [m]; base at z = 0, axis x = y = 0.
-    cells : (n_cells, 8) ndarray of int
-        Hexahedra, VTK node order, positive volume.
+    cells : (n_cells, 8) or (n_cells, 27) ndarray of int
+        Hexahedra, VTK node order, positive volume: trilinear (8 nodes) or triquadratic
+        (27 nodes; the corner nodes are numbered before the mid-edge, mid-face and mid-cell
+        nodes, so the first ``n_corners`` points carry a trilinear field of the same cells).
     base, symmetry, cavity, surface : ndarray of int
         Node indices on the base z = 0; on the symmetry plane y = 0; on the magnet's cavity
         surface (empty without a magnet); on the free outer surface (side, rounded edge and top
@@ -89,6 +91,16 @@ class BodyMesh:
     name: str
 
     @property
+    def order(self) -> int:
+        """Polynomial order of the cells: 1 (8 nodes) or 2 (27 nodes)."""
+        return 1 if self.cells.shape[1] == 8 else 2
+
+    @property
+    def n_corners(self) -> int:
+        """Number of cell-corner nodes (numbered first)."""
+        return int(self.cells[:, :8].max()) + 1
+
+    @property
     def n_points(self) -> int:
         """Number of nodes."""
         return len(self.points)
@@ -100,10 +112,10 @@ class BodyMesh:
 
     def volume(self) -> float:
         """Volume of the half body [m³] (sum of the trilinear cell volumes)."""
-        return float(np.sum(_cell_volumes(self.points, self.cells)))
+        return float(np.sum(_cell_volumes(self.points, self.cells[:, :8])))
 
 
-def body_mesh(study: Study, H: float, mesh: str | None = None) -> BodyMesh:
+def body_mesh(study: Study, H: float, mesh: str | None = None, order: int = 1) -> BodyMesh:
     """Hexahedral mesh of the half sensor body y ≥ 0 for the base height ``H`` [m].
 
     Parameters
@@ -114,6 +126,8 @@ def body_mesh(study: Study, H: float, mesh: str | None = None) -> BodyMesh:
         Base height [m]; the body is a cylinder of radius R and height H + H_g.
     mesh : {"coarse", "default", "accurate", "fine"} or None
         Mesh density; ``None`` takes ``study.mechanics.mesh``.
+    order : {1, 2}
+        Trilinear (8-node) or triquadratic (27-node) hexahedra on the same cells.
 
     Returns
     -------
@@ -130,6 +144,7 @@ def body_mesh(study: Study, H: float, mesh: str | None = None) -> BodyMesh:
         cavity=(study.magnet.R_m, z_low, z_high),
         density=name,
         edge_radius=study.mechanics.magnet_edge_radius,
+        order=order,
     )
 
 
@@ -142,6 +157,7 @@ def half_cylinder_mesh(
     density: str = "default",
     r_ring: float | None = None,
     edge_radius: float = 0.0,
+    order: int = 1,
 ) -> BodyMesh:
     """Hexahedral mesh of a half cylinder y ≥ 0 with a rounded top edge and an optional cavity.
 
@@ -162,11 +178,18 @@ def half_cylinder_mesh(
     edge_radius : float
         Radius [m] of the rounded lower edge of the cavity (0: sharp). The cavity nodes within
         ``edge_radius`` of the edge are projected onto the quarter circle of that radius.
+    order : {1, 2}
+        1: trilinear hexahedra; 2: triquadratic (27-node) hexahedra with the same corners.
+        The mid-edge, mid-face and mid-cell nodes are added to the straight extruded blocks
+        and then go through the same maps as the corners (rounded edges), so they lie on the
+        curved surfaces.
 
     Returns
     -------
     BodyMesh
     """
+    if order not in (1, 2):
+        raise ValueError(f"order must be 1 or 2, got {order!r}")
     if density not in DENSITIES:
         raise ValueError(f"unknown mesh density {density!r}; choose one of {sorted(DENSITIES)}")
     if not (R > 0 and height > 0):
@@ -193,6 +216,8 @@ def half_cylinder_mesh(
     xy, quads = _half_disc(radii, n_radial, dens)
     z_levels = _z_levels(height, R_h, cavity, dens)
     points, cells = _extrude(xy, quads, z_levels)
+    if order == 2:
+        points, cells = _triquadratic(points, cells)
 
     # round the top outer edge: elliptical map of the corner square onto the quarter disc
     if R_h > 0:
@@ -213,11 +238,12 @@ def half_cylinder_mesh(
     # remove the magnet's cells
     tol = 1e-9 * height
     if cavity is not None:
-        centre = points[cells].mean(axis=1)
+        centre = points[cells[:, :8]].mean(axis=1)
         rho_c = np.hypot(centre[:, 0], centre[:, 1])
         inside = (rho_c < r1) & (centre[:, 2] > z_low) & (centre[:, 2] < z_high)
         cells = cells[~inside]
-        used = np.unique(cells)
+        corners, used = np.unique(cells[:, :8]), np.unique(cells)
+        used = np.concatenate([corners, np.setdiff1d(used, corners)])  # corners first
         renumber = np.full(len(points), -1)
         renumber[used] = np.arange(len(used))
         points, cells = points[used], renumber[cells]
@@ -376,6 +402,15 @@ def _extrude(xy: np.ndarray, quads: np.ndarray, z: np.ndarray) -> tuple[np.ndarr
     return points, cells
 
 
+def _triquadratic(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """27-node hexahedra from trilinear ones (FElupe's conversion: new nodes appended)."""
+    import felupe as fem
+
+    points, cells, _ = fem.mesh.convert(points, cells, "hexahedron", order=2,
+                                        calc_midfaces=True, calc_midvolumes=True)
+    return np.asarray(points, dtype=float), np.asarray(cells)
+
+
 def _cell_volumes(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """Volumes of trilinear hexahedra by 2×2×2 Gauss quadrature [m³]."""
     g = 1 / math.sqrt(3)
@@ -393,15 +428,26 @@ def _cell_volumes(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
     return vol
 
 
-_FACES = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6],
-                   [3, 0, 4, 7]])
+def _face_nodes(n_nodes: int) -> np.ndarray:
+    """Local node numbers of the 6 faces of an 8- or 27-node hexahedron (VTK order), corners
+    first: the nodes whose reference coordinate along one axis is −1 or +1."""
+    from felupe.element import Hexahedron, TriQuadraticHexahedron
+
+    ref = (Hexahedron if n_nodes == 8 else TriQuadraticHexahedron)().points
+    faces = []
+    for axis in range(3):
+        for side in (-1.0, 1.0):
+            on = np.flatnonzero(ref[:, axis] == side)
+            faces.append(np.concatenate([on[on < 8], on[on >= 8]]))
+    return np.array(faces)
 
 
 def _outer_surface(points: np.ndarray, cells: np.ndarray, tol: float,
                    exclude: np.ndarray) -> np.ndarray:
     """Nodes of the boundary faces not on the symmetry plane y = 0, without ``exclude``."""
-    faces = cells[:, _FACES].reshape(-1, 4)
-    key = np.sort(faces, axis=1)
+    local = _face_nodes(cells.shape[1])
+    faces = cells[:, local].reshape(-1, local.shape[1])
+    key = np.sort(faces[:, :4], axis=1)
     _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
     boundary = faces[counts[inverse.ravel()] == 1]
     on_symmetry = np.all(np.abs(points[boundary, 1]) < tol, axis=1)

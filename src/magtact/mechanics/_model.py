@@ -183,8 +183,10 @@ class HalfBodyModel:
     Notes
     -----
     Material: the isochoric neo-Hookean energy W = G/2 (J^(-2/3) I_1 − 3) with a volumetric
-    penalty K/2 (J̄ − 1)², K = bulk_ratio · G, in FElupe's ``SolidBodyNearlyIncompressible``
-    (Q1/P0 hexahedra with the pressure and the volume ratio condensed per cell).
+    penalty K/2 (J̄ − 1)², K = bulk_ratio · G, in FElupe's ``SolidBodyNearlyIncompressible``:
+    the pressure and the volume ratio are constant per cell and condensed, on trilinear (Q1/P0)
+    or, for a mesh of 27-node cells, triquadratic (Q2/P0) hexahedra. Contact acts on every
+    node of the outer surface, mid-edge and mid-face nodes included.
     """
 
     def __init__(self, bmesh: BodyMesh, G: float, bulk_ratio: float, mu_f: float, *,
@@ -198,10 +200,12 @@ class HalfBodyModel:
         self._linear = _linear_solver(solver, threads)
 
         n = bmesh.n_points
-        mesh = fem.Mesh(bmesh.points.copy(), bmesh.cells.copy(), "hexahedron")
+        quadratic = bmesh.order == 2
+        mesh = fem.Mesh(bmesh.points.copy(), bmesh.cells.copy(),
+                        "hexahedron27" if quadratic else "hexahedron")
         mesh.update(points=np.vstack([mesh.points, [[0.0, 0.0, 0.0], [0.0, 0.0, bmesh.z_top]]]))
         self.lower, self.upper = n, n + 1
-        region = fem.RegionHexahedron(mesh)
+        region = (fem.RegionTriQuadraticHexahedron if quadratic else fem.RegionHexahedron)(mesh)
         self.field = fem.FieldContainer([fem.Field(region, dim=3)])
         self.solid = fem.SolidBodyNearlyIncompressible(
             fem.NeoHooke(mu=self.G), self.field, bulk=bulk_ratio * self.G)

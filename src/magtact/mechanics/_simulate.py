@@ -26,10 +26,12 @@ def stepping_of(study: Study) -> Stepping:
 def build_model(study: Study, H: float, *, G: float | None = None,
                 mesh: str | None = None) -> HalfBodyModel:
     """The FElupe half-body model of ``study`` for base height ``H`` [m] and shear modulus
-    ``G`` [Pa] (default ``study.material.G_ref``)."""
+    ``G`` [Pa] (default ``study.material.G_ref``), with the hexahedra of
+    ``study.mechanics.element``."""
     m = study.mechanics
+    order = 2 if m.element == "hex27" else 1
     return HalfBodyModel(
-        body_mesh(study, H, mesh), study.material.G_ref if G is None else G,
+        body_mesh(study, H, mesh, order=order), study.material.G_ref if G is None else G,
         study.material.bulk_ratio, study.loading.mu_f, penalty=m.contact_penalty,
         elastic_slip=m.elastic_slip, solver=m.solver, threads=m.threads,
     )

@@ -1,0 +1,288 @@
+"""The error–cost frontier of the structural forces: discretisations measured against each other.
+
+For θ = θ_max and H = 3 and 7 mm, every route gives F_z(t = 1) and min F_r over t on a sequence
+of meshes; a point of the frontier is one mesh of one route: its wall time per path (one core)
+and the relative change of its forces against the next finer mesh of the same route.
+
+Routes:
+
+- ``hex8``: trilinear Q1/P0 hexahedra (the default) on the ``coarse``, ``default``,
+  ``default_x1.5`` and ``fine`` meshes (refinement 2, 1.5 and 2 per direction from ``coarse``).
+  The ``default``, ``default_x1.5`` and ``fine`` paths are those of
+  ``bench/bench_mechanics.py --part convergence`` and ``--part order``; ``coarse`` runs here.
+- ``hex27``: triquadratic Q2/P0 hexahedra (``mechanics.element = "hex27"``) on
+  ``coarse_x0.67``, ``coarse`` and ``coarse_x1.5`` (refinement 1.5 per direction; the two
+  densities exist only in this benchmark).
+- ``richardson``: hex8 forces extrapolated from a pair of meshes with the observed order 1,
+  F ≈ (r F(h/r) − F(h)) / (r − 1); its cost is that of both meshes, its change is against the
+  extrapolation of the next finer pair.
+- ``multi-fidelity``: the 25 default-mesh DOE paths corrected by a relation to a finer mesh
+  fitted on 5 of them (corners and centre of the (θ, H) grid; bilinear in θ and H at every t),
+  checked on the other 20 against the finer mesh (``bench/results/doe_accurate.nc``); its
+  cost is the default path plus a fifth of a finer path.
+
+    python bench/bench_frontier.py run --route hex27 --mesh coarse --H 3   # one path (minutes)
+    python bench/bench_frontier.py assemble                               # JSON and figure
+
+``run`` adds its record to ``bench/results/frontier_runs.json``; ``assemble`` writes
+``bench/results/frontier.json`` and ``frontier.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from magtact.geometry._body_mesh import _GRADING, DENSITIES
+
+RESULTS = Path(__file__).parent / "results"
+RUNS = RESULTS / "frontier_runs.json"
+#: Densities of this benchmark only: the coarse mesh with 2/3 and 1.5 times its cells per
+#: direction (counts rounded).
+DENSITIES.setdefault("coarse_x0.67", {"m": 2, "radial": (1, 2, 1), "h_z": 1.8e-3,
+                                      "n_corner": 1} | _GRADING)
+DENSITIES.setdefault("coarse_x1.5", {"m": 5, "radial": (3, 5, 3), "h_z": 0.8e-3,
+                                     "n_corner": 3} | _GRADING)
+#: Mesh sequence of each route, coarse to fine, with the refinement to the next mesh.
+SEQUENCES = {
+    "hex8": [("coarse", 2.0), ("default", 2.0), ("fine", None)],
+    "hex27": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
+}
+
+
+def _load_runs() -> list[dict]:
+    return json.loads(RUNS.read_text()) if RUNS.is_file() else []
+
+
+def _save(path: Path, data) -> None:
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(data, indent=1))
+    os.replace(tmp, path)
+
+
+def run(route: str, mesh: str, H_mm: float) -> dict:
+    """Solve one path at θ_max and add its record to ``frontier_runs.json``."""
+    from dataclasses import replace
+
+    from magtact.mechanics import PathFailed, simulate_path
+    from magtact.study import load_study
+
+    study = load_study("magone")
+    study = replace(study, mechanics=replace(study.mechanics, element=route, threads=1))
+    rec = {"route": route, "mesh": mesh, "H_mm": H_mm, "theta_rad": study.loading.theta_max,
+           "machine": {"platform": platform.platform(), "load_average_at_start":
+                       os.getloadavg()}}
+    t0 = time.perf_counter()
+    try:
+        r = simulate_path(study, H_mm * 1e-3, study.loading.theta_max, mesh=mesh)
+        rec |= {"completed": True, "wall_time_s": round(r.wall_time, 2), "n_dofs": r.n_dofs,
+                "n_cells": r.n_cells, "steps": r.steps, "jacobians": r.jacobians,
+                "newton_iterations": r.newton_iterations,
+                "timings_s": {k: round(v, 2) for k, v in r.timings.items()},
+                "F_z_t1_N": float(r.F_z[-1]), "F_r_min_N": float(np.min(r.F_r))}
+    except PathFailed as exc:
+        rec |= {"completed": False, "error": str(exc),
+                "wall_time_s": round(time.perf_counter() - t0, 2)}
+    runs = [r for r in _load_runs()
+            if (r["route"], r["mesh"], r["H_mm"]) != (route, mesh, H_mm)] + [rec]
+    _save(RUNS, runs)
+    return rec
+
+
+def _convergence_records() -> list[dict]:
+    """The hex8 paths of the mechanics benchmark (default, default_x1.5, fine)."""
+    out = []
+    for h in (3, 7):
+        f = RESULTS / f"mechanics_convergence_H{h}.json"
+        if f.is_file():
+            for mesh in ("default", "fine"):
+                rec = json.loads(f.read_text())["cases"][0].get(mesh)
+                if rec and rec.get("completed"):
+                    out.append(rec | {"route": "hex8"})
+    f = RESULTS / "mechanics_order.json"
+    if f.is_file():
+        out += [c | {"route": "hex8"} for c in json.loads(f.read_text())["cases"]
+                if c.get("completed")]
+    return out
+
+
+def _change(a: float, b: float) -> float:
+    return abs(a / b - 1)
+
+
+def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
+    """Frontier points of the mesh routes and of Richardson extrapolation, and observed orders."""
+    by = {(r["route"], r["mesh"], r["H_mm"]): r for r in records if r.get("completed")}
+    points, orders = [], []
+    for route, seq in SEQUENCES.items():
+        for H in (3.0, 7.0):
+            for (mesh, ratio), (finer, _) in zip(seq[:-1], seq[1:], strict=True):
+                a, b = by.get((route, mesh, H)), by.get((route, finer, H))
+                if a and b:
+                    points.append({
+                        "route": route, "mesh": mesh, "next": finer, "refinement": ratio,
+                        "H_mm": H, "wall_time_s": a["wall_time_s"], "n_dofs": a["n_dofs"],
+                        "F_z_t1_N": a["F_z_t1_N"], "F_r_min_N": a["F_r_min_N"],
+                        "change_F_z_t1": _change(a["F_z_t1_N"], b["F_z_t1_N"]),
+                        "change_F_r_min": _change(a["F_r_min_N"], b["F_r_min_N"])})
+            trio = [by.get((route, m, H)) for m, _ in seq]
+            if all(trio):
+                r = seq[0][1]
+                rec = {"route": route, "H_mm": H, "meshes": [m for m, _ in seq]}
+                for key in ("F_z_t1_N", "F_r_min_N"):
+                    f1, f2, f3 = (t[key] for t in trio)
+                    q = (f1 - f2) / (f2 - f3)
+                    rec[f"order_{key[:-2]}"] = float(np.log(q) / np.log(r)) if q > 0 else None
+                orders.append(rec)
+    # Richardson (order 1) on consecutive hex8 pairs of the same refinement
+    for H in (3.0, 7.0):
+        pairs = [("coarse", "default", 2.0), ("default", "fine", 2.0),
+                 ("default", "default_x1.5", 1.5)]
+        ext = {}
+        for lo, hi, r in pairs:
+            a, b = by.get(("hex8", lo, H)), by.get(("hex8", hi, H))
+            if a and b:
+                ext[(lo, hi)] = {k: (r * b[k] - a[k]) / (r - 1) for k in ("F_z_t1_N", "F_r_min_N")}
+                ext[(lo, hi)]["wall_time_s"] = a["wall_time_s"] + b["wall_time_s"]
+        for coarse_pair, fine_pair in ((("coarse", "default"), ("default", "fine")),):
+            if coarse_pair in ext and fine_pair in ext:
+                e, f = ext[coarse_pair], ext[fine_pair]
+                points.append({
+                    "route": "richardson", "mesh": "+".join(coarse_pair),
+                    "next": "+".join(fine_pair), "refinement": 2.0, "H_mm": H,
+                    "wall_time_s": e["wall_time_s"], "F_z_t1_N": e["F_z_t1_N"],
+                    "F_r_min_N": e["F_r_min_N"],
+                    "change_F_z_t1": _change(e["F_z_t1_N"], f["F_z_t1_N"]),
+                    "change_F_r_min": _change(e["F_r_min_N"], f["F_r_min_N"])})
+        if ("default", "fine") in ext and ("default", "default_x1.5") in ext:
+            orders.append({"route": "richardson", "H_mm": H, "limit_from_default_fine":
+                           ext[("default", "fine")], "limit_from_default_x1.5":
+                           ext[("default", "default_x1.5")]})
+    return points, orders
+
+
+def _multi_fidelity(n_fit_paths: int = 5) -> dict | None:
+    """Correct the 25 default DOE paths with a relation fitted on 5 paths of the finer DOE."""
+    from magtact.doe import load_bundled, load_dataset
+
+    finer = RESULTS / "doe_accurate.nc"
+    if not finer.is_file():
+        return None
+    lo, hi = load_bundled(), load_dataset(finer)
+
+    def arr(ds, k):
+        return ds[k].transpose("t", "theta", "H", "G").values[..., 0]
+
+    th, H = lo.theta.values, lo.H.values
+    grid = [(i, j) for i in range(len(th)) for j in range(len(H))]
+    fit = [(0, 0), (0, len(H) - 1), (len(th) - 1, 0), (len(th) - 1, len(H) - 1),
+           (len(th) // 2, len(H) // 2)][:n_fit_paths]
+    check = [g for g in grid if g not in fit]
+
+    def basis(ix):
+        return np.array([[1.0, th[i], H[j], th[i] * H[j]] for i, j in ix])
+
+    Fz_lo = arr(lo, "F_z")
+    out = {"fit_paths": len(fit), "check_paths": len(check), "finer_mesh": "accurate"}
+    for name in ("F_z", "F_r"):
+        f_lo, f_hi = arr(lo, name), arr(hi, name)
+        corrected = np.empty_like(f_lo)
+        for k in range(f_lo.shape[0]):  # the change relative to |F_z|, bilinear in (θ, H)
+            scale = np.maximum(np.abs(Fz_lo[k]), 1e-12)
+            y = np.array([(f_hi[k, i, j] - f_lo[k, i, j]) / scale[i, j] for i, j in fit])
+            c, *_ = np.linalg.lstsq(basis(fit), y, rcond=None)
+            corrected[k] = f_lo[k] + (basis(grid) @ c).reshape(f_lo.shape[1:]) * scale
+        if name == "F_z":
+            raw = [_change(f_lo[-1, i, j], f_hi[-1, i, j]) for i, j in check]
+            new = [_change(corrected[-1, i, j], f_hi[-1, i, j]) for i, j in check]
+            key = "F_z_t1"
+        else:
+            sheared = [(i, j) for i, j in check if th[i] > 0]
+            raw = [_change(f_lo[:, i, j].min(), f_hi[:, i, j].min()) for i, j in sheared]
+            new = [_change(corrected[:, i, j].min(), f_hi[:, i, j].min()) for i, j in sheared]
+            key = "F_r_min"
+        out[f"change_{key}_uncorrected_max"] = float(max(raw))
+        out[f"change_{key}_corrected_max"] = float(max(new))
+        out[f"change_{key}_corrected_median"] = float(np.median(new))
+    jobs = {k: json.loads(ds.attrs["jobs"]) for k, ds in (("default", lo), ("finer", hi))}
+    t_lo = float(np.mean([j["wall_time"] for j in jobs["default"]]))
+    t_hi = float(np.mean([j["wall_time"] for j in jobs["finer"]]))
+    out |= {"wall_time_default_s": t_lo, "wall_time_finer_s": t_hi,
+            "wall_time_s": t_lo + len(fit) / len(grid) * t_hi}
+    return out
+
+
+def assemble() -> dict:
+    runs = _load_runs()
+    records = _convergence_records() + runs
+    points, orders = _mesh_points(records)
+    mf = _multi_fidelity()
+    if mf is not None:
+        points.append({"route": "multi-fidelity", "mesh": "default + 5 accurate paths",
+                       "next": "accurate", "H_mm": "all 25 DOE paths",
+                       "wall_time_s": mf["wall_time_s"],
+                       "change_F_z_t1": mf["change_F_z_t1_corrected_max"],
+                       "change_F_r_min": mf["change_F_r_min_corrected_max"]})
+    data = {"points": points, "orders": orders, "multi_fidelity": mf,
+            "failed_runs": [r for r in runs if not r.get("completed")],
+            "target": {"change_F_z_t1": 0.01, "change_F_r_min": 0.02,
+                       "doe_minutes_2_workers": 15, "seconds_per_path": 15 * 60 * 2 / 25}}
+    _save(RESULTS / "frontier.json", data)
+    _figure(data, RESULTS / "frontier.png")
+    return data
+
+
+def _figure(data: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharex=True)
+    style = {"hex8": ("o", "C0"), "hex27": ("s", "C1"), "richardson": ("^", "C2"),
+             "multi-fidelity": ("D", "C3")}
+    for ax, key, target in zip(axes, ("change_F_z_t1", "change_F_r_min"), (0.01, 0.02),
+                               strict=True):
+        for route, (marker, colour) in style.items():
+            pts = [p for p in data["points"] if p["route"] == route]
+            for H, fill in ((3.0, colour), (7.0, "none"), ("all 25 DOE paths", colour)):
+                sel = [p for p in pts if p["H_mm"] == H]
+                if sel:
+                    ax.loglog([p["wall_time_s"] for p in sel], [100 * p[key] for p in sel],
+                              marker, color=colour, mfc=fill, linestyle="-",
+                              label=f"{route}, H = {H:g} mm" if H in (3.0, 7.0) else route)
+        ax.axhline(100 * target, color="k", lw=0.8, ls="--")
+        ax.axvline(data["target"]["seconds_per_path"], color="grey", lw=0.8, ls=":")
+        ax.set_xlabel("wall time per path on one core [s]")
+        ax.set_ylabel(f"change of {'F_z(t = 1)' if key.endswith('t1') else 'min F_r'} "
+                      "against the next finer mesh [%]")
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Error–cost frontier of the structural forces (θ = θ_max)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("--route", choices=("hex8", "hex27"), required=True)
+    r.add_argument("--mesh", required=True)
+    r.add_argument("--H", type=float, required=True, help="base height [mm]")
+    sub.add_parser("assemble")
+    args = ap.parse_args()
+    if args.cmd == "run":
+        print(json.dumps(run(args.route, args.mesh, args.H)))
+    else:
+        print(json.dumps(assemble(), indent=1)[:4000])
+
+
+if __name__ == "__main__":
+    main()
