@@ -233,6 +233,54 @@ def mesh_effect_section(r: Results) -> list[str]:
     return out
 
 
+def frontier_section(r: Results) -> list[str]:
+    if "frontier" not in r.files:
+        return []
+    f = r["frontier"]
+    tgt = f["target"]
+    out = ["## Error–cost frontier of the structural forces", "",
+           f"Source: {r.source('frontier')} (`bench/bench_frontier.py`), figure "
+           "`bench/results/frontier.png`. θ = θ_max; each row is one mesh of one route: its "
+           "wall time per path on one core and the change of its forces against the next finer "
+           "mesh of the same route (refinement per direction in the last column). Target: "
+           f"{pct(tgt['change_F_z_t1'], 0)} in F_z(t = 1), {pct(tgt['change_F_r_min'], 0)} in "
+           f"min F_r, at most {tgt['seconds_per_path']:.0f} s per path (25 paths on 2 workers "
+           f"in {tgt['doe_minutes_2_workers']} min).", ""]
+    rows = []
+    for p in f["points"]:
+        H = f"{p['H_mm']:g}" if isinstance(p["H_mm"], float) else p["H_mm"]
+        rows.append([p["route"], p["mesh"], H, f"{p['wall_time_s']:.0f}",
+                     pct(p["change_F_z_t1"], 2), pct(p["change_F_r_min"], 2),
+                     f"{p['next']} ({p['refinement']:g})" if "refinement" in p else p["next"]])
+    out += table(["route", "mesh", "H [mm]", "s per path", "ΔF_z(t=1)", "Δ min F_r",
+                  "against"], rows)
+    for o in f["orders"]:
+        if "order_F_z_t1" in o:
+            oz, orr = o["order_F_z_t1"], o["order_F_r_min"]
+            out.append(f"Observed order, {o['route']}, H = {o['H_mm']:g} mm "
+                       f"({' → '.join(o['meshes'])}): F_z(t = 1) "
+                       f"{'none' if oz is None else f'{oz:.2f}'}, min F_r "
+                       f"{'none' if orr is None else f'{orr:.2f}'}.")
+            out.append("")
+    limits = [o for o in f["orders"] if "vs_limit" in o]
+    if limits:
+        out += ["Against the converged value: the hex8 forces extrapolated with order 1 from the "
+                "`default` and `fine` meshes, F = 2 F_fine − F_default (the `default` and "
+                "`default_x1.5` pair gives the same limit within "
+                + ", ".join(pct(abs(o["limit_from_default_x1.5"]["F_z_t1_N"]
+                                    / o["limit_from_default_fine"]["F_z_t1_N"] - 1), 2)
+                            + f" at H = {o['H_mm']:g} mm" for o in limits)
+                + " in F_z(t = 1)):", ""]
+        rows = [[p["route"], p["mesh"], f"{o['H_mm']:g}", f"{p['wall_time_s']:.0f}",
+                 pct(p["change_F_z_t1"], 3), pct(p["change_F_r_min"], 2)]
+                for o in limits for p in sorted(o["vs_limit"], key=lambda p: p["wall_time_s"])]
+        out += table(["route", "mesh", "H [mm]", "s per path", "ΔF_z(t=1)", "Δ min F_r"], rows)
+    for run in f["failed_runs"]:
+        out += [f"Not completed: {run['route']} on `{run['mesh']}` at H = {run['H_mm']:g} mm "
+                f"({run['error']}).", ""]
+    return out
+
+
 def optimise_section(r: Results) -> list[str]:
     o = r["optimise"]
     d, ref = o["default_constraints"], o["reference_constraints"]
@@ -330,7 +378,8 @@ def document(folder: Path) -> str:
              "`bench/results`; rerun a benchmark, then `python scripts/make_verification.py`.",
              ""]
     for section in (field_section, mechanics_section, fit_section, gamma_section,
-                    mesh_effect_section, optimise_section, publication_section, timing_section):
+                    mesh_effect_section, frontier_section, optimise_section, publication_section,
+                    timing_section):
         lines += section(r)
     return "\n".join(lines).rstrip() + "\n"
 
