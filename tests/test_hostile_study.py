@@ -119,6 +119,11 @@ def test_edge_radius_refused_by_the_study_in_mm():
             "100 mm", "min(R_m, H_m) = 2 mm")
 
 
+def test_unknown_element_refused_with_the_choices():
+    refused({"mechanics": {"element": "tet10"}}, "mechanics.element", "'tet10'",
+            "'hex8', 'hex27'")
+
+
 def test_every_number_has_physical_bounds_that_hold_the_presets():
     """Each float setting is checked in SI; the built-in studies lie within the bounds."""
     for section, spec in SPECS.items():
