@@ -199,3 +199,9 @@ def shipped_models():
     from magtact.metamodel import load_models, prefitted_dir
 
     return load_models(prefitted_dir())
+
+
+@pytest.fixture(scope="session")
+def models(shipped_models):
+    """The models a test works with: the shipped ones unless its module defines others."""
+    return shipped_models

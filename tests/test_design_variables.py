@@ -29,11 +29,6 @@ H0, G0 = H_ORIGINAL, G_ORIGINAL
 
 
 @pytest.fixture(scope="module")
-def models(shipped_models):
-    return shipped_models
-
-
-@pytest.fixture(scope="module")
 def study():
     s = load_study("magone")
     return replace(s, design=replace(s.design, M_z=(0.9e6, 1.3e6)),

@@ -16,11 +16,6 @@ H0, G0 = H_ORIGINAL, G_ORIGINAL
 
 
 @pytest.fixture(scope="module")
-def models(shipped_models):
-    return shipped_models
-
-
-@pytest.fixture(scope="module")
 def study():
     return load_study("magone")
 
