@@ -229,6 +229,21 @@ def _multi_fidelity(n_fit_paths: int = 5) -> dict | None:
     return out
 
 
+def _cheapest(orders: list[dict], target: dict) -> dict:
+    """Per height, the cheapest measured route whose forces are within the target of the
+    extrapolated limit: F_z(t = 1) alone, and F_z(t = 1) with min F_r."""
+    out = {}
+    for rec in orders:
+        if "vs_limit" not in rec:
+            continue
+        fz = [p for p in rec["vs_limit"] if p["change_F_z_t1"] <= target["change_F_z_t1"]]
+        both = [p for p in fz if p["change_F_r_min"] <= target["change_F_r_min"]]
+        out[f"H_{rec['H_mm']:g}_mm"] = {
+            "F_z_t1": min(fz, key=lambda p: p["wall_time_s"]) if fz else None,
+            "F_z_t1_and_F_r_min": min(both, key=lambda p: p["wall_time_s"]) if both else None}
+    return out
+
+
 def assemble() -> dict:
     runs = _load_runs()
     records = _convergence_records() + runs
@@ -244,6 +259,7 @@ def assemble() -> dict:
             "failed_runs": [r for r in runs if not r.get("completed")],
             "target": {"change_F_z_t1": 0.01, "change_F_r_min": 0.02,
                        "doe_minutes_2_workers": 15, "seconds_per_path": 15 * 60 * 2 / 25}}
+    data["cheapest_within_target"] = _cheapest(orders, data["target"])
     _save(RESULTS / "frontier.json", data)
     _figure(data, RESULTS / "frontier.png")
     return data

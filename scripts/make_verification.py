@@ -275,6 +275,14 @@ def frontier_section(r: Results) -> list[str]:
                  pct(p["change_F_z_t1"], 3), pct(p["change_F_r_min"], 2)]
                 for o in limits for p in sorted(o["vs_limit"], key=lambda p: p["wall_time_s"])]
         out += table(["route", "mesh", "H [mm]", "s per path", "ΔF_z(t=1)", "Δ min F_r"], rows)
+    for H, best in f.get("cheapest_within_target", {}).items():
+        h = H.removeprefix("H_").removesuffix("_mm")
+        words = [f"{label}: " + (f"{b['route']} `{b['mesh']}`, {b['wall_time_s']:.0f} s per path"
+                                 if b else "no measured route")
+                 for label, b in (("F_z(t = 1) alone", best["F_z_t1"]),
+                                  ("with min F_r too", best["F_z_t1_and_F_r_min"]))]
+        out += [f"Cheapest within the target of the converged value at H = {h} mm: "
+                + "; ".join(words) + ".", ""]
     for run in f["failed_runs"]:
         out += [f"Not completed: {run['route']} on `{run['mesh']}` at H = {run['H_mm']:g} mm "
                 f"({run['error']}).", ""]

@@ -210,3 +210,11 @@ def test_hostile_input_errors_are_user_errors(tmp_path):
                                        '"expression_pq": "p"}')
     with pytest.raises(MagtactError, match="f_r.json: model expression: exponent '387420489'"):
         load_model(tmp_path / "f_r.json")
+
+
+def test_error_paths_on_a_mesh_without_a_finer_one_is_refused_before_any_work(tmp_path):
+    study = tmp_path / "s.toml"
+    study.write_text('base = "magone"\n[mechanics]\nmesh = "fine"\n')
+    res = magtact("doe", str(study), "--out", str(tmp_path / "o"), "--error-paths", "3",
+                  "--no-cache", "-j", "0")
+    one_line_error(res, "mechanics.mesh = 'fine' has no finer mesh", "'default'")

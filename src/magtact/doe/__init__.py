@@ -11,11 +11,18 @@ from ._dataset import (
     save_dataset,
     write_csv,
 )
+from ._discretisation import (
+    ERROR_VARIABLES,
+    FINER_MESH,
+    attach_discretisation_error,
+    error_points,
+)
 from ._executor import default_workers
 from ._run import DOEFailed, JobFailure, RunStats, run_doe
 
 __all__ = [
-    "DOE_SECTIONS", "CacheCorruptWarning", "CacheError", "DOEFailed", "JobCache", "JobFailure",
-    "RunStats", "bundled_for", "bundled_path", "default_workers", "load_bundled",
+    "DOE_SECTIONS", "ERROR_VARIABLES", "FINER_MESH", "CacheCorruptWarning", "CacheError",
+    "DOEFailed", "JobCache", "JobFailure", "RunStats", "attach_discretisation_error",
+    "bundled_for", "error_points", "bundled_path", "default_workers", "load_bundled",
     "load_dataset", "matches_study", "run_doe", "save_dataset", "write_csv",
 ]

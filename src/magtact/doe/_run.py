@@ -6,15 +6,17 @@ import functools
 import os
 import subprocess
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import xarray as xr
 from rich.console import Console
 
+from .._errors import MagtactError
 from ..study import Study
 from ._cache import JobCache
 from ._dataset import assemble
+from ._discretisation import FINER_MESH, attach_discretisation_error, error_points
 from ._executor import Task, default_workers, execute
 from ._jobs import (
     FIELD_MODEL,
@@ -69,7 +71,7 @@ class RunStats:
 
 def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: int | None = None,
             scheduler: str | None = None, console: Console | None = None,
-            path_solver=None, field_solver=None) -> xr.Dataset:
+            path_solver=None, field_solver=None, error_paths: int = 0) -> xr.Dataset:
     """Compute the full-factorial design of experiments of ``study`` (docs/method.md §4).
 
     Parameters
@@ -88,6 +90,10 @@ def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: in
         The structural path solver (default :func:`magtact.mechanics.simulate_path`) and the
         field solver (default :func:`magtact.magnetics.hall_field`); their source code is part
         of the cache keys.
+    error_paths : int
+        Also solve this many (θ, H) paths on the next finer mesh (:data:`FINER_MESH`, chosen by
+        :func:`error_points`) and record every path's discretisation-error estimate
+        (:func:`attach_discretisation_error`). 0: no estimate.
 
     Returns
     -------
@@ -106,14 +112,34 @@ def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: in
         from ..mechanics import simulate_path as path_solver
     if field_solver is None:
         from ..magnetics import hall_field as field_solver
+    run = functools.partial(_run, cache=cache, workers=workers, scheduler=scheduler,
+                            console=console, path_solver=path_solver, field_solver=field_solver)
+    mesh = study.mechanics.mesh
+    if error_paths > 0 and mesh not in FINER_MESH:
+        raise MagtactError(f"mechanics.mesh = {mesh!r} has no finer mesh to estimate its "
+                           "discretisation error against (those that have: "
+                           f"{sorted(FINER_MESH)})")
+    ds = run(study)
+    if error_paths <= 0:
+        return ds
+    finer = replace(study, mechanics=replace(study.mechanics, mesh=FINER_MESH[mesh]))
+    points = error_points(study.theta_levels, study.H_levels, error_paths)
+    return attach_discretisation_error(ds, run(finer, only=points))
+
+
+def _run(study: Study, *, cache, workers, scheduler, console, path_solver, field_solver,
+         only: list[tuple[float, float]] | None = None) -> xr.Dataset:
+    """One DOE run; ``only``: solve just these (θ, H) paths and no field (NaN elsewhere)."""
     start = time.perf_counter()
     code = _code_attrs(path_solver, field_solver)  # the sources as they are when the run starts
     store = JobCache(cache) if cache is not None else None
     field_job, path_jobs = plan(study, path_solver, field_solver)
+    if only is not None:
+        path_jobs = [j for j in path_jobs if (j.theta, j.H) in set(only)]
     stats = RunStats(paths_total=len(path_jobs))
     results, field_entry, tasks = {}, None, []
-    display = Display([field_job, *path_jobs], console)
-    for job in (field_job, *path_jobs):
+    display = Display([*([field_job] if only is None else []), *path_jobs], console)
+    for job in (*([field_job] if only is None else []), *path_jobs):
         entry = (store.get(job.kind, job.key, verify=functools.partial(verify_entry, job))
                  if store is not None else None)
         if entry is None:
