@@ -117,10 +117,44 @@ def test_card_names_the_magnetisation(models, study):
     ({"M_z_A_per_m": [0, 1.3e6]}, r"\[design.M_z_A_per_m\] must be \[0, 0\]"),
     ({"M_z_A_per_m": [-1.0, 1.3e6]}, r"\[design.M_z_A_per_m\] must be at least 0"),
     ({"M_z_A_per_m": [1e6, 1e9]}, r"\[design.M_z_A_per_m\] must be 0 or between"),
-    ({"R_m_mm": [1.5, 3.5]}, r"\[design.R_m_mm\] is not a design variable yet.*magnet.R_m_mm"),
-    ({"R_mm": [8.0, 12.0]}, r"\[design.R_mm\] is not a design variable yet.*body.R_mm"),
+    ({"R_m_mm": [1.5, 3.5]}, r"\[design.R_m_mm\] geometric design variables need the exact "
+                             r"field \(metamodel.b_model = 'exact'\)"),
     ({"M_mm": [1.0, 2.0]}, r"\[design.M_mm\] unknown key"),
 ])
 def test_bad_design_variables_name_the_key(design, message):
     with pytest.raises(StudyError, match=message):
         study_from_dict({"design": design})
+
+
+EXACT = {"metamodel": {"b_model": "exact"}}
+
+
+@pytest.mark.parametrize(("design", "message"), [
+    ({"R_m_mm": [3.5, 1.5]}, r"\[design.R_m_mm\] range out of order: low 3.5"),
+    ({"R_m_mm": [0, 3.5]}, r"\[design.R_m_mm\] must be \[0, 0\] \(fixed at magnet.R_m_mm\)"),
+    ({"R_m_mm": [3.0, 4.0]}, r"\[magnet.R_m_mm\] 2.5 mm \(the original design's\) lies outside "
+                             r"design.R_m_mm = \[3, 4\]"),
+    ({"R_m_mm": [1.5, 6.5]}, r"\[design.R_m_mm\] cannot be built at the corner R_m = 6.5 mm "
+                             r"of the design ranges: \[magnet.R_m_mm\] the magnet \(6.5 mm "
+                             r"radius\) must be narrower than the body"),
+    ({"R_m_mm": [1.5, 3.5], "H_m_mm": [1.0, 4.0]},
+     r"\[design.R_m_mm, design.H_m_mm\] cannot be built at the corner R_m = 1.5 mm, H_m = 4 mm"
+     r".*\[magnet.H_m_mm\] the covered magnet needs 6 mm"),
+    ({"R_m_mm": [2.0, 3.5], "R_mm": [4.2, 8.0]},
+     r"corner R_m = 3.5 mm, R = 4.2 mm .*\[body.R_h_mm\] edge radius 1 mm"),
+])
+def test_geometric_ranges_that_cannot_be_built_name_keys_and_corner(design, message):
+    with pytest.raises(StudyError, match=message):
+        study_from_dict({"design": design} | EXACT)
+
+
+def test_a_geometric_sub_study_fixes_the_value_and_clears_the_range():
+    s = study_from_dict({"design": {"R_m_mm": [1.5, 3.5], "R_mm": [5.0, 7.0]}} | EXACT)
+    assert list(s.geometric_variables) == ["R_m", "R"]
+    np.testing.assert_allclose(s.geometry_levels["R_m"], [1.5e-3, 2.5e-3, 3.5e-3])
+    sub = s.at(R_m=2e-3, R=6.5e-3)
+    assert sub.magnet.R_m == 2e-3 and sub.body.R == sub.body.R_g == 6.5e-3
+    assert sub.geometric_variables == {} and sub.design.H == s.design.H
+    assert s.geometry() == {"R_m": 2.5e-3, "R": 6e-3}
+    with pytest.raises(ValueError, match=r"not geometric design variables: \['G'\]"):
+        s.at(G=1.0)

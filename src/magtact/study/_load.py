@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import difflib
+import itertools
 import math
 import tomllib
 from dataclasses import fields, replace
@@ -12,7 +13,7 @@ from pathlib import Path
 import tomli_w
 
 from .._errors import MagtactError
-from ._model import SECTIONS, Study, key_of
+from ._model import GEOMETRY, SECTIONS, Study, key_of
 from ._units import LABEL, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
@@ -22,7 +23,7 @@ class StudyError(MagtactError):
     """A study file is invalid. ``key`` names the offending TOML key (``section.key``)."""
 
     def __init__(self, key: str, message: str, source: str | None = None):
-        self.key = key
+        self.key, self.reason = key, message
         where = f"{source}: " if source else ""
         super().__init__(_one_line(f"{where}[{key}] {message}"))
 
@@ -148,19 +149,9 @@ def _unknown(key: str, allowed, what: str) -> str:
     return f"unknown {what}{hint} Expected one of: {', '.join(allowed)}"
 
 
-#: Geometric design variables that would each need a structural path per level and, for the
-#: magnet, a field solve per geometry; not design variables yet.
-GEOMETRIC = {"R_m_mm": "magnet.R_m_mm", "H_m_mm": "magnet.H_m_mm", "R_mm": "body.R_mm"}
-
-
 def _section(name: str, default, given: dict, complete: bool, source):
     spec = {key_of(f): f for f in fields(default)}
     for key in given:
-        if name == "design" and key in GEOMETRIC:
-            raise StudyError(f"design.{key}", "is not a design variable yet: of the geometry "
-                                              "only H is; set the fixed value in "
-                                              f"{GEOMETRIC[key]} and compare studies, or make "
-                                              "M_z_A_per_m a design variable", source)
         if key not in spec:
             raise StudyError(f"{name}.{_clip(str(key))}", _unknown(str(key), spec, "key"),
                              source)
@@ -262,6 +253,13 @@ def _check_consistency(s: Study, source) -> None:
     if s.design.M_z[0] == 0 < s.design.M_z[1]:
         raise StudyError("design.M_z_A_per_m", "must be [0, 0] (fixed at magnet.M_z_A_per_m) "
                                                "or a positive range", source)
+    for name, section in GEOMETRY.items():
+        if getattr(s.design, name)[0] == 0 < getattr(s.design, name)[1]:
+            raise StudyError(f"design.{name}_mm", f"must be [0, 0] (fixed at "
+                                                  f"{section}.{name}_mm) or a positive range",
+                             source)
+    if s.geometric_variables:
+        _check_geometry_corners(s, source)
     if mg.R_m >= b.R:
         raise StudyError("magnet.R_m_mm", f"the magnet ({_mm(mg.R_m)} mm radius) must be narrower "
                                           f"than the body (body.R_mm = {_mm(b.R)})", source)
@@ -302,6 +300,35 @@ def _check_consistency(s: Study, source) -> None:
                                                       f"outside the design range", source)
 
 
+def _check_geometry_corners(s: Study, source) -> None:
+    """Every corner of the geometric design ranges (R_m, H_m, R; H over its whole range) must
+    give a sensor the checks above accept; the message names the keys and the failing corner."""
+    names = ["H", *s.geometric_variables]
+    ranges = [s.design.H, *s.geometric_variables.values()]
+    if s.metamodel.b_model != "exact" or s.sensitivity.definition != "jacobian":
+        raise StudyError("design." + "_mm, design.".join(names[1:]) + "_mm",
+                         "geometric design variables need the exact field (metamodel.b_model "
+                         "= 'exact') and the Jacobian sensitivity (sensitivity.definition = "
+                         "'jacobian'): a fitted field would have to learn the magnet's shape",
+                         source)
+    for name, (lo, hi) in s.geometric_variables.items():
+        own = getattr(getattr(s, GEOMETRY[name]), name)
+        if not lo <= own <= hi:
+            raise StudyError(f"{GEOMETRY[name]}.{name}_mm", f"{_mm(own)} mm (the original "
+                                                            f"design's) lies outside design."
+                                                            f"{name}_mm = [{_mm(lo)}, {_mm(hi)}]",
+                             source)
+    for corner in itertools.product(*ranges[1:]):
+        values = dict(zip(names[1:], corner, strict=True))
+        try:
+            _check_consistency(s.at(**values), None)
+        except StudyError as exc:
+            where = ", ".join(f"{k} = {_mm(v)} mm" for k, v in values.items())
+            keys = ", ".join(f"design.{k}_mm" for k in names[1:])
+            raise StudyError(keys, f"cannot be built at the corner {where} of the design "
+                                   f"ranges: [{exc.key}] {exc.reason}", source) from None
+
+
 #: Most structural paths (loading paths solved by FE) a study's DOE may ask for.
 MAX_PATHS = 10_000
 #: Most field points (t × θ × H levels) a study's DOE may ask for.
@@ -316,6 +343,7 @@ def _check_work(s: Study, source) -> None:
     """Bounds on the work a study asks for (each message says the bound)."""
     d, mg, fm = s.doe, s.magnet, s.magnetics
     paths = d.n_theta * d.n_H * (1 if s.mechanics.scale_in_G else d.n_G)
+    paths *= math.prod(len(v) for v in s.geometry_levels.values())
     if paths > MAX_PATHS:
         key = "doe.n_G" if not s.mechanics.scale_in_G and d.n_G > 1 else "doe.n_H"
         raise StudyError(key, f"the DOE asks for {paths:,} structural paths (n_theta × n_H"

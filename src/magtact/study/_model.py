@@ -13,7 +13,7 @@ TOML export follow from the metadata.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -105,6 +105,15 @@ class Design:
                                        doc="range of the magnetisation M_z (the magnet's "
                                            "grade) as a design variable; [0, 0]: fixed at "
                                            "magnet.M_z")
+    R_m: tuple[float, float] = setting((0.0, 0.0), "mm", minimum=0.0,
+                                       doc="range of the magnet radius as a design variable; "
+                                           "[0, 0]: fixed at magnet.R_m")
+    H_m: tuple[float, float] = setting((0.0, 0.0), "mm", minimum=0.0,
+                                       doc="range of the magnet height as a design variable; "
+                                           "[0, 0]: fixed at magnet.H_m")
+    R: tuple[float, float] = setting((0.0, 0.0), "mm", minimum=0.0,
+                                     doc="range of the body radius as a design variable; "
+                                         "[0, 0]: fixed at body.R")
     H_original: float = setting(3e-3, "mm", positive=True, doc="H of the original sensor")
     G_original: float = setting(29.4e3, "kPa", positive=True, doc="G of the original sensor")
 
@@ -119,6 +128,12 @@ class DOE:
     n_H: int = setting(5, integer=True, minimum=1, maximum=101, doc="levels of the base height H")
     n_G: int = setting(5, integer=True, minimum=1, maximum=1001,
                        doc="levels of the shear modulus G")
+    n_R_m: int = setting(3, integer=True, minimum=2, maximum=21,
+                         doc="levels of the magnet radius (when it is a design variable)")
+    n_H_m: int = setting(3, integer=True, minimum=2, maximum=21,
+                         doc="levels of the magnet height (when it is a design variable)")
+    n_R: int = setting(3, integer=True, minimum=2, maximum=21,
+                       doc="levels of the body radius (when it is a design variable)")
 
 
 @dataclass(frozen=True)
@@ -315,6 +330,40 @@ class Study:
         """Range of M_z [A/m]: the design range, or the magnet's own M_z at both ends."""
         return self.design.M_z if self.M_z_variable else (self.magnet.M_z, self.magnet.M_z)
 
+    @property
+    def geometric_variables(self) -> dict[str, tuple[float, float]]:
+        """The geometric design variables besides H, by name (``R_m``, ``H_m``, ``R``), with
+        their ranges [m]; empty when only H (and G, M_z) are design variables."""
+        return {k: getattr(self.design, k) for k in GEOMETRY
+                if getattr(self.design, k)[1] > 0}
+
+    @property
+    def geometry_levels(self) -> dict[str, np.ndarray]:
+        """DOE levels [m] of each geometric design variable besides H."""
+        return {k: _levels(*rng, getattr(self.doe, f"n_{k}"))
+                for k, rng in self.geometric_variables.items()}
+
+    def geometry(self) -> dict[str, float]:
+        """The study's own (fixed) values [m] of the geometric design variables besides H."""
+        return {k: getattr(getattr(self, GEOMETRY[k]), k) for k in self.geometric_variables}
+
+    def at(self, **values: float) -> Study:
+        """This study with geometric design variables fixed: ``values`` [m] by name (``R_m``,
+        ``H_m``, ``R``) replace the magnet's or body's value, and the variable's design range is
+        cleared. An upper part as wide as the body stays as wide as it."""
+        unknown = set(values) - set(GEOMETRY)
+        if unknown:
+            raise ValueError(f"not geometric design variables: {sorted(unknown)}; "
+                             f"choose from {list(GEOMETRY)}")
+        magnet = replace(self.magnet, **{k: float(v) for k, v in values.items()
+                                         if GEOMETRY[k] == "magnet"})
+        body = self.body
+        if "R" in values:
+            R = float(values["R"])
+            body = replace(body, R=R, R_g=R if body.R_g == body.R else min(body.R_g, R))
+        design = replace(self.design, **{k: (0.0, 0.0) for k in values})
+        return replace(self, magnet=magnet, body=body, design=design)
+
     # ---- DOE levels (SI) -------------------------------------------------------------------
     @property
     def t_levels(self) -> np.ndarray:
@@ -346,6 +395,9 @@ class Study:
 def _levels(lo: float, hi: float, n: int) -> np.ndarray:
     return np.array([lo]) if n == 1 else np.linspace(lo, hi, n)
 
+
+#: Geometric design variables besides H: name -> the section holding its fixed value.
+GEOMETRY: dict[str, str] = {"R_m": "magnet", "H_m": "magnet", "R": "body"}
 
 SECTIONS: tuple[str, ...] = tuple(
     f.name for f in fields(Study) if f.name not in ("name", "description")
