@@ -113,7 +113,7 @@ def tiny(**doe):
 def run(study, tmp_path=None, **kw):
     kw.setdefault("workers", 0)
     return run_doe(study, cache=tmp_path, path_solver=kw.pop("path_solver", fake_path),
-                   field_solver=fake_field, **kw)
+                   field_solver=kw.pop("field_solver", fake_field), **kw)
 
 
 # ---- an analytic DOE-layout data set (for fitting metamodels without FE) -----------------------

@@ -3,8 +3,10 @@
 from ._cache import CacheCorruptWarning, CacheError, JobCache
 from ._dataset import (
     DOE_SECTIONS,
+    GEOMETRY_NAMES,
     bundled_for,
     bundled_path,
+    geometry_dims,
     load_bundled,
     load_dataset,
     matches_study,
@@ -21,8 +23,8 @@ from ._executor import default_workers
 from ._run import DOEFailed, JobFailure, RunStats, run_doe
 
 __all__ = [
-    "DOE_SECTIONS", "ERROR_VARIABLES", "FINER_MESH", "CacheCorruptWarning", "CacheError",
+    "DOE_SECTIONS", "ERROR_VARIABLES", "GEOMETRY_NAMES", "FINER_MESH", "CacheCorruptWarning", "CacheError",
     "DOEFailed", "JobCache", "JobFailure", "RunStats", "attach_discretisation_error",
-    "bundled_for", "error_points", "bundled_path", "default_workers", "load_bundled",
+    "bundled_for", "error_points", "geometry_dims", "bundled_path", "default_workers", "load_bundled",
     "load_dataset", "matches_study", "run_doe", "save_dataset", "write_csv",
 ]

@@ -43,6 +43,8 @@ CSV_COLUMNS = {
     "u_r_mm": ("u_r", "mm"), "u_z_mm": ("u_z", "mm"), "B_r_T": ("B_r", "T"),
     "B_z_T": ("B_z", "T"), "F_r_N": ("F_r", "N"), "F_z_N": ("F_z", "N"),
 }
+#: Long names of the geometric design variables' dimensions (after ``DIMS``, in metres).
+GEOMETRY_NAMES = {"R_m": "magnet radius", "H_m": "magnet height", "R": "body radius"}
 BUNDLED_NAME = "magone_doe.nc"
 
 
@@ -146,14 +148,21 @@ def load_dataset(path: str | os.PathLike) -> xr.Dataset:
     for dim in DIMS:
         if dim not in ds.dims:
             raise MagtactError(f"{path}: not a DOE data set (no dimension {dim!r})")
+    extra = geometry_dims(ds)
     for name, (dims, units, _) in VARIABLES.items():
         if name not in ds.data_vars:
             raise MagtactError(f"{path}: not a DOE data set (no variable {name!r})")
+        dims = dims + extra
         if ds[name].dims != dims or ds[name].attrs.get("units") != units:
             raise MagtactError(f"{path}: variable {name!r} should have dims {dims} and units "
                                f"{units!r}, has {ds[name].dims} and "
                                f"{ds[name].attrs.get('units')!r}")
     return ds
+
+
+def geometry_dims(ds: xr.Dataset) -> tuple[str, ...]:
+    """The data set's dimensions of geometric design variables besides H (after ``DIMS``)."""
+    return tuple(d for d in ds.dims if d in GEOMETRY_NAMES)
 
 
 def bundled_path() -> Path:
@@ -173,17 +182,24 @@ def load_bundled() -> xr.Dataset:
 def write_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     """Export ``ds`` as CSV, one row per (t, theta, H, G), G fastest; user units in the header.
 
-    Columns: ``t,theta_rad,H_mm,G_kPa,u_r_mm,u_z_mm,B_r_T,B_z_T,F_r_N,F_z_N``. Numbers are
+    Columns: ``t,theta_rad,H_mm,G_kPa,u_r_mm,u_z_mm,B_r_T,B_z_T,F_r_N,F_z_N``; the geometric
+    design variables besides H (``R_m_mm``, ...) follow ``G_kPa`` and vary fastest. Numbers are
     written in their shortest exact form (they read back to the same doubles).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    def column(var: str, unit: str) -> np.ndarray:
-        return from_si(ds[var].broadcast_like(ds["F_r"]).transpose(*DIMS).values.ravel(), unit)
+    order = DIMS + geometry_dims(ds)
 
-    full = {name: column(var, unit) for name, (var, unit) in CSV_COLUMNS.items()}
-    return _write_csv(path, list(CSV_COLUMNS),
-                     zip(*(full[name].tolist() for name in CSV_COLUMNS), strict=True),
+    def column(var: str, unit: str) -> np.ndarray:
+        return from_si(ds[var].broadcast_like(ds["F_r"]).transpose(*order).values.ravel(), unit)
+
+    extra = {f"{k}_mm": (k, "mm") for k in geometry_dims(ds)}  # after G_kPa
+    names = list(CSV_COLUMNS)
+    at = names.index("G_kPa") + 1
+    columns = {n: (extra | CSV_COLUMNS)[n] for n in names[:at] + list(extra) + names[at:]}
+    full = {name: column(var, unit) for name, (var, unit) in columns.items()}
+    return _write_csv(path, list(columns),
+                     zip(*(full[name].tolist() for name in columns), strict=True),
                      cell=lambda x: repr(x + 0.0))  # + 0.0: no '-0.0'; shortest exact form
 
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import functools
+import itertools
+import json
 import os
 import subprocess
 import time
@@ -15,7 +17,7 @@ from rich.console import Console
 from .._errors import MagtactError
 from ..study import Study
 from ._cache import JobCache
-from ._dataset import assemble
+from ._dataset import GEOMETRY_NAMES, assemble
 from ._discretisation import FINER_MESH, attach_discretisation_error, error_points
 from ._executor import Task, default_workers, execute
 from ._jobs import (
@@ -112,6 +114,10 @@ def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: in
         from ..mechanics import simulate_path as path_solver
     if field_solver is None:
         from ..magnetics import hall_field as field_solver
+    if study.geometric_variables:
+        return _run_geometry(study, cache=cache, workers=workers, scheduler=scheduler,
+                             console=console, path_solver=path_solver, field_solver=field_solver,
+                             error_paths=error_paths)
     run = functools.partial(_run, cache=cache, workers=workers, scheduler=scheduler,
                             console=console, path_solver=path_solver, field_solver=field_solver)
     mesh = study.mechanics.mesh
@@ -125,6 +131,41 @@ def run_doe(study: Study, *, cache: str | os.PathLike | None = None, workers: in
     finer = replace(study, mechanics=replace(study.mechanics, mesh=FINER_MESH[mesh]))
     points = error_points(study.theta_levels, study.H_levels, error_paths)
     return attach_discretisation_error(ds, run(finer, only=points))
+
+
+def _run_geometry(study: Study, **kw) -> xr.Dataset:
+    """The DOE over the geometric design variables besides H: one sub-DOE (its field solve and
+    structural paths) per point of their grid, joined along one dimension per variable."""
+    levels = study.geometry_levels
+    parts, failures = [], []
+    for values in itertools.product(*levels.values()):
+        geometry = dict(zip(levels, (float(v) for v in values), strict=True))
+        try:
+            part = run_doe(study.at(**geometry), **kw)
+        except DOEFailed as exc:
+            failures += exc.failures
+            part = exc.dataset
+        parts.append(part.expand_dims({k: [v] for k, v in geometry.items()}, axis=-1))
+    ds = xr.combine_by_coords(parts, combine_attrs="drop_conflicts")
+    for k in levels:
+        ds[k].attrs.update(units="m", long_name=GEOMETRY_NAMES[k])
+    jobs = [dict(j, **{k: float(p[k].values[0]) for k in levels})
+            for p in parts for j in json.loads(p.attrs["jobs"])]
+    ds.attrs.update({
+        "study_name": study.name, "study_toml": study.to_toml(),
+        "title": f"magtact design of experiments: {study.name}",
+        "jobs": json.dumps(jobs),
+        "geometric_variables": ", ".join(levels),
+        "complete": int(not failures),
+        "failed_jobs": "\n".join(f"{f.label}: {f.error}" for f in failures),
+        **{key: sum(int(p.attrs[key]) for p in parts)
+           for key in ("run_paths_total", "run_paths_computed", "run_paths_cached",
+                       "run_fields_computed", "run_cache_corrupt")},
+        "run_wall_time_s": sum(float(p.attrs["run_wall_time_s"]) for p in parts),
+    })
+    if failures:
+        raise DOEFailed(failures, ds)
+    return ds
 
 
 def _run(study: Study, *, cache, workers, scheduler, console, path_solver, field_solver,
