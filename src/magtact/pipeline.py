@@ -242,6 +242,8 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
 def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
     if ctx.dataset is None:
         raise StageSkipped("needs the DOE data set, which is missing")
+    if ctx.study.geometric_variables:
+        return _fit_geometry(ctx)
     from .metamodel import copy_prefitted, select_metamodels, write_fit_outputs
 
     chosen = select_metamodels(ctx.study, ctx.dataset, refit=ctx.refit,
@@ -263,9 +265,37 @@ def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
             f"{ctx.study.metamodel.b_model}); largest held-out relative error {worst:.3g}")
 
 
+def _fit_geometry(ctx: _Context) -> str:
+    """Force models over (t, θ, H) and the geometric design variables; the field is exact."""
+    from .metamodel import fit_models, save_models
+
+    result = fit_models(ctx.dataset, ctx.study, log=lambda m: ctx.log(f"      {m}"))
+    ctx.models = result.model_set(ctx.study)
+    save_models(ctx.models, ctx.folder / "metamodel")
+    worst = max((r.test.max_rel_err for r in result.reports.values() if r.test is not None),
+                default=float("nan"))
+    return (f"f_r, f_z over (t, theta, H, {', '.join(ctx.study.geometric_variables)}) "
+            f"({ctx.study.metamodel.generations} GP generations; B: exact field); largest "
+            f"held-out relative error {worst:.3g}")
+
+
+def _optimise_geometry(ctx: _Context) -> str:
+    from .optimise import write_geometry_outputs
+    from .optimise._geometry import describe
+    from .report import fig_geometry_pareto
+
+    r = write_geometry_outputs(ctx.models, ctx.study, ctx.folder / "optimise",
+                               figures=fig_geometry_pareto)
+    return (f"design chosen: {describe(r.choice.values)} (exact reduction: "
+            f"{describe(r.exact_choice.values)}; NSGA-II within {100 * r.gap:.2g} % of the "
+            "exact front)")
+
+
 def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
+    if ctx.study.geometric_variables:
+        return _optimise_geometry(ctx)
     from .designer import check_rest_field
     from .optimise._run import FrontGapWarning, write_optimise_outputs
     from .report import optimise_figures
@@ -304,6 +334,9 @@ def design_card(models, study, choice, folder) -> dict:
 def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
+    if ctx.study.geometric_variables:
+        raise StageSkipped("repeat tests belong to one built sensor: validate the chosen "
+                           "geometry with its own study (fixed R_m, H_m, R)")
     from .validation import PathModel, read_experiment, synthetic_files, validate, write_outputs
 
     files = ctx.data or synthetic_files()

@@ -23,8 +23,9 @@ from ._executor import default_workers
 from ._run import DOEFailed, JobFailure, RunStats, run_doe
 
 __all__ = [
-    "DOE_SECTIONS", "ERROR_VARIABLES", "GEOMETRY_NAMES", "FINER_MESH", "CacheCorruptWarning", "CacheError",
-    "DOEFailed", "JobCache", "JobFailure", "RunStats", "attach_discretisation_error",
-    "bundled_for", "error_points", "geometry_dims", "bundled_path", "default_workers", "load_bundled",
-    "load_dataset", "matches_study", "run_doe", "save_dataset", "write_csv",
+    "DOE_SECTIONS", "ERROR_VARIABLES", "GEOMETRY_NAMES", "FINER_MESH", "CacheCorruptWarning",
+    "CacheError", "DOEFailed", "JobCache", "JobFailure", "RunStats",
+    "attach_discretisation_error", "bundled_for", "error_points", "geometry_dims",
+    "bundled_path", "default_workers", "load_bundled", "load_dataset", "matches_study",
+    "run_doe", "save_dataset", "write_csv",
 ]

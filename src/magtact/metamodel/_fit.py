@@ -34,6 +34,7 @@ by the regressor: R², max |error| / range(y) and max |error| / |y| where |y| > 
 from __future__ import annotations
 
 import hashlib
+import itertools
 import time
 from dataclasses import asdict, dataclass, field
 
@@ -47,7 +48,10 @@ from ..study import Study, mm, mt
 from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._regressor import SymbolicRegressor
-from ._symbols import H, features, p, q
+from ._symbols import GEOMETRY, SYMBOLS, H, features, p, q
+
+#: Names of the geometric design variables besides H (data-set dimensions, model inputs).
+GEO_NAMES = tuple(g.name for g in GEOMETRY)
 
 #: Transform of each response (see the module notes).
 TRANSFORMS = {"B_r": "anchor_x", "B_z": "log", "f_r": "anchor_q", "f_z": "anchor_0"}
@@ -148,7 +152,8 @@ def accuracy(y, y_hat, reference=None) -> Accuracy:
 def data_hash(ds) -> str:
     """SHA-256 of the coordinates and response arrays of a DOE data set."""
     h = hashlib.sha256()
-    for name in ("t", "theta", "H", "G", "B_r", "B_z", "F_r", "F_z"):
+    geo = [d for d in GEO_NAMES if d in ds.dims]  # none in an (H, G) data set: hash unchanged
+    for name in ("t", "theta", "H", "G", *geo, "B_r", "B_z", "F_r", "F_z"):
         a = np.ascontiguousarray(np.asarray(ds[name].values, dtype=np.float64))
         h.update(name.encode())
         h.update(str(a.shape).encode())
@@ -182,16 +187,19 @@ def hall_features(study: Study) -> tuple[sp.Expr, sp.Expr]:
 
 
 def _table(ds):
-    """Flattened training table: t, θ, H, path index and the four responses."""
+    """Flattened training table: t, θ, H, the geometric design variables besides H (if the
+    data set has them), and the four responses."""
+    geo = tuple(d for d in ds.dims if d in GEO_NAMES)
+    dims = ("t", "theta", "H", *geo)
     t_, th_, H_ = (np.asarray(ds[k].values, dtype=float) for k in ("t", "theta", "H"))
-    T, TH, HH = np.meshgrid(t_, th_, H_, indexing="ij")
+    grids = np.meshgrid(*(np.asarray(ds[k].values, dtype=float) for k in dims), indexing="ij")
     G = np.asarray(ds["G"].values, dtype=float)
-    out = {"t": T.ravel(), "theta": TH.ravel(), "H": HH.ravel()}
+    out = {k: g.ravel() for k, g in zip(dims, grids, strict=True)}
     for k in ("B_r", "B_z"):
-        out[k] = np.asarray(ds[k].transpose("t", "theta", "H").values, dtype=float).ravel()
+        out[k] = np.asarray(ds[k].transpose(*dims).values, dtype=float).ravel()
     spread = {}
     for k in ("r", "z"):
-        F = np.asarray(ds[f"F_{k}"].transpose("t", "theta", "H", "G").values, dtype=float)
+        F = np.asarray(ds[f"F_{k}"].transpose(*dims, "G").values, dtype=float)
         f = F / G
         mean = f.mean(axis=-1)
         spread[f"f_{k}"] = float(np.max(np.abs(f - mean[..., None])) / max(np.ptp(mean), 1e-300))
@@ -254,8 +262,24 @@ def _model_expr(name: str, g: sp.Expr, gsyms, feats: dict[str, sp.Expr], transfo
     raise ValueError(f"unknown transform {transform!r} for {name}")
 
 
-def _guard(model: Metamodel, study: Study, y_max: float, n: tuple[int, int, int] = (25, 11, 11)):
-    """Reasons to reject ``model`` on a dense off-grid set inside the domain ('' if none)."""
+def _guard(model: Metamodel, study: Study, y_max: float, geometry: dict | None = None,
+           n: tuple[int, int, int] = (25, 11, 11)) -> str:
+    """Reasons to reject ``model`` on a dense off-grid set inside the domain ('' if none).
+
+    ``geometry``: the training values of the geometric design variables besides H; the model
+    is checked at each of their levels and midway between neighbouring ones.
+    """
+    if geometry:
+        levels = [np.unique(v) for v in geometry.values()]
+        levels = [np.union1d(v, (v[1:] + v[:-1]) / 2) for v in levels]
+        for values in itertools.product(*levels):
+            reason = _guard(model.bind(**dict(zip(geometry, values, strict=True))), study,
+                            y_max, None, (n[0], 6, 6))
+            if reason:
+                where = ", ".join(f"{k} = {mm(v):.4g} mm" for k, v in zip(geometry, values,
+                                                                           strict=True))
+                return f"{reason} ({where})"
+        return ""
     lo, hi = study.design.H
     # Off-grid: shifted midpoints plus the domain's faces (t = 0 included).
     tt = np.concatenate([np.linspace(0, 1, n[0]), (np.arange(n[0] - 1) + 0.37) / (n[0] - 1)])
@@ -337,9 +361,11 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
         fx = sp.lambdify((p, q, H), [X_, Z_], "numpy")
         Xv, Zv = (np.broadcast_to(a, pv.shape) for a in fx(pv, qv, table["H"]))
         feats, cols = {"X": X_, "Z": Z_}, np.column_stack([Xv, Zv])
-    else:
-        feats = {"p": p, "q": q, "h": mm(H)}
-        cols = np.column_stack([pv, qv, mm(table["H"])])
+    else:  # lengths in mm: inputs of order one for the GP
+        geo = [g for g in GEO_NAMES if g in table]
+        feats = {"p": p, "q": q, "h": mm(H)} | {g.lower(): mm(SYMBOLS[g]) for g in geo}
+        cols = np.column_stack([pv, qv, mm(table["H"]), *(mm(table[g]) for g in geo)])
+    geometry = {g: table[g] for g in GEO_NAMES if g in table}
     train = ~test_mask  # accuracy on all training points; the GP sees ``fit_on`` ⊆ train
     rejected, best, tries = [], None, 0
     t0 = time.perf_counter()
@@ -367,13 +393,14 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
             except ValueError:  # e.g. the anchor g(0, Z) is infinite: a pole on the axis
                 model, reason = None, "infinite constant after the transform (pole on the axis?)"
             else:
-                reason = _guard(model, study, float(np.max(np.abs(y))))
+                reason = _guard(model, study, float(np.max(np.abs(y))), geometry)
             if reason:
                 rejected.append(f"{transform}, seed {seed}: {reason}")
                 if log:
                     log(f"{name}: rejected seed {seed} ({reason})")
                 continue
-            y_hat = model.value(table["t"], table["theta"], table["H"])
+            y_hat = model.value(table["t"], table["theta"], table["H"],
+                                **({} if published else geometry))
             err = accuracy(y[train], y_hat[train], y).max_abs_err_over_range
             if best is None or err < best[0]:
                 best = (err, seed, model, y_hat, int(fit_on.sum()))

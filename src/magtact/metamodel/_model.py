@@ -11,7 +11,7 @@ import symengine as se
 import sympy as sp
 
 from ..study import mm
-from ._symbols import PQ_TO_TTH, PQH, SYMBOLS, TTH, TTH_TO_PQ, features, p, q
+from ._symbols import GEOMETRY, PQ_TO_TTH, PQH, SYMBOLS, TTH, TTH_TO_PQ, features, p, q
 
 #: Names of the four responses of a :class:`ModelSet` and their SI units.
 RESPONSES: dict[str, str] = {"B_r": "T", "B_z": "T", "f_r": "N/Pa", "f_z": "N/Pa"}
@@ -31,7 +31,8 @@ def _canonical(expr) -> sp.Expr:
     unknown = names - set(SYMBOLS)
     if unknown:
         raise ValueError(f"metamodel expression has unknown symbols {sorted(unknown)}; "
-                         f"allowed: t, theta, H (or the features p, q, H)")
+                         f"allowed: t, theta, H (or the features p, q, H) and the geometric "
+                         f"design variables R_m, H_m, R")
     if names & {"t", "theta"} and names & {"p", "q"}:
         raise ValueError("metamodel expression mixes (t, theta) and the features (p, q)")
     return expr.xreplace({s: SYMBOLS[s.name] for s in expr.free_symbols})
@@ -138,31 +139,54 @@ class Metamodel:
     def _compiled(self) -> dict:
         return {}
 
+    @property
+    def geometry(self) -> tuple[str, ...]:
+        """Names of the geometric design variables besides H the model depends on."""
+        names = {s.name for s in self.expr.free_symbols}
+        return tuple(g.name for g in GEOMETRY if g.name in names)
+
     def _fn(self, form: str, order: int):
-        """Compiled stack of derivatives up to ``order``: form "tth" (t, θ, H) or "pq"."""
+        """Compiled stack of derivatives up to ``order``: form "tth" (t, θ, H) or "pq"; the
+        geometric variables follow as arguments (derivatives are not taken along them)."""
         key = (form, order)
         if key not in self._compiled:
+            geo = tuple(SYMBOLS[g] for g in self.geometry)
             if form == "tth":
                 exprs = _derivative_tensors(self.expr, TTH, order)
             else:
                 exprs = _derivative_tensors(self.expr_pq, (p, q), order)
-            self._compiled[key] = _lambdify(exprs, TTH if form == "tth" else PQH)
+            self._compiled[key] = _lambdify(exprs, (TTH if form == "tth" else PQH) + geo)
         return self._compiled[key]
 
+    def _geo(self, geometry: dict) -> list:
+        """The values of the model's geometric variables, in order (all must be given)."""
+        missing = [g for g in self.geometry if g not in geometry]
+        if missing:
+            raise ValueError(f"model {self.name} depends on {missing}: give their values "
+                             "(or bind them with ModelSet.at)")
+        return [geometry[g] for g in self.geometry]
+
     # ---- evaluation ----------------------------------------------------------------------
-    def value(self, t, theta, H) -> np.ndarray:
-        """Model value at (t, θ, H) (broadcast), in ``units``."""
-        return _evaluate(self._fn("tth", 0), 3, 0, t, theta, H)[0]
+    def value(self, t, theta, H, **geometry) -> np.ndarray:
+        """Model value at (t, θ, H) (broadcast), in ``units``; ``geometry``: values [m] of the
+        geometric design variables it depends on (:attr:`geometry`)."""
+        return _evaluate(self._fn("tth", 0), 3, 0, t, theta, H, *self._geo(geometry))[0]
 
-    def grad(self, t, theta, H) -> np.ndarray:
+    def grad(self, t, theta, H, **geometry) -> np.ndarray:
         """Gradient w.r.t. (t, θ, H), shape (..., 3)."""
-        return _evaluate(self._fn("tth", 1), 3, 1, t, theta, H)[1]
+        return _evaluate(self._fn("tth", 1), 3, 1, t, theta, H, *self._geo(geometry))[1]
 
-    def hess(self, t, theta, H) -> np.ndarray:
+    def hess(self, t, theta, H, **geometry) -> np.ndarray:
         """Hessian w.r.t. (t, θ, H), shape (..., 3, 3)."""
-        return _evaluate(self._fn("tth", 2), 3, 2, t, theta, H)[2]
+        return _evaluate(self._fn("tth", 2), 3, 2, t, theta, H, *self._geo(geometry))[2]
 
-    def jet(self, t, theta, H, order: int = 1) -> list[np.ndarray]:
+    def bind(self, **geometry: float) -> Metamodel:
+        """The model at fixed values [m] of its geometric design variables: a model of
+        (t, θ, H) alone that evaluates through this one's compiled functions."""
+        return _Bound(self, dict(zip(self.geometry, map(float, self._geo(geometry)),
+                                     strict=True)))
+
+    def jet(self, t, theta, H, order: int = 1, **geometry) -> list[np.ndarray]:
         """Value and derivatives w.r.t. the features (p, q) at fixed H, up to ``order`` (≤ 3).
 
         Returns
@@ -175,8 +199,35 @@ class Metamodel:
             raise ValueError(f"jet order must be 0..3, got {order}")
         t = np.asarray(t, dtype=float)
         pv, qv = features(t, theta)
-        # two derivative directions (p, q); H enters as a parameter
-        return _evaluate(self._fn("pq", order), 2, order, pv, qv, H)
+        # two derivative directions (p, q); H and the geometry enter as parameters
+        return _evaluate(self._fn("pq", order), 2, order, pv, qv, H, *self._geo(geometry))
+
+    def __repr__(self) -> str:
+        return f"Metamodel({self.name!r}, {self.expr}, units={self.units!r})"
+
+
+class _Bound:
+    """A :class:`Metamodel` at fixed geometric design variables (see :meth:`Metamodel.bind`)."""
+
+    def __init__(self, model: Metamodel, geometry: dict[str, float]):
+        self.model, self.geometry_values = model, geometry
+        self.name, self.units, self.info = model.name, model.units, model.info
+        sub = {SYMBOLS[g]: sp.Float(v) for g, v in geometry.items()}
+        self.expr, self.expr_pq = model.expr.xreplace(sub), model.expr_pq.xreplace(sub)
+
+    geometry = ()
+
+    def value(self, t, theta, H):
+        return self.model.value(t, theta, H, **self.geometry_values)
+
+    def grad(self, t, theta, H):
+        return self.model.grad(t, theta, H, **self.geometry_values)
+
+    def hess(self, t, theta, H):
+        return self.model.hess(t, theta, H, **self.geometry_values)
+
+    def jet(self, t, theta, H, order: int = 1):
+        return self.model.jet(t, theta, H, order, **self.geometry_values)
 
     def __repr__(self) -> str:
         return f"Metamodel({self.name!r}, {self.expr}, units={self.units!r})"
@@ -220,6 +271,27 @@ class ModelSet:
         if len(kinds) != 1:
             raise ValueError("f_r and f_z belong to different sensitivity definitions")
         return "published" if kinds.pop() else "jacobian"
+
+    @property
+    def geometry(self) -> tuple[str, ...]:
+        """Geometric design variables besides H that some model depends on."""
+        names = {g for _, m in self.items() for g in getattr(m, "geometry", ())}
+        return tuple(g.name for g in GEOMETRY if g.name in names)
+
+    def at(self, study, **geometry: float) -> ModelSet:
+        """The models at fixed geometric design variables [m], for ``study.at(**geometry)``:
+        fitted models are bound (:meth:`Metamodel.bind`), the exact field is rebuilt for the
+        sub-study's magnet."""
+        from ._exact_field import ExactField
+
+        sub = study.at(**geometry)
+
+        def one(name, m):
+            if isinstance(m, ExactField):
+                return ExactField(sub, name)
+            return m.bind(**geometry) if getattr(m, "geometry", ()) else m
+
+        return ModelSet(**{k: one(k, m) for k, m in self.items()})
 
     def __getitem__(self, name: str) -> Metamodel:
         if name not in RESPONSES:

@@ -32,8 +32,13 @@ PQ_TO_TTH = {p: t, q: t * sp.tan(theta)}
 #: Substitution (t, θ, H) form → feature form (exact where t > 0).
 TTH_TO_PQ = {t: p, theta: sp.atan(q / p)}
 
+#: Geometric design variables besides H [m] (magnet radius, magnet height, body radius): a
+#: model fitted over them has them as inputs like H; the Jacobian stays one in (p, q).
+R_m, H_m, R = sp.symbols("R_m H_m R")
+GEOMETRY = (R_m, H_m, R)
+
 #: Every symbol a model may contain, by name.
-SYMBOLS: dict[str, sp.Symbol] = {s.name: s for s in (t, theta, H, p, q)}
+SYMBOLS: dict[str, sp.Symbol] = {s.name: s for s in (t, theta, H, p, q, *GEOMETRY)}
 
 
 def features(t, theta) -> tuple[np.ndarray, np.ndarray]:

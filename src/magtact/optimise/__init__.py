@@ -20,6 +20,14 @@ from ._design import (
     per_design,
     per_height,
 )
+from ._geometry import (
+    DesignSet,
+    GeometricChoice,
+    GeometryOptimisation,
+    geometry_json,
+    optimise_geometry,
+    write_geometry_outputs,
+)
 from ._pareto import (
     Choice,
     Comparison,
@@ -42,6 +50,8 @@ from ._pareto import (
 from ._run import Optimisation, Timings, optimise, write_optimise_outputs
 
 __all__ = [
+    "DesignSet", "GeometricChoice", "GeometryOptimisation", "geometry_json",
+    "optimise_geometry", "write_geometry_outputs",
     "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignResult",
     "ForceConstraints", "HeightResult", "HeightTable", "InfeasibleError", "Optimisation",
     "ParetoSet", "Reduction", "ShearBoundConditioning", "Timings", "as_responses",

@@ -8,6 +8,7 @@ nothing). :func:`build_report` turns a results folder into one self-contained HT
 from ._card import card_rows, read_card, write_card
 from ._fig_doe import fig_doe
 from ._fig_field import fig_field
+from ._fig_geometry import draw_geometry_pareto, fig_geometry_pareto
 from ._fig_mechanics import fig_deformed_body
 from ._fig_metamodel import fig_force_map, fig_gamma, fig_parity
 from ._fig_optimise import fig_maps, fig_pareto
@@ -18,8 +19,9 @@ from ._stages import field_figures, fit_figures, optimise_figures, validation_fi
 from ._style import CMAP_DIV, CMAP_SEQ, save, style
 
 __all__ = [
-    "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "read_card", "write_card",
-    "fig_deformed_body", "fig_doe", "fig_field", "fig_force_map", "fig_gamma", "fig_maps",
-    "fig_parity", "fig_pareto", "fig_validation", "field_figures", "fit_figures",
-    "optimise_figures", "publication_figures", "save", "style", "validation_figures",
+    "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "draw_geometry_pareto",
+    "field_figures", "fig_deformed_body", "fig_doe", "fig_field", "fig_force_map", "fig_gamma",
+    "fig_geometry_pareto", "fig_maps", "fig_pareto", "fig_parity", "fig_validation",
+    "fit_figures", "optimise_figures", "publication_figures", "read_card", "save", "style",
+    "validation_figures", "write_card",
 ]

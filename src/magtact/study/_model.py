@@ -297,6 +297,9 @@ class Optimise:
                                doc="start grid along theta of the batched per-height solver")
     active_rtol: float = setting(1e-2, positive=True, bounds=(1e-12, 1.0),
                                  doc="a constraint is active when |margin| <= this x |limit|")
+    geometry_n: int = setting(11, integer=True, minimum=2, maximum=1001,
+                              doc="levels of each geometric design variable besides H in the "
+                                  "exact reduction's grid")
 
 
 @dataclass(frozen=True)

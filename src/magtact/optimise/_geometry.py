@@ -1,0 +1,313 @@
+"""Optimisation over the geometric design variables besides H (R_m, H_m, R).
+
+At a fixed geometry the problem is the (H, G, M_z) problem of :mod:`._pareto` with the models
+bound to it (:meth:`magtact.metamodel.ModelSet.at`), so both answers are built from it
+(docs/method.md §7):
+
+* the **exact reduction**, generalised: the exact Pareto set over H (with the best G and M_z at
+  each height) at every point of a grid over the geometric variables, then the non-dominated
+  part of their union;
+* **NSGA-II** over every design variable at once (H, G, M_z where it varies, and the geometric
+  ones), each design evaluated exactly with the models bound to its geometry.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..metamodel import ModelSet
+from ..study import Study, from_si
+from ._design import DesignResult, heights_batch, per_design
+from ._pareto import (
+    ForceConstraints,
+    InfeasibleError,
+    decision_index,
+    exact_reduction,
+    force_constraints,
+    nondominated,
+    sweep,
+)
+
+
+@dataclass(frozen=True)
+class DesignSet:
+    """Designs over every design variable (arrays of shape (n,), SI).
+
+    ``values`` maps ``H``, ``G``, ``M_z`` and each geometric variable to its values;
+    ``Gamma_r_max, Gamma_z_max`` [N/T] the objectives.
+    """
+
+    values: dict[str, np.ndarray]
+    Gamma_r_max: np.ndarray
+    Gamma_z_max: np.ndarray
+
+    @property
+    def objectives(self) -> np.ndarray:
+        """(Γ_r,max, Γ_z,max) [N/T], shape (n, 2)."""
+        return np.stack([self.Gamma_r_max, self.Gamma_z_max], axis=1)
+
+    def __len__(self) -> int:
+        return self.Gamma_r_max.size
+
+    def design(self, i: int) -> dict[str, float]:
+        """Design ``i`` as a dict of SI values."""
+        return {k: float(v[i]) for k, v in self.values.items()}
+
+
+@dataclass(frozen=True)
+class GeometricChoice:
+    """The chosen design: ``values`` (SI, by variable) and its per-design result at its
+    geometry (:func:`per_design` with the bound models)."""
+
+    values: dict[str, float]
+    design: DesignResult
+    g_r: float
+    g_z: float
+
+
+@dataclass(frozen=True)
+class GeometryOptimisation:
+    """Both answers over the geometric design space and the decision on each.
+
+    Attributes
+    ----------
+    variables : tuple of str
+        The geometric design variables besides H.
+    design_variables : tuple of str
+        Every design variable: H, G, M_z (where it varies) and :attr:`variables`.
+    constraints : ForceConstraints
+    exact : DesignSet
+        The exact Pareto set (generalised reduction, :attr:`grid` levels).
+    pareto : DesignSet
+        NSGA-II's Pareto set.
+    choice, exact_choice : GeometricChoice
+        The decision rule applied to NSGA-II's set (the answer) and to the exact set.
+    gap : float
+        Largest relative distance of NSGA-II's set from the exact front (:func:`set_gap`).
+    grid : dict of numpy.ndarray
+        Levels of each geometric variable in the exact reduction [m].
+    evaluations : int
+        NSGA-II's design evaluations.
+    """
+
+    variables: tuple[str, ...]
+    design_variables: tuple[str, ...]
+    constraints: ForceConstraints
+    exact: DesignSet
+    pareto: DesignSet
+    choice: GeometricChoice
+    exact_choice: GeometricChoice
+    gap: float
+    grid: dict[str, np.ndarray]
+    evaluations: int
+
+
+def bound(models: ModelSet, study: Study, geometry: dict[str, float]) -> tuple[ModelSet, Study]:
+    """The models and the study at one geometry (the (H, G, M_z) problem there)."""
+    return models.at(study, **geometry), study.at(**geometry)
+
+
+def exact_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
+                   ) -> tuple[DesignSet, dict[str, np.ndarray]]:
+    """The generalised exact reduction: the exact front over H at each point of a
+    ``optimise.geometry_n`` grid per geometric variable, then the non-dominated union.
+
+    Raises
+    ------
+    InfeasibleError
+        If no geometry of the grid admits a feasible design.
+    """
+    grid = {k: np.linspace(lo, hi, study.optimise.geometry_n)
+            for k, (lo, hi) in study.geometric_variables.items()}
+    rows, last_error = [], None
+    for values in itertools.product(*grid.values()):
+        geo = dict(zip(grid, (float(v) for v in values), strict=True))
+        m, s = bound(models, study, geo)
+        try:
+            red = exact_reduction(m, s, constraints, sweep(m, s))
+        except InfeasibleError as exc:
+            last_error = exc
+            continue
+        for i in np.flatnonzero(red.front):
+            rows.append([red.H[i], red.G_star[i], red.M_z_star[i], *values,
+                         red.Gamma_r[i], red.Gamma_z[i]])
+    if not rows:
+        raise InfeasibleError(f"no geometry of the grid admits a feasible design; at the last "
+                              f"one: {last_error}")
+    E = np.array(rows)
+    E = E[nondominated(E[:, -2:])]
+    E = E[np.argsort(E[:, -2], kind="stable")]
+    names = ("H", "G", "M_z", *grid)
+    return DesignSet({k: E[:, i] for i, k in enumerate(names)}, E[:, -2], E[:, -1]), grid
+
+
+def nsga2_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
+                   ) -> tuple[DesignSet, int]:
+    """NSGA-II (pymoo, seeded) over (H, G[, M_z], geometric variables), each design evaluated
+    exactly at its geometry; variables scaled to [0, 1], constraints as in
+    :func:`magtact.optimise.pareto_nsga2` (the chip's range is not a constraint here).
+
+    Raises
+    ------
+    InfeasibleError
+        If NSGA-II finds no feasible design.
+    """
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.core.problem import Problem
+    from pymoo.optimize import minimize
+
+    o = study.optimise
+    geo_names = tuple(study.geometric_variables)
+    bounds = {"H": study.design.H, "G": study.design.G}
+    if study.M_z_variable:
+        bounds["M_z"] = study.design.M_z
+    bounds |= study.geometric_variables
+    lo = np.array([b[0] for b in bounds.values()])
+    hi = np.array([b[1] for b in bounds.values()])
+    M0 = study.magnet.M_z
+    s_r = abs(constraints.F_r_c) or 1.0
+    s_z = abs(constraints.F_z_c) or 1.0
+
+    def evaluate(x):
+        v = lo + x * (hi - lo)
+        cols = dict(zip(bounds, v.T, strict=True))
+        out = np.empty((x.shape[0], 6))
+        for i in range(x.shape[0]):
+            m, s = bound(models, study, {k: float(cols[k][i]) for k in geo_names})
+            tab = heights_batch(m, [cols["H"][i]], s)
+            out[i] = (tab.f_r_min[0], tab.f_z_max[0], tab.gamma_r_max[0], tab.gamma_z_max[0],
+                      0.0, 0.0)
+        G = cols["G"]
+        M = cols.get("M_z", np.full(x.shape[0], M0))
+        k = G * M0 / M
+        g_r, g_z = constraints.margins(G * out[:, 0], G * out[:, 1])
+        return cols, M, k * out[:, 2], k * out[:, 3], g_r, g_z
+
+    class _Designs(Problem):
+        def __init__(self):
+            super().__init__(n_var=lo.size, n_obj=2, n_ieq_constr=2, xl=np.zeros(lo.size),
+                             xu=np.ones(lo.size))
+
+        def _evaluate(self, x, out, *args, **kwargs):
+            _, _, Gr, Gz, g_r, g_z = evaluate(x)
+            out["F"] = np.stack([Gr, Gz], axis=1)
+            out["G"] = np.stack([g_r / s_r, g_z / s_z], axis=1)
+
+    res = minimize(_Designs(), NSGA2(pop_size=o.population), ("n_gen", o.nsga2_generations),
+                   seed=o.seed, verbose=False)
+    opt = res.opt
+    feasible = np.zeros(0, bool) if opt is None else np.ravel(opt.get("CV")) <= 0
+    if not feasible.any():
+        raise InfeasibleError("NSGA-II found no feasible design over the geometric design "
+                              "space; increase optimise.nsga2_generations or population")
+    X = np.atleast_2d(opt.get("X"))[feasible]
+    cols, M, Gr, Gz, _, _ = evaluate(X)
+    order = np.argsort(Gr, kind="stable")
+    values = {"H": cols["H"], "G": cols["G"], "M_z": M} | {k: cols[k] for k in geo_names}
+    return (DesignSet({k: np.asarray(v)[order] for k, v in values.items()}, Gr[order],
+                      Gz[order]), int(res.algorithm.evaluator.n_eval))
+
+
+def set_gap(points: np.ndarray, front: np.ndarray) -> float:
+    """Largest relative distance of ``points`` (n, 2) from the curve through ``front`` (m, 2)
+    sorted along its first objective (20 interpolated points per segment): for each point
+    min over the curve Q of max_i |P_i − Q_i| / Q_i."""
+    Q = np.asarray(front, float)
+    if Q.shape[0] > 1:
+        s = np.linspace(0, 1, 20, endpoint=False)
+        Q = np.concatenate([Q[k] + s[:, None] * (Q[k + 1] - Q[k]) for k in range(len(Q) - 1)]
+                           + [Q], axis=0)
+    P = np.asarray(points, float)
+    d = np.max(np.abs(P[:, None, :] - Q[None, :, :]) / np.abs(Q[None, :, :]), axis=2)
+    return float(np.max(np.min(d, axis=1)))
+
+
+def _choose(models: ModelSet, study: Study, designs: DesignSet,
+            constraints: ForceConstraints) -> GeometricChoice:
+    values = designs.design(decision_index(designs.objectives))
+    m, s = bound(models, study, {k: values[k] for k in study.geometric_variables})
+    d = per_design(m, values["H"], values["G"], s,
+                   values["M_z"] if study.M_z_variable else None)
+    g_r, g_z = (float(v) for v in constraints.margins(d.F_r_min, d.F_z_max))
+    return GeometricChoice(values, d, g_r, g_z)
+
+
+def optimise_geometry(models: ModelSet, study: Study, *, F_r_c: float | None = None,
+                      F_z_c: float | None = None) -> GeometryOptimisation:
+    """Optimise over H, G (M_z) and the study's geometric design variables (module notes).
+
+    The force constraints come from the study (or ``F_r_c``, ``F_z_c`` [N]); a reference design
+    is evaluated at the study's own geometry (``magnet.R_m`` ...).
+
+    Raises
+    ------
+    ValueError
+        If the study has no geometric design variable besides H.
+    InfeasibleError
+        If no design is feasible.
+    """
+    if not study.geometric_variables:
+        raise ValueError("the study has no geometric design variable besides H; use optimise")
+    m0, s0 = bound(models, study, study.geometry())
+    constraints = force_constraints(m0, s0, F_r_c=F_r_c, F_z_c=F_z_c)
+    exact, grid = exact_geometry(models, study, constraints)
+    pareto, n_eval = nsga2_geometry(models, study, constraints)
+    geo = tuple(study.geometric_variables)
+    return GeometryOptimisation(
+        geo, ("H", "G", *(("M_z",) if study.M_z_variable else ()), *geo), constraints, exact,
+        pareto,
+        _choose(models, study, pareto, constraints), _choose(models, study, exact, constraints),
+        set_gap(pareto.objectives, exact.objectives), grid, n_eval)
+
+
+def describe(values: dict[str, float]) -> str:
+    """A design in user units, one line."""
+    unit = {"G": "kPa", "M_z": "A_per_m"}
+    return ", ".join(f"{k} = {from_si(v, unit.get(k, 'mm')):.4g} {unit.get(k, 'mm')}"
+                     for k, v in values.items())
+
+
+def _set_json(s: DesignSet) -> list[dict]:
+    unit = {"G": "kPa", "M_z": "A_per_m"}
+    return [{f"{k}_{unit.get(k, 'mm')}": float(from_si(v[i], unit.get(k, "mm")))
+             for k, v in s.values.items()}
+            | {"Gamma_r_max_N_per_T": float(s.Gamma_r_max[i]),
+               "Gamma_z_max_N_per_T": float(s.Gamma_z_max[i])} for i in range(len(s))]
+
+
+def geometry_json(r: GeometryOptimisation) -> dict:
+    """The result in user units (mm, kPa, A/m, N, N/T) as JSON-ready data."""
+    def choice(c: GeometricChoice) -> dict:
+        d = c.design
+        return {"design": describe(c.values), "Gamma_r_max_N_per_T": d.Gamma_r_max,
+                "Gamma_z_max_N_per_T": d.Gamma_z_max, "F_r_min_N": d.F_r_min,
+                "F_z_max_N": d.F_z_max, "g_r_N": c.g_r, "g_z_N": c.g_z}
+
+    return {"variables": list(r.design_variables),
+            "constraints": {"F_r_c_N": r.constraints.F_r_c, "F_z_c_N": r.constraints.F_z_c,
+                            "source": r.constraints.source},
+            "choice": choice(r.choice), "exact_choice": choice(r.exact_choice),
+            "gap_to_exact_front": r.gap, "nsga2_evaluations": r.evaluations,
+            "exact_grid_mm": {k: [float(from_si(v, "mm")) for v in g]
+                              for k, g in r.grid.items()},
+            "pareto": _set_json(r.pareto), "exact_front": _set_json(r.exact)}
+
+
+def write_geometry_outputs(models: ModelSet, study: Study, folder, figures=None
+                           ) -> GeometryOptimisation:
+    """Run :func:`optimise_geometry` and write ``folder/geometry.json`` (and, with
+    ``figures``, its figure: a callable ``figures(result, folder)``)."""
+    import json
+    from pathlib import Path
+
+    from .._files import write_text
+
+    folder = Path(folder)
+    result = optimise_geometry(models, study)
+    write_text(folder / "geometry.json", json.dumps(geometry_json(result), indent=1) + "\n")
+    if figures is not None:
+        figures(result, folder)
+    return result

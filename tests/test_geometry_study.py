@@ -1,0 +1,53 @@
+"""A tiny real study with (H, R_m) as design variables, end to end: field, DOE (FE), fit,
+optimisation over the geometry, report; NSGA-II against the generalised exact reduction."""
+
+import json
+
+import numpy as np
+import pytest
+
+from magtact.pipeline import run_study
+from magtact.study import study_from_dict
+
+TINY = {
+    "name": "tiny (H, R_m)",
+    "design": {"H_mm": [3.0, 5.0], "R_m_mm": [2.0, 2.5]},
+    "magnet": {"R_m_mm": 2.5},
+    "doe": {"n_t": 5, "n_theta": 2, "n_H": 2, "n_G": 2, "n_R_m": 2},
+    "mechanics": {"mesh": "coarse"},
+    "magnetics": {"solver": "exact"},
+    "metamodel": {"b_model": "exact", "generations": 20, "population": 150,
+                  "holdout_paths": 0},
+    "constraints": {"source": "values", "F_r_c_N": -0.02, "F_z_c_N": 1.0},
+    "optimise": {"population": 12, "nsga2_generations": 8, "sweep_n": 41, "sweep_coarse": 9,
+                 "geometry_n": 5, "start_t": 11, "start_theta": 6},
+}
+
+
+@pytest.mark.long
+@pytest.mark.xfail(strict=True, reason="NSGA-II at this budget (96 evaluations) ends 34 % off "
+                                       "the exact front: the agreement within 1 % is not met yet")
+def test_tiny_geometric_study_end_to_end(tmp_path):
+    study = study_from_dict(TINY)
+    res = run_study(study, tmp_path, recompute=True, cache=tmp_path / "cache", workers=2,
+                    log=lambda m: None)
+    status = {r.key: r.status for r in res.stages}
+    assert status["doe"] == status["metamodel"] == status["optimise"] == "ok", \
+        [(r.key, r.message) for r in res.stages]
+    assert status["validation"] == "skipped"
+    out = json.loads((tmp_path / "optimise" / "geometry.json").read_text())
+    assert out["variables"] == ["H", "G", "R_m"]
+    choice = out["choice"]
+    assert 2.0 <= float(choice["design"].split("R_m = ")[1].split()[0]) <= 2.5
+    # NSGA-II's set lies within 1 % of the exact front in both objectives
+    assert out["gap_to_exact_front"] <= 0.01
+    assert choice["g_r_N"] <= 1e-9 and choice["g_z_N"] <= 1e-9  # feasible
+    assert (tmp_path / "optimise" / "geometry_pareto.png").is_file()
+    assert res.report.is_file()
+    from magtact.doe import load_dataset
+
+    ds = load_dataset(tmp_path / "doe" / "doe.nc")
+    assert ds["F_z"].dims[-1] == "R_m"
+    # a wider magnet in the same body: the stiff inclusion carries more of the load
+    Fz = ds["F_z"].isel(t=-1, theta=0, H=0, G=0).values
+    assert np.all(np.isfinite(Fz)) and Fz[1] != Fz[0]
