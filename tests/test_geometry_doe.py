@@ -66,13 +66,13 @@ def test_csv_of_a_geometric_doe_has_the_variable_after_g(tmp_path):
     assert [float(r.split(",")[4]) for r in lines[1:4]] == [1.5, 2.5, 3.5]
 
 
-def test_set_gap_is_zero_on_the_front_and_relative_off_it():
-    from magtact.optimise._geometry import set_gap
+def test_curve_gap_is_zero_on_the_front_and_relative_off_it():
+    from magtact.optimise._pareto import curve_gap
 
     front = np.array([[1.0, 4.0], [2.0, 2.0], [4.0, 1.0]])
-    assert set_gap(front, front) == 0.0
-    assert set_gap(np.array([[1.5, 3.0]]), front) < 1e-12  # on a segment
-    assert abs(set_gap(np.array([[4.4, 1.0]]), front) - 0.1) < 1e-12
+    assert curve_gap(front, front) == 0.0
+    assert curve_gap(np.array([[1.5, 3.0]]), front) < 1e-12  # on a segment
+    assert abs(curve_gap(np.array([[4.4, 1.0]]), front) - 0.1) < 1e-12
 
 
 def test_geometry_figure_shows_both_sets_and_the_choice(tmp_path):

@@ -24,6 +24,7 @@ from ._design import DesignResult, heights_batch, per_design
 from ._pareto import (
     ForceConstraints,
     InfeasibleError,
+    curve_gap,
     decision_index,
     exact_reduction,
     force_constraints,
@@ -86,7 +87,7 @@ class GeometryOptimisation:
     choice, exact_choice : GeometricChoice
         The decision rule applied to NSGA-II's set (the answer) and to the exact set.
     gap : float
-        Largest relative distance of NSGA-II's set from the exact front (:func:`set_gap`).
+        Largest relative distance of NSGA-II's set from the exact front (:func:`curve_gap`).
     grid : dict of numpy.ndarray
         Levels of each geometric variable in the exact reduction [m].
     evaluations : int
@@ -211,20 +212,6 @@ def nsga2_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
                       Gz[order]), int(res.algorithm.evaluator.n_eval))
 
 
-def set_gap(points: np.ndarray, front: np.ndarray) -> float:
-    """Largest relative distance of ``points`` (n, 2) from the curve through ``front`` (m, 2)
-    sorted along its first objective (20 interpolated points per segment): for each point
-    min over the curve Q of max_i |P_i − Q_i| / Q_i."""
-    Q = np.asarray(front, float)
-    if Q.shape[0] > 1:
-        s = np.linspace(0, 1, 20, endpoint=False)
-        Q = np.concatenate([Q[k] + s[:, None] * (Q[k + 1] - Q[k]) for k in range(len(Q) - 1)]
-                           + [Q], axis=0)
-    P = np.asarray(points, float)
-    d = np.max(np.abs(P[:, None, :] - Q[None, :, :]) / np.abs(Q[None, :, :]), axis=2)
-    return float(np.max(np.min(d, axis=1)))
-
-
 def _choose(models: ModelSet, study: Study, designs: DesignSet,
             constraints: ForceConstraints) -> GeometricChoice:
     values = designs.design(decision_index(designs.objectives))
@@ -260,7 +247,7 @@ def optimise_geometry(models: ModelSet, study: Study, *, F_r_c: float | None = N
         geo, ("H", "G", *(("M_z",) if study.M_z_variable else ()), *geo), constraints, exact,
         pareto,
         _choose(models, study, pareto, constraints), _choose(models, study, exact, constraints),
-        set_gap(pareto.objectives, exact.objectives), grid, n_eval)
+        curve_gap(pareto.objectives, exact.objectives), grid, n_eval)
 
 
 def describe(values: dict[str, float]) -> str:

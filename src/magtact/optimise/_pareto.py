@@ -397,24 +397,31 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
                      int(res.algorithm.evaluator.n_eval), M)
 
 
-def front_gap(pareto: ParetoSet, reduction: Reduction) -> float:
-    """Largest relative distance of NSGA-II's set from the exact Pareto curve in objective space.
+def curve_gap(points: np.ndarray, front: np.ndarray, joined: np.ndarray | None = None) -> float:
+    """Largest relative distance of ``points`` (n, 2) from the curve through ``front`` (m, 2).
 
-    For each NSGA-II point P the distance is min over the curve Q of max_i |P_i − Q_i| / Q_i,
-    the curve being the exact front refined by linear interpolation (20 points per segment)
-    between neighbouring front heights.
+    For each point P the distance is min over the curve Q of max_i |P_i − Q_i| / Q_i; the curve
+    is ``front`` refined by linear interpolation (20 points per segment) between neighbours
+    ``k, k + 1`` where ``joined[k]`` (default: all of them).
     """
-    idx = np.flatnonzero(reduction.front)
-    Q = np.stack([reduction.Gamma_r[idx], reduction.Gamma_z[idx]], axis=1)
+    Q = np.asarray(front, float)
     if Q.shape[0] > 1:
+        joined = np.ones(Q.shape[0] - 1, bool) if joined is None else joined
         s = np.linspace(0, 1, 20, endpoint=False)
-        contiguous = np.diff(idx) == 1
         segs = [Q[k] + s[:, None] * (Q[k + 1] - Q[k]) for k in range(Q.shape[0] - 1)
-                if contiguous[k]]
+                if joined[k]]
         Q = np.concatenate(segs + [Q], axis=0)
-    P = pareto.objectives
+    P = np.asarray(points, float)
     d = np.max(np.abs(P[:, None, :] - Q[None, :, :]) / np.abs(Q[None, :, :]), axis=2)
     return float(np.max(np.min(d, axis=1)))
+
+
+def front_gap(pareto: ParetoSet, reduction: Reduction) -> float:
+    """Largest relative distance of NSGA-II's set from the exact Pareto curve in objective space
+    (:func:`curve_gap`, the curve joining neighbouring front heights only)."""
+    idx = np.flatnonzero(reduction.front)
+    Q = np.stack([reduction.Gamma_r[idx], reduction.Gamma_z[idx]], axis=1)
+    return curve_gap(pareto.objectives, Q, np.diff(idx) == 1)
 
 
 def decision_index(objectives: np.ndarray) -> int:
