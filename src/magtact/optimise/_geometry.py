@@ -250,16 +250,18 @@ def optimise_geometry(models: ModelSet, study: Study, *, F_r_c: float | None = N
         curve_gap(pareto.objectives, exact.objectives), grid, n_eval)
 
 
+#: User unit of each design variable (lengths in mm).
+UNITS = {"G": "kPa", "M_z": "A_per_m"}
+
+
 def describe(values: dict[str, float]) -> str:
     """A design in user units, one line."""
-    unit = {"G": "kPa", "M_z": "A_per_m"}
-    return ", ".join(f"{k} = {from_si(v, unit.get(k, 'mm')):.4g} {unit.get(k, 'mm')}"
+    return ", ".join(f"{k} = {from_si(v, UNITS.get(k, 'mm')):.4g} {UNITS.get(k, 'mm')}"
                      for k, v in values.items())
 
 
 def _set_json(s: DesignSet) -> list[dict]:
-    unit = {"G": "kPa", "M_z": "A_per_m"}
-    return [{f"{k}_{unit.get(k, 'mm')}": float(from_si(v[i], unit.get(k, "mm")))
+    return [{f"{k}_{UNITS.get(k, 'mm')}": float(from_si(v[i], UNITS.get(k, "mm")))
              for k, v in s.values.items()}
             | {"Gamma_r_max_N_per_T": float(s.Gamma_r_max[i]),
                "Gamma_z_max_N_per_T": float(s.Gamma_z_max[i])} for i in range(len(s))]
