@@ -93,7 +93,7 @@ def cel(kc, p, c, s) -> np.ndarray:
     return 0.5 * np.pi * (ss + cc * em) / (em * (em + pp))
 
 
-def cylinder_field(r, z, R_m: float, H_m: float, M_z: float) -> tuple[np.ndarray, np.ndarray]:
+def cylinder_field(r, z, R_m, H_m, M_z) -> tuple[np.ndarray, np.ndarray]:
     """Flux density of an axially magnetised cylinder centred at the origin (exact).
 
     Parameters
@@ -103,9 +103,10 @@ def cylinder_field(r, z, R_m: float, H_m: float, M_z: float) -> tuple[np.ndarray
     z : array_like
         Axial coordinate of the field points [m], relative to the magnet's centre; broadcast
         with ``r``.
-    R_m, H_m : float
-        Magnet radius and height [m]; the magnet occupies r ≤ R_m, |z| ≤ H_m / 2.
-    M_z : float
+    R_m, H_m : float or array_like
+        Magnet radius and height [m]; the magnet occupies r ≤ R_m, |z| ≤ H_m / 2. Arrays
+        broadcast with ``r`` and ``z`` (one magnet per field point).
+    M_z : float or array_like
         Uniform axial magnetisation [A/m] (polarisation μ0 M_z with μ0 = ``magtact.study.MU0``).
 
     Returns
@@ -137,12 +138,13 @@ def cylinder_field(r, z, R_m: float, H_m: float, M_z: float) -> tuple[np.ndarray
     On the axis k± = 1 and γ = 1, which gives B_r = 0 and the textbook
     B_z = μ0 M_z / 2 (β+ − β−); on the mantle line r = a, γ = 0 (``cel`` with p = 0).
     """
-    r, z = np.broadcast_arrays(np.asarray(r, dtype=float), np.asarray(z, dtype=float))
+    r, z, a, h, M_z = np.broadcast_arrays(*(np.asarray(v, dtype=float)
+                                            for v in (r, z, R_m, H_m, M_z)))
     if np.any(r < 0):
         raise ValueError("cylinder_field: r must be >= 0 (cylindrical radius)")
-    if R_m <= 0 or H_m <= 0:
+    if not (np.all(a > 0) and np.all(h > 0)):
         raise ValueError(f"cylinder_field: R_m and H_m must be positive, got {R_m}, {H_m}")
-    a, b = float(R_m), 0.5 * float(H_m)
+    b = 0.5 * h
     rim = np.isclose(r, a, rtol=0.0, atol=1e-12 * a) & np.isclose(np.abs(z), b, rtol=0.0,
                                                                   atol=1e-12 * a)
     r = np.where(rim, 0.0, r)  # evaluate a harmless point there, replaced by NaN below

@@ -1,16 +1,19 @@
 """The exact closed-form field as the "B model": no fit error, same interface as a Metamodel.
 
 The Hall point sits at (X, Z) relative to the magnet's centre, affine in the features:
-X = a(H) q, Z = Z0(H) − a(H) p with a(H) = Δz_sat − Δz0(H) (the load's u_z per unit t) and
-Z0(H) the unloaded height (negative) — both from :mod:`magtact.geometry`. The field is
-``magtact.magnetics.cylinder_field`` at (|X|, Z), with B_r along +x: B_r = sign(X) B_ρ(|X|, Z),
-an odd, smooth function of X (the cylindrical B_ρ vanishes linearly on the axis).
+X = a q, Z = Z0 − a p with a = Δz_sat − Δz0 (the load's u_z per unit t) and Z0 the unloaded
+height (negative), both affine in H and in the magnet height H_m — from :mod:`magtact.geometry`.
+The field is ``magtact.magnetics.cylinder_field`` at (|X|, Z), with B_r along +x:
+B_r = sign(X) B_ρ(|X|, Z), an odd, smooth function of X (the cylindrical B_ρ vanishes linearly
+on the axis). Where the magnet's radius or height is a design variable of the study, the model
+takes its values like a fitted model takes them (arrays broadcasting with t, θ, H).
 
 Derivatives with respect to (X, Z) up to third order come from central finite differences on a
 7 × 7 stencil of step h = 20 µm (weights of order 6 for first, 6 for second and 4 for third
-derivatives). The field varies on the scale of the magnet–sensor distance L ≥ 2 mm, so the
-truncation error is about (h / L)^4 ≈ 1e-8 relative for third derivatives and the rounding error
-about ε (L / h)^3 ≈ 1e-10; first derivatives are accurate to ~1e-12.
+derivatives); first derivatives need only the stencil's two axes. The field varies on the scale
+of the magnet–sensor distance L ≥ 2 mm, so the truncation error is about (h / L)^4 ≈ 1e-8
+relative for third derivatives and the rounding error about ε (L / h)^3 ≈ 1e-10; first
+derivatives are accurate to ~1e-12.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import numpy as np
 
 from ..study import Study
 from ._fit import _affine_in_H
+from ._model import geometry_values
 from ._symbols import feature_jacobian, features, q_hessian
 
 #: Finite-difference step in the Hall position [m].
@@ -35,19 +39,59 @@ def _weights() -> np.ndarray:
     return np.linalg.solve(V, np.eye(7)[:, :4]).T
 
 
+def _coefficients(fun, study: Study) -> tuple[float, float, float]:
+    """(c0, c_H, c_Hm) of a function of the study's geometry that is affine in H and in the
+    magnet height: fun(s, H) = c0 + c_H H + c_Hm s.magnet.H_m. Without H_m as a design
+    variable c_Hm = 0 and c0 holds the magnet's own height."""
+    if "H_m" not in study.geometric_variables:
+        return (*_affine_in_H(lambda h: fun(study, h), study), 0.0)
+    lo, hi = study.geometric_variables["H_m"]
+    def at(v):
+        sub = study.at(H_m=v)
+        return _affine_in_H(lambda h: fun(sub, h), study)
+
+    (c0_lo, c1_lo), (c0_mid, c1_mid), (c0_hi, c1_hi) = (at(v) for v in (lo, 0.5 * (lo + hi), hi))
+    scale = max(abs(c0_lo), abs(c0_hi), abs(c1_lo) * study.design.H[1])
+    slope = (c0_hi - c0_lo) / (hi - lo)
+    if not (abs(c1_hi - c1_lo) <= 1e-12 * scale and abs(c1_mid - c1_lo) <= 1e-12 * scale
+            and abs(c0_lo + slope * 0.5 * (hi - lo) - c0_mid) <= 1e-12 * scale):
+        raise ValueError("the loading path is not affine in the magnet height")
+    return c0_lo - slope * lo, c1_lo, slope
+
+
+#: The last evaluation of the field (arguments, both components): B_r and B_z are asked for at
+#: the same points one after the other (the sensitivity needs both), and cost one evaluation.
+_LAST: tuple = ((), None)
+
+
+def _both_components(r, Z, R_m, H_m, M_z) -> tuple[np.ndarray, np.ndarray]:
+    from ..magnetics import cylinder_field
+
+    args = (r, Z, R_m, H_m, M_z)
+    key, value = _LAST
+    if len(key) == 5 and all(np.shape(a) == np.shape(b) and np.array_equal(a, b)
+                             for a, b in zip(args, key, strict=True)):
+        return value
+    value = cylinder_field(*args)
+    globals()["_LAST"] = (args, value)
+    return value
+
+
 class ExactField:
     """B_r or B_z [T] of the exact cylinder-magnet field, as a function of (t, θ, H).
 
     Parameters
     ----------
     study : Study
-        Geometry of the magnet and the loading path.
+        Geometry of the magnet and the loading path. Where its magnet radius ``R_m`` or height
+        ``H_m`` is a design variable, the model depends on it (:attr:`geometry`): the calls take
+        its values [m] by name, as :class:`magtact.metamodel.Metamodel` calls do.
     name : {"B_r", "B_z"}
 
     Notes
     -----
-    Offers ``value``, ``grad``, ``hess`` (w.r.t. (t, θ, H)) and ``jet`` (w.r.t. the features
-    (p, q)) like :class:`magtact.metamodel.Metamodel`; it has no SymPy expression.
+    Offers ``value``, ``grad``, ``hess`` (w.r.t. (t, θ, H)), ``jet`` (w.r.t. the features
+    (p, q)) and ``bind`` like :class:`magtact.metamodel.Metamodel`; it has no SymPy expression.
     """
 
     units = "T"
@@ -58,47 +102,78 @@ class ExactField:
         from ..geometry import hall_from_magnet_centre, loading_path
 
         self.study, self.name = study, name
-        self.a0, self.a1 = _affine_in_H(lambda h: float(loading_path(study, 1.0, 0.0, h)[1]),
-                                        study)
-        self.z0, self.z1 = _affine_in_H(
-            lambda h: float(hall_from_magnet_centre(study, 0.0, 0.0, h)[1]), study)
+        self.geometry = tuple(k for k in ("R_m", "H_m") if k in study.geometric_variables)
+        self.a0, self.a1, self.a2 = _coefficients(
+            lambda s, h: float(loading_path(s, 1.0, 0.0, h)[1]), study)
+        self.z0, self.z1, self.z2 = _coefficients(
+            lambda s, h: float(hall_from_magnet_centre(s, 0.0, 0.0, h)[1]), study)
         self.info = {"kind": "exact closed-form field (magtact.magnetics.cylinder_field)"}
+
+    def bind(self, **geometry: float) -> ExactField:
+        """The field of the study at fixed values [m] of its geometric design variables
+        (``study.at(**geometry)``); a model of (t, θ, H) alone."""
+        geometry_values(self.name, self.geometry, geometry)
+        return ExactField(self.study.at(**{k: v for k, v in geometry.items()
+                                           if k in self.study.geometric_variables}), self.name)
 
     @cached_property
     def _W(self):
         return _weights()
 
-    def _field(self, X, Z):
-        from ..magnetics import cylinder_field
-
+    def _magnet(self, geometry: dict) -> tuple:
+        """(R_m, H_m, M_z) of the magnet: the given values of the design variables, the
+        study's own for the rest."""
         m = self.study.magnet
-        br, bz = cylinder_field(np.abs(X), Z, m.R_m, m.H_m, m.M_z)
+        given = dict(zip(self.geometry, geometry_values(self.name, self.geometry, geometry),
+                         strict=True))
+        return (np.asarray(given.get("R_m", m.R_m), dtype=float),
+                np.asarray(given.get("H_m", m.H_m), dtype=float), m.M_z)
+
+    def _field(self, X, Z, magnet):
+        R_m, H_m, M_z = magnet
+        br, bz = _both_components(np.abs(X), Z, R_m, H_m, M_z)
         return br * np.sign(X) if self.name == "B_r" else bz
 
-    def _position(self, t, theta, H):
-        t, theta, H = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (t, theta, H)))
-        a = self.a0 + self.a1 * H
+    def _position(self, t, theta, H, magnet):
+        t, theta, H, H_m = np.broadcast_arrays(
+            *(np.asarray(v, dtype=float) for v in (t, theta, H, magnet[1])))
+        a = self.a0 + self.a1 * H + self.a2 * H_m
         pv, qv = features(t, theta)
-        return t, theta, H, a, a * qv, self.z0 + self.z1 * H - a * pv
+        return t, theta, H, a, a * qv, self.z0 + self.z1 * H + self.z2 * H_m - a * pv
 
-    def _derivs(self, X, Z, order):
+    def _derivs(self, X, Z, order, magnet):
         """D[i][j] = ∂^(i+j) B / ∂X^i ∂Z^j for i + j ≤ order, each of the shape of X."""
+        R_m, H_m, M_z = magnet
         if order == 0:
-            return {(0, 0): self._field(X, Z)}
+            return {(0, 0): self._field(X, Z, magnet)}
         o = _OFFSETS * STEP
-        F = self._field(X[..., None, None] + o[:, None], Z[..., None, None] + o[None, :])
         W = self._W
+        if order == 1:  # the centre weight of a first derivative is zero: the axes suffice
+            F = self._field(np.concatenate([X[..., None] + o, np.broadcast_to(X[..., None],
+                                                                              X.shape + (7,))],
+                                           axis=-1),
+                            np.concatenate([np.broadcast_to(Z[..., None], Z.shape + (7,)),
+                                            Z[..., None] + o], axis=-1),
+                            (np.asarray(R_m)[..., None], np.asarray(H_m)[..., None], M_z))
+            return {(0, 0): F[..., 3], (1, 0): F[..., :7] @ W[1] / STEP,
+                    (0, 1): F[..., 7:] @ W[1] / STEP}
+        F = self._field(X[..., None, None] + o[:, None], Z[..., None, None] + o[None, :],
+                        (np.asarray(R_m)[..., None, None], np.asarray(H_m)[..., None, None],
+                         M_z))
         return {(i, j): np.einsum("...ab,a,b->...", F, W[i], W[j]) / STEP ** (i + j)
                 for i in range(order + 1) for j in range(order + 1 - i)}
 
-    def value(self, t, theta, H) -> np.ndarray:
-        """Field component [T] at (t, θ, H) (broadcast)."""
-        *_, X, Z = self._position(t, theta, H)
-        return self._field(X, Z)
+    def value(self, t, theta, H, **geometry) -> np.ndarray:
+        """Field component [T] at (t, θ, H) (broadcast); ``geometry``: values [m] of the
+        design variables it depends on (:attr:`geometry`)."""
+        magnet = self._magnet(geometry)
+        *_, X, Z = self._position(t, theta, H, magnet)
+        return self._field(X, Z, magnet)
 
-    def _chain(self, t, theta, H, order):
-        t, theta, H, a, X, Z = self._position(t, theta, H)
-        D = self._derivs(X, Z, order)
+    def _chain(self, t, theta, H, order, geometry):
+        magnet = self._magnet(geometry)
+        t, theta, H, a, X, Z = self._position(t, theta, H, magnet)
+        D = self._derivs(X, Z, order, magnet)
         Jq = feature_jacobian(t, theta)[..., 1, :]  # ∂q/∂(t, θ); X = a(H) q
         zero = np.zeros_like(t)
         dX = np.stack([a * Jq[..., 0], a * Jq[..., 1], self.a1 * features(t, theta)[1]],
@@ -106,14 +181,14 @@ class ExactField:
         dZ = np.stack([-a, zero, self.z1 - self.a1 * t], axis=-1)
         return t, theta, a, Jq, D, dX, dZ
 
-    def grad(self, t, theta, H) -> np.ndarray:
+    def grad(self, t, theta, H, **geometry) -> np.ndarray:
         """Gradient w.r.t. (t, θ, H), shape (..., 3)."""
-        *_, D, dX, dZ = self._chain(t, theta, H, 1)
+        *_, D, dX, dZ = self._chain(t, theta, H, 1, geometry)
         return D[1, 0][..., None] * dX + D[0, 1][..., None] * dZ
 
-    def hess(self, t, theta, H) -> np.ndarray:
+    def hess(self, t, theta, H, **geometry) -> np.ndarray:
         """Hessian w.r.t. (t, θ, H), shape (..., 3, 3)."""
-        t, theta, a, Jq, D, dX, dZ = self._chain(t, theta, H, 2)
+        t, theta, a, Jq, D, dX, dZ = self._chain(t, theta, H, 2, geometry)
         out = (D[2, 0][..., None, None] * dX[..., :, None] * dX[..., None, :]
                + D[1, 1][..., None, None] * (dX[..., :, None] * dZ[..., None, :]
                                              + dZ[..., :, None] * dX[..., None, :])
@@ -126,15 +201,16 @@ class ExactField:
         out[..., 2, 0] -= D[0, 1] * self.a1
         return out
 
-    def jet(self, t, theta, H, order: int = 1) -> list[np.ndarray]:
+    def jet(self, t, theta, H, order: int = 1, **geometry) -> list[np.ndarray]:
         """Value and derivatives w.r.t. (p, q) up to ``order`` (≤ 3); see ``Metamodel.jet``.
 
         ∂/∂p = −a ∂/∂Z and ∂/∂q = a ∂/∂X at fixed H.
         """
         if not 0 <= order <= 3:
             raise ValueError(f"jet order must be 0..3, got {order}")
-        t, theta, H, a, X, Z = self._position(t, theta, H)
-        D = self._derivs(X, Z, order)
+        magnet = self._magnet(geometry)
+        t, theta, H, a, X, Z = self._position(t, theta, H, magnet)
+        D = self._derivs(X, Z, order, magnet)
         out = [D[0, 0]]
         for k in range(1, order + 1):
             arr = np.empty(t.shape + (2,) * k)

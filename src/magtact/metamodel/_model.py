@@ -17,6 +17,22 @@ from ._symbols import GEOMETRY, PQ_TO_TTH, PQH, SYMBOLS, TTH, TTH_TO_PQ, feature
 RESPONSES: dict[str, str] = {"B_r": "T", "B_z": "T", "f_r": "N/Pa", "f_z": "N/Pa"}
 
 
+def geometry_values(name: str, needed: tuple[str, ...], given: dict) -> list:
+    """The values of the geometric variables ``needed`` by model ``name``, in order, from
+    ``given`` (others are ignored; each may be an array broadcasting with t, θ, H).
+
+    Raises
+    ------
+    ValueError
+        If one of them is not given.
+    """
+    missing = [g for g in needed if g not in given]
+    if missing:
+        raise ValueError(f"model {name} depends on {missing}: give their values "
+                         "(or bind them with ModelSet.at)")
+    return [given[g] for g in needed]
+
+
 def _canonical(expr) -> sp.Expr:
     """``expr`` with its symbols replaced by the canonical ones of the same name.
 
@@ -139,7 +155,7 @@ class Metamodel:
     def _compiled(self) -> dict:
         return {}
 
-    @property
+    @cached_property
     def geometry(self) -> tuple[str, ...]:
         """Names of the geometric design variables besides H the model depends on."""
         names = {s.name for s in self.expr.free_symbols}
@@ -159,12 +175,7 @@ class Metamodel:
         return self._compiled[key]
 
     def _geo(self, geometry: dict) -> list:
-        """The values of the model's geometric variables, in order (all must be given)."""
-        missing = [g for g in self.geometry if g not in geometry]
-        if missing:
-            raise ValueError(f"model {self.name} depends on {missing}: give their values "
-                             "(or bind them with ModelSet.at)")
-        return [geometry[g] for g in self.geometry]
+        return geometry_values(self.name, self.geometry, geometry)
 
     # ---- evaluation ----------------------------------------------------------------------
     def value(self, t, theta, H, **geometry) -> np.ndarray:
@@ -217,16 +228,18 @@ class _Bound:
 
     geometry = ()
 
-    def value(self, t, theta, H):
+    # other geometric values given to a bound model are ignored, as by any model that does
+    # not depend on them
+    def value(self, t, theta, H, **_):
         return self.model.value(t, theta, H, **self.geometry_values)
 
-    def grad(self, t, theta, H):
+    def grad(self, t, theta, H, **_):
         return self.model.grad(t, theta, H, **self.geometry_values)
 
-    def hess(self, t, theta, H):
+    def hess(self, t, theta, H, **_):
         return self.model.hess(t, theta, H, **self.geometry_values)
 
-    def jet(self, t, theta, H, order: int = 1):
+    def jet(self, t, theta, H, order: int = 1, **_):
         return self.model.jet(t, theta, H, order, **self.geometry_values)
 
     def __repr__(self) -> str:
@@ -278,20 +291,12 @@ class ModelSet:
         names = {g for _, m in self.items() for g in getattr(m, "geometry", ())}
         return tuple(g.name for g in GEOMETRY if g.name in names)
 
-    def at(self, study, **geometry: float) -> ModelSet:
-        """The models at fixed geometric design variables [m], for ``study.at(**geometry)``:
-        fitted models are bound (:meth:`Metamodel.bind`), the exact field is rebuilt for the
-        sub-study's magnet."""
-        from ._exact_field import ExactField
-
-        sub = study.at(**geometry)
-
-        def one(name, m):
-            if isinstance(m, ExactField):
-                return ExactField(sub, name)
-            return m.bind(**geometry) if getattr(m, "geometry", ()) else m
-
-        return ModelSet(**{k: one(k, m) for k, m in self.items()})
+    def at(self, **geometry: float) -> ModelSet:
+        """The models at fixed geometric design variables [m] (the models of
+        ``study.at(**geometry)``): each model that depends on them is bound
+        (:meth:`Metamodel.bind`, ``ExactField.bind``)."""
+        return ModelSet(**{k: m.bind(**geometry) if getattr(m, "geometry", ()) else m
+                           for k, m in self.items()})
 
     def __getitem__(self, name: str) -> Metamodel:
         if name not in RESPONSES:

@@ -7,7 +7,7 @@ once per height H (:class:`HeightResult`) and scaled by G for a design (:class:`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +15,7 @@ import numpy as np
 from .._errors import MagtactError
 from .._files import significant, write_csv
 from ..metamodel import ModelSet
-from ..sensitivity import Responses, ResponsesAtH
+from ..sensitivity import Responses
 from ..study import Study, from_si
 from ._box import BatchOptimum, BoxOptimum, batch_optimum, box_optimum
 
@@ -30,11 +30,6 @@ def as_responses(models: Responses | ModelSet) -> Responses:
     if isinstance(models, ModelSet):
         return Responses(models)
     raise TypeError(f"expected Responses or ModelSet, got {type(models).__name__}")
-
-
-def _at(responses: Responses, H) -> ResponsesAtH:
-    """Responses at height(s) H; an array H broadcasts against (t, θ)."""
-    return responses.at(H)
 
 
 @dataclass(frozen=True)
@@ -165,7 +160,7 @@ def per_height(models: Responses | ModelSet, H: float, study: Study) -> HeightRe
     [0, t_m] × [0, θ_m]; a side of zero width (degenerate box) fixes that variable, and the
     single point (0, 0) is simply evaluated. Each problem: :func:`box_optimum`.
     """
-    R = _at(as_responses(models), float(H))
+    R = as_responses(models).at(float(H))
     o = study.optimise
     kw = {"population": o.population, "generations": o.ga_generations, "seed": o.seed,
           "tol": o.tol}
@@ -207,7 +202,8 @@ class HeightTable:
 
     ``H`` [m]; ``t_m, theta_m`` the stable shear bounds; ``f_r_min, f_z_max`` [N/Pa];
     ``gamma_r_max, gamma_z_max`` [N/(T·Pa)]; ``loc_*`` the (t, θ) of each maximum, shape (n, 2);
-    ``converged`` whether all four refinements met the tolerance.
+    ``converged`` whether all four refinements met the tolerance; ``geometry`` each row's values
+    [m] of the geometric design variables besides H, by name (empty without them).
     """
 
     H: np.ndarray
@@ -221,10 +217,17 @@ class HeightTable:
     loc_gamma_r: np.ndarray
     loc_gamma_z: np.ndarray
     converged: np.ndarray
+    geometry: dict = field(default_factory=dict)
+
+    def take(self, rows) -> HeightTable:
+        """The table of the rows ``rows`` (index or mask)."""
+        return HeightTable(*(getattr(self, f.name)[rows] for f in fields(self)[:-1]),
+                           {k: v[rows] for k, v in self.geometry.items()})
 
 
 def heights_batch(models: Responses | ModelSet, H, study: Study,
-                  warm: HeightTable | None = None, coarse_start: bool = True) -> HeightTable:
+                  warm: HeightTable | None = None, coarse_start: bool = True,
+                  geometry: dict | None = None) -> HeightTable:
     """Per-unit-G extrema at many heights at once (vectorised over H).
 
     The same two steps as :func:`per_height`, each solved for all heights together by
@@ -239,27 +242,36 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
     warm : HeightTable, optional
         Solved heights. Without it every problem starts from the best point of a
         ``start_t × start_theta`` grid on its box. With it, each problem is solved from three
-        starts and the best result kept: the optima at the two heights of ``warm`` that bracket
-        H, and the best point of a coarse 6 × 4 grid. An optimum that jumps between basins
-        somewhere between two table heights is thereby still found on both sides of the jump.
+        starts and the best result kept: the optima at the two heights of ``warm`` (of the same
+        geometry) that bracket H, and the best point of a coarse 6 × 4 grid. An optimum that
+        jumps between basins somewhere between two table heights is thereby still found on
+        both sides of the jump.
     coarse_start : bool
         With ``warm``: also start from the coarse grid. NSGA-II, which warm-starts from the
         dense sweep, leaves it out.
+    geometry : dict of array_like, optional
+        For models over geometric design variables: each problem's values [m] by name
+        (shape (n,), like ``H``), so that designs of different geometries are solved together.
     """
     H = np.atleast_1d(np.asarray(H, dtype=float))
+    geo = {k: np.broadcast_to(np.asarray(v, dtype=float), H.shape)
+           for k, v in (geometry or {}).items()}
     R = as_responses(models)
     o = study.optimise
     n = H.size
 
+    def at(r, t):
+        return R.at(_rows(H, r, t), **{k: _rows(v, r, t) for k, v in geo.items()})
+
     def solve(name, lo, hi, maximise, starts):
         def fun(r, t, th):
-            return _at(R, _rows(H, r, t)).value(name, t, th)
+            return at(r, t).value(name, t, th)
 
         def jac(r, t, th):
-            return _at(R, _rows(H, r, t)).grad(name, t, th)
+            return at(r, t).grad(name, t, th)
 
         def hess(r, t, th):
-            return _at(R, _rows(H, r, t)).hess(name, t, th)
+            return at(r, t).hess(name, t, th)
 
         if starts is None:
             return batch_optimum(fun, jac, hess, lo, hi, maximise=maximise,
@@ -274,7 +286,7 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
     hi = np.tile([1.0, study.loading.theta_max], (n, 1))
     starts = [None] * 4
     if warm is not None:
-        sides = _bracket(warm.H, H)
+        sides = _bracket(warm.H, H, *_groups(warm.geometry, geo))
         starts = [[np.stack([warm.t_m[k], warm.theta_m[k]], axis=1) for k in sides],
                   [warm.loc_f_z[k] for k in sides], [warm.loc_gamma_r[k] for k in sides],
                   [warm.loc_gamma_z[k] for k in sides]]
@@ -284,7 +296,7 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
     conv = fr.converged & np.logical_and.reduce([r.converged for r in res])
     locs = [np.stack([r.t, r.theta], axis=1) for r in res]
     return HeightTable(H, fr.t, fr.theta, fr.value, res[0].value, res[1].value, res[2].value,
-                       *locs, conv)
+                       *locs, conv, {k: np.array(v) for k, v in geo.items()})
 
 
 def _best(runs: list[BatchOptimum], maximise: bool) -> BatchOptimum:
@@ -303,17 +315,49 @@ def _best(runs: list[BatchOptimum], maximise: bool) -> BatchOptimum:
     return BatchOptimum(pick("t"), pick("theta"), pick("value"), pick("kkt"), converged)
 
 
-def _bracket(grid: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Indices of the elements of the sorted ``grid`` just below and above each ``x``."""
-    if grid.size == 1:
-        z = np.zeros(np.shape(x), int)
-        return z, z
-    k = np.clip(np.searchsorted(grid, x), 1, grid.size - 1)
-    return k - 1, k
+def _groups(warm: dict, query: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Group numbers of the rows of two tables by their geometric values (equal values, same
+    group; a query geometry absent from ``warm`` gets a group of its own)."""
+    names = sorted(warm)
+    if sorted(query) != names:
+        raise ValueError(f"the warm table's geometric variables {names} are not the "
+                         f"problems' {sorted(query)}")
+    if not names:
+        return np.zeros(0, int), np.zeros(0, int)
+    n = next(iter(warm.values())).size
+    both = np.stack([np.concatenate([warm[k], query[k]]) for k in names], axis=1)
+    _, group = np.unique(both, axis=0, return_inverse=True)
+    group = np.ravel(group)
+    return group[:n], group[n:]
+
+
+def _bracket(grid: np.ndarray, x: np.ndarray, grid_group=None, x_group=None
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the elements of ``grid`` just below and above each ``x``, among those of the
+    same group (all in one group when no groups are given; a group without elements falls
+    back to the first group)."""
+    x = np.asarray(x, float)
+    if grid_group is None or grid_group.size == 0:
+        grid_group, x_group = np.zeros(grid.size, int), np.zeros(x.shape, int)
+    # one sort key: the group, then the value scaled into [0, 1)
+    base = min(grid.min(), x.min())
+    span = 2.0 * max(grid.max(), x.max()) - 2.0 * base or 1.0
+    key = grid_group * 1.0 + (grid - base) / span
+    order = np.argsort(key, kind="stable")
+    g_sorted = grid_group[order]
+    first = np.searchsorted(g_sorted, x_group, side="left")
+    last = np.searchsorted(g_sorted, x_group, side="right") - 1
+    empty = last < first
+    first, last = np.where(empty, 0, first), np.where(empty, grid.size - 1, last)
+    k = np.searchsorted(key[order], np.where(empty, 0, x_group) + (x - base) / span)
+    hi = np.clip(k, np.minimum(first + 1, last), last)
+    lo = np.maximum(hi - 1, first)
+    return order[lo], order[hi]
 
 
 def _rows(H: np.ndarray, r, t) -> np.ndarray:
-    """Heights of the problems ``r``, shaped to broadcast against ``t``."""
+    """Heights (or another per-problem value) of the problems ``r``, shaped to broadcast
+    against ``t``."""
     h = H[np.asarray(r)]
     return h.reshape(h.shape + (1,) * (np.ndim(t) - h.ndim))
 

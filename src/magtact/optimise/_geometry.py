@@ -108,7 +108,7 @@ class GeometryOptimisation:
 
 def bound(models: ModelSet, study: Study, geometry: dict[str, float]) -> tuple[ModelSet, Study]:
     """The models and the study at one geometry (the (H, G, M_z) problem there)."""
-    return models.at(study, **geometry), study.at(**geometry)
+    return models.at(**geometry), study.at(**geometry)
 
 
 def exact_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
@@ -123,12 +123,17 @@ def exact_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
     """
     grid = {k: np.linspace(lo, hi, study.optimise.geometry_n)
             for k, (lo, hi) in study.geometric_variables.items()}
+    points = list(itertools.product(*grid.values()))
+    # the sweeps over H at every geometry of the grid, in one batch
+    table = sweep(models, study, geometry={k: [p[i] for p in points]
+                                           for i, k in enumerate(grid)})
+    n_H = study.optimise.sweep_n
     rows, last_error = [], None
-    for values in itertools.product(*grid.values()):
+    for j, values in enumerate(points):
         geo = dict(zip(grid, (float(v) for v in values), strict=True))
         m, s = bound(models, study, geo)
         try:
-            red = exact_reduction(m, s, constraints, sweep(m, s))
+            red = exact_reduction(m, s, constraints, table.take(slice(j * n_H, (j + 1) * n_H)))
         except InfeasibleError as exc:
             last_error = exc
             continue
@@ -175,17 +180,14 @@ def nsga2_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
     def evaluate(x):
         v = lo + x * (hi - lo)
         cols = dict(zip(bounds, v.T, strict=True))
-        out = np.empty((x.shape[0], 6))
-        for i in range(x.shape[0]):
-            m, s = bound(models, study, {k: float(cols[k][i]) for k in geo_names})
-            tab = heights_batch(m, [cols["H"][i]], s)
-            out[i] = (tab.f_r_min[0], tab.f_z_max[0], tab.gamma_r_max[0], tab.gamma_z_max[0],
-                      0.0, 0.0)
+        # every design at its own geometry, all in one batch
+        tab = heights_batch(models, cols["H"], study,
+                            geometry={k: cols[k] for k in geo_names})
         G = cols["G"]
         M = cols.get("M_z", np.full(x.shape[0], M0))
         k = G * M0 / M
-        g_r, g_z = constraints.margins(G * out[:, 0], G * out[:, 1])
-        return cols, M, k * out[:, 2], k * out[:, 3], g_r, g_z
+        g_r, g_z = constraints.margins(G * tab.f_r_min, G * tab.f_z_max)
+        return cols, M, k * tab.gamma_r_max, k * tab.gamma_z_max, g_r, g_z
 
     class _Designs(Problem):
         def __init__(self):

@@ -213,15 +213,28 @@ class Reduction:
         return np.isfinite(self.G_star)
 
 
-def sweep(models: Responses | ModelSet, study: Study) -> HeightTable:
+def sweep(models: Responses | ModelSet, study: Study, geometry: dict | None = None
+          ) -> HeightTable:
     """Per-unit-G extrema on ``sweep_n`` equally spaced heights over the H bounds.
 
     ``sweep_coarse`` heights are solved from full start grids; the others start from the
     bracketing coarse heights' optima (and a coarse grid) (see :func:`heights_batch`).
+    With ``geometry`` (values [m] of geometric design variables by name, arrays of one
+    length), the sweep is done at each of these geometries, all in one batch: the rows are
+    ordered by geometry, then height.
     """
     o = study.optimise
-    coarse = heights_batch(models, np.linspace(*study.design.H, o.sweep_coarse), study)
-    return heights_batch(models, np.linspace(*study.design.H, o.sweep_n), study, warm=coarse)
+    geometry = {k: np.atleast_1d(np.asarray(v, float)) for k, v in (geometry or {}).items()}
+    n_geo = len(next(iter(geometry.values()))) if geometry else 1
+
+    def rows(n):
+        H = np.tile(np.linspace(*study.design.H, n), n_geo)
+        return H, {k: np.repeat(v, n) for k, v in geometry.items()}
+
+    H, geo = rows(o.sweep_coarse)
+    coarse = heights_batch(models, H, study, geometry=geo)
+    H, geo = rows(o.sweep_n)
+    return heights_batch(models, H, study, warm=coarse, geometry=geo)
 
 
 def exact_reduction(models: Responses | ModelSet, study: Study, constraints: ForceConstraints,

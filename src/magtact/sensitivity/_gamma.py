@@ -142,12 +142,17 @@ class Responses:
     def __init__(self, models: ModelSet):
         self.models = models
 
-    def at(self, H) -> ResponsesAtH:
+    def at(self, H, **geometry) -> ResponsesAtH:
         """The responses at design height ``H`` [m] (a float, or an array that broadcasts
-        against the ``t, theta`` arrays of the calls, for many designs at once)."""
+        against the ``t, theta`` arrays of the calls, for many designs at once) and, for
+        models over geometric design variables, at their values ``geometry`` [m] (floats or
+        arrays like ``H``)."""
         if self.models.definition == "published":
+            if geometry:
+                raise ValueError("the published sensitivity definition has no geometric "
+                                 "design variables")
             return PublishedResponsesAtH(self.models, H)
-        return ResponsesAtH(self.models, H)
+        return ResponsesAtH(self.models, H, **geometry)
 
     @property
     def definition(self) -> str:
@@ -156,11 +161,12 @@ class Responses:
 
 
 class ResponsesAtH:
-    """Responses at design height(s) H [m]; see :class:`Responses`."""
+    """Responses at design height(s) H [m] (and geometry); see :class:`Responses`."""
 
-    def __init__(self, models: ModelSet, H):
+    def __init__(self, models: ModelSet, H, **geometry):
         self.models = models
         self.H = float(H) if np.ndim(H) == 0 else np.asarray(H, dtype=float)
+        self.geometry = geometry
 
     def _check(self, name):
         if name not in NAMES:
@@ -170,14 +176,14 @@ class ResponsesAtH:
         """Value of ``name`` at (t, θ), shape of the broadcast inputs."""
         self._check(name)
         if name in ("f_r", "f_z"):
-            return self.models[name].value(t, theta, self.H)
+            return self.models[name].value(t, theta, self.H, **self.geometry)
         return self._gamma_jet(name, t, theta, 0)[0]
 
     def grad(self, name: str, t, theta) -> np.ndarray:
         """Gradient of ``name`` w.r.t. (t, θ), shape (..., 2)."""
         self._check(name)
         if name in ("f_r", "f_z"):
-            return self.models[name].grad(t, theta, self.H)[..., :2]
+            return self.models[name].grad(t, theta, self.H, **self.geometry)[..., :2]
         _, gx = self._gamma_jet(name, t, theta, 1)
         return _to_ttheta(t, theta, gx)
 
@@ -185,16 +191,15 @@ class ResponsesAtH:
         """Hessian of ``name`` w.r.t. (t, θ), shape (..., 2, 2)."""
         self._check(name)
         if name in ("f_r", "f_z"):
-            return self.models[name].hess(t, theta, self.H)[..., :2, :2]
+            return self.models[name].hess(t, theta, self.H, **self.geometry)[..., :2, :2]
         _, gx, hx = self._gamma_jet(name, t, theta, 2)
         return _to_ttheta_hess(t, theta, gx, hx)
 
     def _gamma_jet(self, name, t, theta, order):
         """γ and its derivatives w.r.t. x = (p, q) up to ``order`` (≤ 2)."""
         f = "f_r" if name == "gamma_r" else "f_z"
-        jf = self.models[f].jet(t, theta, self.H, order + 1)
-        jr = self.models["B_r"].jet(t, theta, self.H, order + 1)
-        jz = self.models["B_z"].jet(t, theta, self.H, order + 1)
+        jf, jr, jz = (self.models[k].jet(t, theta, self.H, order + 1, **self.geometry)
+                      for k in (f, "B_r", "B_z"))
         # v_i = first derivatives, shape (..., 6); dv = their x-gradients (..., 6, 2); ...
         v = np.concatenate([jf[1], jr[1], jz[1]], axis=-1)
         shape = v.shape[:-1]
