@@ -19,14 +19,12 @@ TINY = {
     "metamodel": {"b_model": "exact", "generations": 20, "population": 150,
                   "holdout_paths": 0},
     "constraints": {"source": "values", "F_r_c_N": -0.02, "F_z_c_N": 1.0},
-    "optimise": {"population": 12, "nsga2_generations": 8, "sweep_n": 41, "sweep_coarse": 9,
+    "optimise": {"population": 24, "nsga2_generations": 25, "sweep_n": 41, "sweep_coarse": 9,
                  "geometry_n": 5, "start_t": 11, "start_theta": 6},
 }
 
 
-@pytest.mark.long
-@pytest.mark.xfail(strict=True, reason="NSGA-II at this budget (96 evaluations) ends 34 % off "
-                                       "the exact front: the agreement within 1 % is not met yet")
+@pytest.mark.long  # about 100 s on 2 cores: run with `pytest -m long`
 def test_tiny_geometric_study_end_to_end(tmp_path):
     study = study_from_dict(TINY)
     res = run_study(study, tmp_path, recompute=True, cache=tmp_path / "cache", workers=2,
@@ -39,8 +37,10 @@ def test_tiny_geometric_study_end_to_end(tmp_path):
     assert out["variables"] == ["H", "G", "R_m"]
     choice = out["choice"]
     assert 2.0 <= float(choice["design"].split("R_m = ")[1].split()[0]) <= 2.5
-    # NSGA-II's set lies within 1 % of the exact front in both objectives
+    # NSGA-II's set lies within 1 % of the exact front in both objectives; the front is a
+    # curve over R_m at the lowest H, which the refined geometry grid resolves
     assert out["gap_to_exact_front"] <= 0.01
+    assert len(out["exact_front"]) > 1 and out["exact_resolution_mm"]["R_m"] < 0.125
     assert choice["g_r_N"] <= 1e-9 and choice["g_z_N"] <= 1e-9  # feasible
     assert (tmp_path / "optimise" / "geometry_pareto.png").is_file()
     assert res.report.is_file()

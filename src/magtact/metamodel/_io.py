@@ -25,7 +25,7 @@ from .._errors import MagtactError, MissingFileError
 from ._field_force import FIELD_SYMBOLS, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
-from ._symbols import PQ_TO_TTH, TTH
+from ._symbols import GEOMETRY, PQ_TO_TTH, TTH
 
 FORMAT = "magtact-metamodel/1"
 EXACT_FORMAT = "magtact-exact-field/1"
@@ -76,8 +76,9 @@ def model_from_dict(data: dict, source: str = "<dict>") -> Metamodel:
         if not isinstance(data.get(key), str):
             raise MagtactError(f"{source}: key {key!r} is missing or not a string")
     try:
-        expr = parse_expression(data["expression"], ("t", "theta", "H"))
-        expr_pq = parse_expression(data["expression_pq"], ("p", "q", "H"))
+        geo = tuple(g.name for g in GEOMETRY)  # a model over geometric design variables
+        expr = parse_expression(data["expression"], ("t", "theta", "H", *geo))
+        expr_pq = parse_expression(data["expression_pq"], ("p", "q", "H", *geo))
     except ValueError as exc:
         raise MagtactError(f"{source}: {exc}") from None
     _check_agree(expr, expr_pq, source)
@@ -91,9 +92,11 @@ def _check_agree(expr, expr_pq, source, n: int = 16) -> None:
     """Both forms must give the same values at random points with t > 0."""
     rng = np.random.default_rng(0)
     tt, th, hh = rng.uniform(0.05, 1.0, n), rng.uniform(0.0, 0.6, n), rng.uniform(2e-3, 8e-3, n)
+    geo = tuple(g for g in GEOMETRY if g in expr.free_symbols | expr_pq.free_symbols)
+    gg = [rng.uniform(1e-3, 8e-3, n) for _ in geo]  # magnet and body dimensions [m]
     with np.errstate(all="ignore"):
-        a = sp.lambdify(TTH, expr, "numpy")(tt, th, hh)
-        b = sp.lambdify(TTH, expr_pq.subs(PQ_TO_TTH), "numpy")(tt, th, hh)
+        a = sp.lambdify(TTH + geo, expr, "numpy")(tt, th, hh, *gg)
+        b = sp.lambdify(TTH + geo, expr_pq.subs(PQ_TO_TTH), "numpy")(tt, th, hh, *gg)
     a, b = np.broadcast_to(a, (n,)), np.broadcast_to(b, (n,))
     ok = np.isfinite(a) & np.isfinite(b)
     if not ok.any():

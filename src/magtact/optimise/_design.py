@@ -227,7 +227,7 @@ class HeightTable:
 
 def heights_batch(models: Responses | ModelSet, H, study: Study,
                   warm: HeightTable | None = None, coarse_start: bool = True,
-                  geometry: dict | None = None) -> HeightTable:
+                  geometry: dict | None = None, maxiter: int = 100) -> HeightTable:
     """Per-unit-G extrema at many heights at once (vectorised over H).
 
     The same two steps as :func:`per_height`, each solved for all heights together by
@@ -252,6 +252,8 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
     geometry : dict of array_like, optional
         For models over geometric design variables: each problem's values [m] by name
         (shape (n,), like ``H``), so that designs of different geometries are solved together.
+    maxiter : int
+        Newton iterations at most per problem (:func:`batch_optimum`).
     """
     H = np.atleast_1d(np.asarray(H, dtype=float))
     geo = {k: np.broadcast_to(np.asarray(v, dtype=float), H.shape)
@@ -273,13 +275,12 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
         def hess(r, t, th):
             return at(r, t).hess(name, t, th)
 
+        kw = {"maximise": maximise, "tol": o.tol, "maxiter": maxiter}
         if starts is None:
-            return batch_optimum(fun, jac, hess, lo, hi, maximise=maximise,
-                                 grid=(o.start_t, o.start_theta), tol=o.tol)
-        runs = [batch_optimum(fun, jac, hess, lo, hi, maximise=maximise, grid=(6, 4), tol=o.tol)
-                ] if coarse_start else []
-        runs += [batch_optimum(fun, jac, hess, lo, hi, maximise=maximise, grid=(6, 4),
-                               tol=o.tol, start=s) for s in starts]
+            return batch_optimum(fun, jac, hess, lo, hi, grid=(o.start_t, o.start_theta), **kw)
+        runs = [batch_optimum(fun, jac, hess, lo, hi, grid=(6, 4), **kw)] if coarse_start else []
+        runs += [batch_optimum(fun, jac, hess, lo, hi, grid=(6, 4), start=s, **kw)
+                 for s in starts]
         return _best(runs, maximise)
 
     lo = np.zeros((n, 2))

@@ -32,6 +32,13 @@ from ._pareto import (
     sweep,
 )
 
+#: Newton iterations at most per per-height problem, in both answers over the geometry. A flat
+#: valley of f_r keeps some problems iterating on round-off long after their values are
+#: resolved: capped at 15 instead of 100, the extrema of the tiny (H, R_m) study change by
+#: < 1e-12 (f_r,min, Γ) and 1.2e-4 (F_z,max, whose box follows the valley's ill-defined
+#: minimum) relative. The chosen designs are evaluated again in full.
+MAXITER = 20
+
 
 @dataclass(frozen=True)
 class DesignSet:
@@ -89,7 +96,9 @@ class GeometryOptimisation:
     gap : float
         Largest relative distance of NSGA-II's set from the exact front (:func:`curve_gap`).
     grid : dict of numpy.ndarray
-        Levels of each geometric variable in the exact reduction [m].
+        Levels of each geometric variable in the exact reduction's first grid [m].
+    resolution : dict of float
+        Its final spacing around the front, per geometric variable [m].
     evaluations : int
         NSGA-II's design evaluations.
     """
@@ -104,6 +113,7 @@ class GeometryOptimisation:
     gap: float
     grid: dict[str, np.ndarray]
     evaluations: int
+    resolution: dict[str, float]
 
 
 def bound(models: ModelSet, study: Study, geometry: dict[str, float]) -> tuple[ModelSet, Study]:
@@ -111,43 +121,93 @@ def bound(models: ModelSet, study: Study, geometry: dict[str, float]) -> tuple[M
     return models.at(**geometry), study.at(**geometry)
 
 
-def exact_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
-                   ) -> tuple[DesignSet, dict[str, np.ndarray]]:
-    """The generalised exact reduction: the exact front over H at each point of a
-    ``optimise.geometry_n`` grid per geometric variable, then the non-dominated union.
+#: Refinement of the geometry grid around the exact front: at most this many halvings of its
+#: spacing, until the front moves by less than :data:`REFINE_TOL` (relative, :func:`curve_gap`).
+REFINE_ROUNDS = 8
+REFINE_TOL = 1e-3
 
-    Raises
-    ------
-    InfeasibleError
-        If no geometry of the grid admits a feasible design.
-    """
-    grid = {k: np.linspace(lo, hi, study.optimise.geometry_n)
-            for k, (lo, hi) in study.geometric_variables.items()}
-    points = list(itertools.product(*grid.values()))
-    # the sweeps over H at every geometry of the grid, in one batch
+
+def _fronts(models: ModelSet, study: Study, constraints: ForceConstraints, names: tuple,
+            points: list[tuple]) -> tuple[list[list], Exception | None]:
+    """The exact front over H at each geometry of ``points`` (one batched sweep): rows
+    (H, G*, M_z*, *geometry, Γ_r, Γ_z), and the last infeasibility met."""
     table = sweep(models, study, geometry={k: [p[i] for p in points]
-                                           for i, k in enumerate(grid)})
+                                           for i, k in enumerate(names)}, maxiter=MAXITER)
     n_H = study.optimise.sweep_n
     rows, last_error = [], None
     for j, values in enumerate(points):
-        geo = dict(zip(grid, (float(v) for v in values), strict=True))
-        m, s = bound(models, study, geo)
+        m, s = bound(models, study, dict(zip(names, values, strict=True)))
         try:
             red = exact_reduction(m, s, constraints, table.take(slice(j * n_H, (j + 1) * n_H)))
         except InfeasibleError as exc:
             last_error = exc
             continue
-        for i in np.flatnonzero(red.front):
-            rows.append([red.H[i], red.G_star[i], red.M_z_star[i], *values,
-                         red.Gamma_r[i], red.Gamma_z[i]])
+        rows += [[red.H[i], red.G_star[i], red.M_z_star[i], *values, red.Gamma_r[i],
+                  red.Gamma_z[i]] for i in np.flatnonzero(red.front)]
+    return rows, last_error
+
+
+def exact_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
+                   ) -> tuple[DesignSet, dict[str, np.ndarray], dict[str, float]]:
+    """The generalised exact reduction: the exact front over H at each point of a
+    ``optimise.geometry_n`` grid per geometric variable, the non-dominated union, and the grid
+    refined around it.
+
+    Returns
+    -------
+    DesignSet, dict, dict
+        The exact Pareto set; the grid's levels [m]; the final spacing [m] per variable.
+
+    Raises
+    ------
+    InfeasibleError
+        If no geometry of the grid admits a feasible design.
+
+    Notes
+    -----
+    Each refinement halves the spacing and adds the neighbours (in every direction, at the new
+    spacing) of the geometries on the current front; it stops when the front moved by less than
+    ``REFINE_TOL`` or after ``REFINE_ROUNDS`` rounds.
+    """
+    ranges = study.geometric_variables
+    names = tuple(ranges)
+    grid = {k: np.linspace(lo, hi, study.optimise.geometry_n) for k, (lo, hi) in ranges.items()}
+    step = {k: (hi - lo) / (study.optimise.geometry_n - 1) for k, (lo, hi) in ranges.items()}
+    points = [tuple(float(v) for v in p) for p in itertools.product(*grid.values())]
+    done = set(points)
+    rows, last_error = _fronts(models, study, constraints, names, points)
     if not rows:
         raise InfeasibleError(f"no geometry of the grid admits a feasible design; at the last "
                               f"one: {last_error}")
-    E = np.array(rows)
-    E = E[nondominated(E[:, -2:])]
-    E = E[np.argsort(E[:, -2], kind="stable")]
-    names = ("H", "G", "M_z", *grid)
-    return DesignSet({k: E[:, i] for i, k in enumerate(names)}, E[:, -2], E[:, -1]), grid
+
+    def front(rows):
+        E = np.array(rows)
+        E = E[nondominated(E[:, -2:])]
+        return E[np.argsort(E[:, -2], kind="stable")]
+
+    E = front(rows)
+    for _ in range(REFINE_ROUNDS):
+        step = {k: v / 2 for k, v in step.items()}
+        new = set()
+        for g in {tuple(r[3:3 + len(names)]) for r in E}:
+            for d in itertools.product((-1, 0, 1), repeat=len(names)):
+                p = tuple(float(np.clip(v + di * step[k], *ranges[k]))
+                          for v, di, k in zip(g, d, names, strict=True))
+                new.add(p)
+        new -= done
+        if not new:
+            break
+        done |= new
+        more, _ = _fronts(models, study, constraints, names, sorted(new))
+        rows += more
+        E_new = front(rows)
+        moved = curve_gap(E_new[:, -2:], E[:, -2:])
+        E = E_new
+        if moved <= REFINE_TOL:
+            break
+    all_names = ("H", "G", "M_z", *names)
+    return (DesignSet({k: E[:, i] for i, k in enumerate(all_names)}, E[:, -2], E[:, -1]), grid,
+            step)
 
 
 def nsga2_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
@@ -181,7 +241,7 @@ def nsga2_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
         v = lo + x * (hi - lo)
         cols = dict(zip(bounds, v.T, strict=True))
         # every design at its own geometry, all in one batch
-        tab = heights_batch(models, cols["H"], study,
+        tab = heights_batch(models, cols["H"], study, maxiter=MAXITER,
                             geometry={k: cols[k] for k in geo_names})
         G = cols["G"]
         M = cols.get("M_z", np.full(x.shape[0], M0))
@@ -242,14 +302,14 @@ def optimise_geometry(models: ModelSet, study: Study, *, F_r_c: float | None = N
         raise ValueError("the study has no geometric design variable besides H; use optimise")
     m0, s0 = bound(models, study, study.geometry())
     constraints = force_constraints(m0, s0, F_r_c=F_r_c, F_z_c=F_z_c)
-    exact, grid = exact_geometry(models, study, constraints)
+    exact, grid, resolution = exact_geometry(models, study, constraints)
     pareto, n_eval = nsga2_geometry(models, study, constraints)
     geo = tuple(study.geometric_variables)
     return GeometryOptimisation(
         geo, ("H", "G", *(("M_z",) if study.M_z_variable else ()), *geo), constraints, exact,
         pareto,
         _choose(models, study, pareto, constraints), _choose(models, study, exact, constraints),
-        curve_gap(pareto.objectives, exact.objectives), grid, n_eval)
+        curve_gap(pareto.objectives, exact.objectives), grid, n_eval, resolution)
 
 
 #: User unit of each design variable (lengths in mm).
@@ -284,6 +344,7 @@ def geometry_json(r: GeometryOptimisation) -> dict:
             "gap_to_exact_front": r.gap, "nsga2_evaluations": r.evaluations,
             "exact_grid_mm": {k: [float(from_si(v, "mm")) for v in g]
                               for k, g in r.grid.items()},
+            "exact_resolution_mm": {k: float(from_si(v, "mm")) for k, v in r.resolution.items()},
             "pareto": _set_json(r.pareto), "exact_front": _set_json(r.exact)}
 
 

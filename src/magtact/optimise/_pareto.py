@@ -213,15 +213,15 @@ class Reduction:
         return np.isfinite(self.G_star)
 
 
-def sweep(models: Responses | ModelSet, study: Study, geometry: dict | None = None
-          ) -> HeightTable:
+def sweep(models: Responses | ModelSet, study: Study, geometry: dict | None = None,
+          maxiter: int = 100) -> HeightTable:
     """Per-unit-G extrema on ``sweep_n`` equally spaced heights over the H bounds.
 
     ``sweep_coarse`` heights are solved from full start grids; the others start from the
     bracketing coarse heights' optima (and a coarse grid) (see :func:`heights_batch`).
     With ``geometry`` (values [m] of geometric design variables by name, arrays of one
     length), the sweep is done at each of these geometries, all in one batch: the rows are
-    ordered by geometry, then height.
+    ordered by geometry, then height. ``maxiter``: Newton iterations at most per problem.
     """
     o = study.optimise
     geometry = {k: np.atleast_1d(np.asarray(v, float)) for k, v in (geometry or {}).items()}
@@ -232,9 +232,9 @@ def sweep(models: Responses | ModelSet, study: Study, geometry: dict | None = No
         return H, {k: np.repeat(v, n) for k, v in geometry.items()}
 
     H, geo = rows(o.sweep_coarse)
-    coarse = heights_batch(models, H, study, geometry=geo)
+    coarse = heights_batch(models, H, study, geometry=geo, maxiter=maxiter)
     H, geo = rows(o.sweep_n)
-    return heights_batch(models, H, study, warm=coarse, geometry=geo)
+    return heights_batch(models, H, study, warm=coarse, geometry=geo, maxiter=maxiter)
 
 
 def exact_reduction(models: Responses | ModelSet, study: Study, constraints: ForceConstraints,
