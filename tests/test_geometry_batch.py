@@ -162,3 +162,19 @@ def test_the_refined_grid_finds_an_optimum_between_its_first_levels(monkeypatch,
         np.testing.assert_allclose(grid[k], np.linspace(*s.geometric_variables[k], 5))
         assert abs(exact.values[k][0] - v) <= 0.1e-3
         assert step[k] < np.diff(grid[k])[0] / 2  # at least two halvings
+
+
+def test_a_model_over_the_magnet_radius_round_trips_through_its_file(tmp_path):
+    from magtact import MagtactError
+    from magtact.metamodel import load_model, save_model
+
+    s = geo_study()
+    f = radius_models(s).f_z
+    back = load_model(save_model(f, tmp_path / "f_z.json"))
+    assert back.geometry == ("R_m",) and back.expr == f.expr
+    x = (np.array([0.2, 1.0]), np.array([0.0, 0.3]), 4e-3)
+    assert np.array_equal(back.value(*x, R_m=2.2e-3), f.value(*x, R_m=2.2e-3))
+    bad = save_model(f, tmp_path / "bad.json")
+    bad.write_text(bad.read_text().replace("R_m", "R_x"))
+    with pytest.raises(MagtactError, match="name .R_x. is not allowed"):
+        load_model(bad)
