@@ -314,6 +314,35 @@ def optimise_section(r: Results) -> list[str]:
     return out
 
 
+def _design_row(label: str, d: dict) -> list[str]:
+    return [label, f"{d['H_mm']:.3f}", f"{d['G_kPa']:.2f}", f"{d['R_m_mm']:.3f}",
+            f"{d['Gamma_r_max_N_per_T']:.2f}", f"{d['Gamma_z_max_N_per_T']:.2f}",
+            f"{d['F_r_min_N']:.3f}", f"{d['F_z_max_N']:.2f}"]
+
+
+def geometry_section(r: Results) -> list[str]:
+    if "optimise" not in r.files.get("geometry", {}):
+        return []
+    g = r["geometry"]
+    d, o = g["doe"], g["optimise"]
+    out = ["## The magnet radius as a design variable", "",
+           f"Source: {r.source('geometry')} (`bench/bench_geometry.py`, study "
+           f"`{g['study']}`); docs/method.md §7.2. The DOE: {d['paths_total']} structural paths "
+           f"and {d['fields_computed']} field solves on the `{d['mesh']}` mesh with "
+           f"{d['workers']} workers in {d['wall_time_s'] / 60:.0f} min (data set "
+           f"`{d['dataset']}`); the force fit {o['fit_wall_time_s']:.0f} s, the optimisation "
+           f"{o['optimise_wall_time_s']:.0f} s. NSGA-II's {o['nsga2_evaluations']} evaluations "
+           f"end within {pct(o['gap_to_exact_front'], 2)} of the refined exact front.", ""]
+    out += table(["design", "H [mm]", "G [kPa]", "R_m [mm]", "Γ_r,max [N/T]", "Γ_z,max [N/T]",
+                  "F_r,min [N]", "F_z,max [N]"],
+                 [_design_row("chosen (H, G, R_m)", o["chosen"]),
+                  _design_row("exact reduction (H, G, R_m)", o["chosen_by_exact_reduction"]),
+                  _design_row("(H, G) at R_m = 2.5 mm, same models",
+                              o["HG_optimum_same_models_R_m_2p5"]),
+                  _design_row("(H, G), shipped models", o["HG_optimum_shipped_models"])])
+    return out
+
+
 def _spread_rows(p: dict) -> list[list[str]]:
     rows = []
     for d, figs in p["spread"].items():
@@ -386,8 +415,8 @@ def document(folder: Path) -> str:
              "`bench/results`; rerun a benchmark, then `python scripts/make_verification.py`.",
              ""]
     for section in (field_section, mechanics_section, fit_section, gamma_section,
-                    mesh_effect_section, frontier_section, optimise_section, publication_section,
-                    timing_section):
+                    mesh_effect_section, frontier_section, optimise_section, geometry_section,
+                    publication_section, timing_section):
         lines += section(r)
     return "\n".join(lines).rstrip() + "\n"
 
