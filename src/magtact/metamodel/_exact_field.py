@@ -61,19 +61,19 @@ def _coefficients(fun, study: Study) -> tuple[float, float, float]:
 
 #: The last evaluation of the field (arguments, both components): B_r and B_z are asked for at
 #: the same points one after the other (the sensitivity needs both), and cost one evaluation.
-_LAST: tuple = ((), None)
+_LAST: list = [((), None)]
 
 
 def _both_components(r, Z, R_m, H_m, M_z) -> tuple[np.ndarray, np.ndarray]:
     from ..magnetics import cylinder_field
 
     args = (r, Z, R_m, H_m, M_z)
-    key, value = _LAST
+    key, value = _LAST[0]
     if len(key) == 5 and all(np.shape(a) == np.shape(b) and np.array_equal(a, b)
                              for a, b in zip(args, key, strict=True)):
         return value
     value = cylinder_field(*args)
-    globals()["_LAST"] = (args, value)
+    _LAST[0] = (args, value)  # one tuple: a reader sees an old or a new entry, never a mix
     return value
 
 
