@@ -340,17 +340,18 @@ def _bracket(grid: np.ndarray, x: np.ndarray, grid_group=None, x_group=None
     x = np.asarray(x, float)
     if grid_group is None or grid_group.size == 0:
         grid_group, x_group = np.zeros(grid.size, int), np.zeros(x.shape, int)
-    # one sort key: the group, then the value scaled into [0, 1)
-    base = min(grid.min(), x.min())
-    span = 2.0 * max(grid.max(), x.max()) - 2.0 * base or 1.0
-    key = grid_group * 1.0 + (grid - base) / span
+    # one exact integer sort key: the group, then the value's rank among all values
+    values = np.unique(np.concatenate([grid, x.ravel()]))
+    size = values.size + 1
+    key = grid_group * size + np.searchsorted(values, grid)
     order = np.argsort(key, kind="stable")
     g_sorted = grid_group[order]
     first = np.searchsorted(g_sorted, x_group, side="left")
     last = np.searchsorted(g_sorted, x_group, side="right") - 1
     empty = last < first
     first, last = np.where(empty, 0, first), np.where(empty, grid.size - 1, last)
-    k = np.searchsorted(key[order], np.where(empty, 0, x_group) + (x - base) / span)
+    k = np.searchsorted(key[order], np.where(empty, 0, x_group) * size
+                        + np.searchsorted(values, x))
     hi = np.clip(k, np.minimum(first + 1, last), last)
     lo = np.maximum(hi - 1, first)
     return order[lo], order[hi]
