@@ -100,9 +100,12 @@ def test_compare_prints_percentages(model_dir):
 
 
 def test_write_optimise_outputs_for_the_report(tmp_path, small_study):
-    from magtact.optimise import write_optimise_outputs
+    from magtact.optimise import optimise, write_optimise_outputs
 
-    choice = write_optimise_outputs(synthetic_models(), load_study(small_study), tmp_path)
+    result = optimise(synthetic_models(), load_study(small_study))
+    files = write_optimise_outputs(result, synthetic_models(), tmp_path)
+    assert sorted(files) == sorted(p for p in tmp_path.iterdir() if p.is_file())
+    choice = result.choice
     chosen = json.loads((tmp_path / "chosen.json").read_text())
     assert chosen["H_mm"] == pytest.approx(choice.design.H * 1e3, rel=1e-12)
     assert chosen["active_constraints"] == (", ".join(choice.active) or "none")

@@ -28,6 +28,15 @@ def fast_study(tmp_path, **sections):
     return path
 
 
+def visible_text(html: str) -> str:
+    """The prose a browser shows: styles, scripts, code (``<pre>``, ``<code>``: literal file
+    keys and expressions) and tags removed, entities decoded."""
+    import html as html_module
+
+    html = re.sub(r"(?is)<(style|script|pre|code)\b.*?</\1>", " ", html)
+    return html_module.unescape(re.sub(r"(?s)<[^>]+>", " ", html))
+
+
 def check_run(tmp_path, study_file):
     """Run the study; every stage ok, every figure embedded, report rebuilt from the folder."""
     out = tmp_path / "results"
@@ -52,6 +61,10 @@ def check_run(tmp_path, study_file):
     assert html.index('id="card"') < html.index('id="summary"')
     assert all(escape(c) in html for row in card["rows"] for c in row)
     assert "Design card" in result.output and "normal force range" in result.output
+    # the prose a reader sees is in words and units: no file key, no Markdown syntax
+    visible = visible_text(html)
+    for raw in ("_N_per_T", "_kPa", "None", "**", "!["):
+        assert raw not in visible, (raw, visible[max(0, visible.find(raw) - 200):][:400])
     # the report is rebuilt from the folder alone
     (out / "report.html").unlink()
     assert CliRunner().invoke(app, ["report", str(out)]).exit_code == 0
@@ -64,9 +77,18 @@ def test_run_end_to_end_on_bundled_data(tmp_path):
     if not bundled_path().is_file():
         pytest.skip("the bundled DOE data set is not built yet (python -m magtact.doe.bundle)")
     s = load_study(None)  # real FE data: the exact field for B, a modest GP budget for f
-    check_run(tmp_path, fast_study(tmp_path, metamodel=replace(
+    study_file = fast_study(tmp_path, metamodel=replace(
         s.metamodel, b_model="exact", generations=20, population=400, max_length=40,
-        retries=2, holdout_paths=2)))
+        retries=2, holdout_paths=2))
+    check_run(tmp_path, study_file)
+    # the front door on the run's models chooses what the run chose (one chain)
+    import magtact
+
+    out = tmp_path / "results"
+    result = magtact.design(study_file, models=out / "metamodel")
+    chosen = json.loads((out / "optimise" / "chosen.json").read_text())
+    assert result.chosen_design == {"H_mm": pytest.approx(chosen["H_mm"], rel=1e-12),
+                                    "G_kPa": pytest.approx(chosen["G_kPa"], rel=1e-12)}
 
 
 def test_run_end_to_end_with_stand_in_doe(tmp_path, monkeypatch):

@@ -1,9 +1,13 @@
-"""The README's Python example runs and prints the chosen design of the MagOne study."""
+"""The README's Python example runs and prints the chosen design of the MagOne study, the one
+the benchmark recorded (bench/results/optimise.json)."""
 
+import json
 import re
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -19,12 +23,18 @@ def test_readme_python_example(tmp_path):
                          env={"PYTHONPATH": src, "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg"})
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
-    # chosen design of the MagOne study: H at its lower bound, the F_r constraint active
-    m = re.match(r"H = ([\d.]+) mm, G = ([\d.]+) kPa: Γ_r,max = ([\d.]+) N/T", lines[0])
-    assert m and float(m.group(1)) == 3.0 and 10 < float(m.group(2)) < 50
+    bench = json.loads((ROOT / "bench" / "results" / "optimise.json").read_text())
+    b = bench["default_constraints"]
+    m = re.match(r"H = ([\d.]+) mm, G = ([\d.]+) kPa: Γ_r,max = ([\d.]+) N/T, "
+                 r"Γ_z,max = ([\d.]+) N/T", lines[0])
+    assert m, lines[0]
+    assert m.groups() == (f"{b['H_mm']:.3f}", f"{b['G_kPa']:.2f}",
+                          f"{b['Gamma_r_max_N_per_T']:.4g}", f"{b['Gamma_z_max_N_per_T']:.4g}")
     assert lines[1].startswith("H = 3.000 mm, G = 29.40 kPa")
-    assert "F_r" in lines[2] and "shipped" in lines[2]
+    assert lines[2].startswith(str(tuple(b["active_constraints"]))) and "shipped" in lines[2]
+    assert lines[3].startswith("H = 4.110 mm, G = 29.40 kPa")
     assert (tmp_path / "design" / "design.json").is_file()
+    assert (tmp_path / "design" / "card.json").is_file()
     assert (tmp_path / "design" / "pareto_set.png").is_file()
 
 
@@ -34,5 +44,39 @@ def test_help_lists_the_front_door():
                          env={"PYTHONPATH": str(ROOT / "src"), "PATH": "/usr/bin:/bin",
                               "PAGER": "cat"})
     assert out.returncode == 0, out.stderr
-    for name in ("design(", "load(", "run(", "Design", "DesignSummary", "MagtactError"):
+    for name in ("design(", "load(", "run(", "solve(", "Result", "MagtactError"):
         assert name in out.stdout
+
+
+def _readme_table() -> dict[str, list[str]]:
+    """The MagOne table of the README: row label → cells."""
+    text = (ROOT / "README.md").read_text("utf-8")
+    section = text[text.index("## The MagOne design"):text.index("## magtact and the publication")]
+    rows = [ln.strip().strip("|").split("|") for ln in section.splitlines() if ln.startswith("| ")]
+    return {r[0].strip(): [c.strip() for c in r[1:]] for r in rows}
+
+
+def test_readme_magone_table_is_the_benchmarks_result():
+    """Every number of the README's MagOne table as bench/results/optimise.json has it."""
+    bench = json.loads((ROOT / "bench" / "results" / "optimise.json").read_text())
+    c = bench["default_constraints"]
+    ref = bench["reference_constraints"]
+    o = ref["exact_reduction_choice"]  # the original design, where the reference is itself
+    assert (o["H_mm"], o["G_kPa"]) == pytest.approx((3.0, 29.4), rel=1e-12)
+    table = _readme_table()
+
+    def num(text):
+        return [float(x.replace("−", "-")) for x in re.findall(r"[−-]?\d+\.?\d*", text)]
+
+    assert table["base height H"] == [f"{c['H_mm']:.3f} mm", f"{o['H_mm']:.0f} mm"]
+    assert table["shear modulus G"] == [f"{c['G_kPa']:.2f} kPa", f"{o['G_kPa']:.1f} kPa"]
+    chosen, original = table["worst-case Γ_r,max / Γ_z,max"]
+    assert num(chosen) == [round(c["Gamma_r_max_N_per_T"], 2), round(c["Gamma_z_max_N_per_T"], 2)]
+    assert num(original) == [round(o["Gamma_r_max_N_per_T"], 2),
+                             round(o["Gamma_z_max_N_per_T"], 2)]
+    chosen, original = table["F_r,min / F_z,max"]
+    assert num(chosen) == [round(c["F_r_min_N"], 3), round(c["F_z_max_N"], 2)]
+    rc = ref["constraints"]  # the original design's own forces
+    assert num(original) == [round(rc["F_r_c_N"], 3), round(rc["F_z_c_N"], 2)]
+    active = {"F_r": "F_r (shear)", "F_z": "F_z (normal)"}
+    assert table["active constraint"][0] == ", ".join(active[k] for k in c["active_constraints"])

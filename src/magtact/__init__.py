@@ -4,8 +4,11 @@ The front door::
 
     import magtact
     study = magtact.load("magone")          # a preset, a study file, or either with changes
-    result = magtact.design(study)          # chosen design: bundled data and shipped fit
+    result = magtact.design(study)          # a Result: bundled data and shipped fit
     print(result.chosen)                    # H [mm], G [kPa], Γ [N/T], forces [N]
+    result.evaluate(H_mm=4.0, G_kPa=30.0)   # any other design, same models
+
+``magtact.solve(models, study)`` is the chain behind it, from models to the :class:`Result`.
 
 ``magtact.run`` runs every stage into a results folder with an HTML report; the stages are
 sub-packages (``magtact.study``, ``magnetics``, ``mechanics``, ``doe``, ``metamodel``,
@@ -16,7 +19,7 @@ docs/method.md.
 from importlib.metadata import PackageNotFoundError, version
 
 from ._errors import MagtactError
-from ._front import Design, DesignSummary, design, load
+from ._front import Result, design, load, models_for, solve
 from .study import Study
 
 try:
@@ -35,5 +38,5 @@ def run(study: Study | str | None = None, out: str = "results", **options):
     return run_study(study, out, **options)
 
 
-__all__ = ["Design", "DesignSummary", "MagtactError", "Study", "__version__", "design", "load",
-           "run"]
+__all__ = ["MagtactError", "Result", "Study", "__version__", "design", "load", "models_for",
+           "run", "solve"]

@@ -1,13 +1,28 @@
-"""The front door: a study in, the chosen design out (``magtact.load``, ``magtact.design``)."""
+"""The front door and the one chain from a study to its answer.
+
+``magtact.load`` reads a study; :func:`design` picks the models for it (bundled data and the
+shipped fit, a data set, or a folder of model files) and runs :func:`solve`, the only path from
+models and a study to a :class:`Result`: the optimisation (over (H, G[, M_z]) or with geometric
+design variables), the decision, and the designer's answer for the chosen and the original
+design. ``magtact run``, ``magtact optimise`` and the Python API all go through it.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ._errors import MagtactError
-from .study import Study, from_si, load_study
+from .study import Study, checked_si, from_si, load_study
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from .designer import DesignAnswer
+    from .metamodel import ModelSet
+    from .optimise import ForceConstraints, GeometryOptimisation, Optimisation
 
 
 def load(source: str | Path | None = None, **sections: dict) -> Study:
@@ -53,74 +68,139 @@ def load(source: str | Path | None = None, **sections: dict) -> Study:
     return study_from_dict(data, "keyword settings")
 
 
-@dataclass(frozen=True)
-class DesignSummary:
-    """One design in user units (the numbers a sensor designer reads).
-
-    Attributes
-    ----------
-    H_mm : base height [mm]
-    G_kPa : shear modulus of the elastomer [kPa]
-    Gamma_r_max_N_per_T, Gamma_z_max_N_per_T : worst sensitivities of the shear and normal force
-        estimate to field error [N/T] over the stable region
-    F_r_min_N : largest shear force before shear turns unstable (negative) [N]
-    F_z_max_N : largest normal force in the stable region [N]
-    sensitivity_definition : "jacobian" or "published"
-    """
-
-    H_mm: float
-    G_kPa: float
-    Gamma_r_max_N_per_T: float
-    Gamma_z_max_N_per_T: float
-    F_r_min_N: float
-    F_z_max_N: float
-    sensitivity_definition: str
-
-    @classmethod
-    def of(cls, d, definition: str) -> DesignSummary:
-        """From a :class:`magtact.optimise.DesignResult` (SI inside)."""
-        return cls(float(from_si(d.H, "mm")), float(from_si(d.G, "kPa")), float(d.Gamma_r_max),
-                   float(d.Gamma_z_max), float(d.F_r_min), float(d.F_z_max), definition)
-
-    def __str__(self) -> str:
-        return (f"H = {self.H_mm:.3f} mm, G = {self.G_kPa:.2f} kPa: "
-                f"Γ_r,max = {self.Gamma_r_max_N_per_T:.4g} N/T, "
-                f"Γ_z,max = {self.Gamma_z_max_N_per_T:.4g} N/T, "
-                f"F_r,min = {self.F_r_min_N:.4g} N, F_z,max = {self.F_z_max_N:.4g} N "
-                f"({self.sensitivity_definition} Γ)")
+#: User unit of each design variable (the study-file key is the name plus ``_<unit>``).
+UNITS = {"H": "mm", "G": "kPa", "M_z": "A_per_m", "R_m": "mm", "H_m": "mm", "R": "mm"}
 
 
 @dataclass(frozen=True)
-class Design:
-    """The answer of :func:`design`.
+class Result:
+    """The answer for one study (:func:`design`, :func:`solve`).
 
     Attributes
     ----------
     study : Study
-    chosen : DesignSummary
-        The design the decision rule picks from NSGA-II's Pareto set.
-    original : DesignSummary
-        The study's original design, for comparison.
-    active_constraints : tuple of str
-        ``"F_r"`` and/or ``"F_z"``: constraints the chosen design meets with (almost) no margin.
+    models : ModelSet
+        B_r, B_z, f_r, f_z: the closed-form models every number comes from.
     models_source : str
-        Where the metamodels came from (the shipped fit, or fitted now).
-    optimisation : magtact.optimise.Optimisation
-        Everything the optimisation computed (maps, Pareto sets, timings).
+        Where the models came from, in words (the shipped fit, fitted now, a folder).
+    optimisation : Optimisation or GeometryOptimisation
+        Everything the optimisation computed: maps, both Pareto sets, the decision on each,
+        timings (:class:`magtact.optimise.Optimisation`; with geometric design variables
+        :class:`magtact.optimise.GeometryOptimisation`).
+    chosen, original : DesignAnswer
+        The designer's answer (extrema, resolution with the study's Hall chip, saturation) for
+        the design the decision rule picks and for the study's original design.
+    variables : dict of float
+        The chosen design's variables [SI] by name (``H``, ``G``, and ``M_z``, ``R_m``,
+        ``H_m``, ``R`` where they are design variables); :attr:`chosen_design` in user units.
+
+    Examples
+    --------
+    >>> import magtact
+    >>> result = magtact.design("magone")                          # doctest: +SKIP
+    >>> result.chosen_design                                        # doctest: +SKIP
+    {'H_mm': 3.0, 'G_kPa': 22.57...}
+    >>> result.evaluate(H_mm=4.0, G_kPa=30.0).design.Gamma_z_max   # doctest: +SKIP
     """
 
     study: Study
-    chosen: DesignSummary
-    original: DesignSummary
-    active_constraints: tuple[str, ...]
+    models: ModelSet
     models_source: str
-    optimisation: object
+    optimisation: Optimisation | GeometryOptimisation
+    chosen: DesignAnswer
+    original: DesignAnswer
+    variables: dict[str, float]
+
+    @property
+    def constraints(self) -> ForceConstraints:
+        """The force constraints the design meets (F_r,c, F_z,c [N])."""
+        return self.optimisation.constraints
+
+    @property
+    def active_constraints(self) -> tuple[str, ...]:
+        """``"F_r"`` and/or ``"F_z"``: constraints the chosen design meets with (almost) no
+        margin (within ``optimise.active_rtol`` of the limit)."""
+        d = self.chosen.design
+        return self.constraints.active(d.F_r_min, d.F_z_max, self.study.optimise.active_rtol)
+
+    @property
+    def pareto(self):
+        """NSGA-II's Pareto set (:class:`magtact.optimise.ParetoSet`, or ``DesignSet`` over
+        the geometric design variables)."""
+        return self.optimisation.pareto
+
+    @property
+    def chosen_design(self) -> dict[str, float]:
+        """The chosen design's variables in user units (``H_mm``, ``G_kPa`` ...)."""
+        return {f"{k}_{UNITS[k]}": float(from_si(v, UNITS[k])) for k, v in self.variables.items()}
+
+    @property
+    def card(self) -> dict:
+        """The design card: ``header`` and ``rows`` (words and units) for the chosen and the
+        original design (:func:`magtact.report.card_rows`)."""
+        from .report import card_rows
+
+        header, rows = card_rows([self.chosen, self.original], self.constraints,
+                                 rtol=self.study.optimise.active_rtol)
+        return {"header": header, "rows": rows}
+
+    def evaluate(self, *, H_mm: float, G_kPa: float, M_z_A_per_m: float | None = None,
+                 label: str = "design", **geometry_mm: float) -> DesignAnswer:
+        """The designer's answer for any design, given in user units.
+
+        Parameters
+        ----------
+        H_mm, G_kPa : float
+            Base height [mm] and shear modulus [kPa].
+        M_z_A_per_m : float, optional
+            Magnetisation [A/m]; default the magnet's own.
+        label : str
+            Name of the design in the answer.
+        **geometry_mm : float
+            ``R_m_mm``, ``H_m_mm``, ``R_mm`` where the study has them as design variables
+            (default: the study's own value).
+
+        Raises
+        ------
+        MagtactError
+            For a value out of its physical range or an unknown or fixed geometric variable.
+        """
+        values = {"H": checked_si(H_mm, "mm", "H_mm"), "G": checked_si(G_kPa, "kPa", "G_kPa")}
+        if M_z_A_per_m is not None:
+            values["M_z"] = checked_si(M_z_A_per_m, "A_per_m", "M_z_A_per_m")
+        own = self.study.geometry()
+        for key, v in geometry_mm.items():
+            name = key.removesuffix("_mm")
+            if name not in own:
+                known = ", ".join(f"{k}_mm" for k in own) or "none (R_m, H_m and R are fixed)"
+                raise MagtactError(f"{key}: not a geometric design variable of study "
+                                   f"{self.study.name!r}; its geometric design variables: "
+                                   f"{known}")
+            own[name] = checked_si(v, "mm", key)
+        return _answer(self.models, self.study, values | own, label)
+
+    def figures(self) -> dict[str, Figure]:
+        """The optimisation's figures as matplotlib figures, by name."""
+        from .report import optimise_figure_objects
+
+        return optimise_figure_objects(self.optimisation)
 
     def write(self, out: str | Path, figures: bool = True) -> list[Path]:
-        """Write the optimisation's tables (and figures) into ``out``; return the files."""
-        from .report import optimise_figures
+        """Write the optimisation's tables, the design card (``card.json``) and, with
+        ``figures``, the figures into ``out``; return the files written."""
+        from .optimise import write_geometry_outputs, write_optimise_outputs
+        from .report import fig_geometry_pareto, optimise_figures, write_card
 
-        return self.optimisation.write(out, figures=optimise_figures if figures else None)
+        out = Path(out)
+        if self.study.geometric_variables:
+            files = write_geometry_outputs(self.optimisation, out,
+                                           figures=fig_geometry_pareto if figures else None)
+        else:
+            files = write_optimise_outputs(self.optimisation, self.models, out,
+                                           figures=optimise_figures if figures else None)
+        files.append(write_card([self.chosen, self.original], out, self.constraints,
+                                rtol=self.study.optimise.active_rtol, study=self.study))
+        return files
 
     def __str__(self) -> str:
         return (f"{self.study.name}: chosen {self.chosen}; active constraints "
@@ -128,13 +208,97 @@ class Design:
                 f"original {self.original}")
 
 
-def design(study: Study | str | Path | None = None, *, data: str | Path | None = None,
-           refit: bool = False, log: Callable[[str], None] | None = None) -> Design:
-    """From a study to its chosen design in one call.
+def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str
+            ) -> DesignAnswer:
+    """The designer's answer for a design given by its variables [SI] (at its geometry)."""
+    from .designer import answer
 
-    Uses the DOE data set bundled with magtact (when it describes the study) or ``data``, and
-    the metamodels shipped for it when they match the data and settings, else fits them
-    (minutes); then the optimisation (docs/method.md §7).
+    geometry = {k: values[k] for k in study.geometric_variables if k in values}
+    if geometry:
+        models, study = models.at(**geometry), study.at(**geometry)
+    return answer(models, study, values["H"], values["G"], label, values.get("M_z"))
+
+
+def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None = None, *,
+          models_source: str = "given") -> Result:
+    """From models and a study to the :class:`Result`: the one chain every caller uses.
+
+    The optimisation (docs/method.md §7: NSGA-II and the exact reduction over (H, G[, M_z]),
+    or over the geometric design variables as well), the decision rule on NSGA-II's set, and
+    the designer's answer for the chosen and the original design (docs/method.md §10).
+
+    Parameters
+    ----------
+    models : ModelSet
+        B_r, B_z, f_r, f_z (over the geometric design variables where the study has them).
+    study : Study
+    constraints : ForceConstraints, optional
+        Default: the study's ``[constraints]`` (:func:`magtact.optimise.force_constraints`).
+    models_source : str
+        Where the models came from, in words (kept in the result).
+
+    Raises
+    ------
+    MagtactError
+        Models not finite on the design domain, infeasible constraints (with the best reachable
+        values), a chip that reads nothing but its limit.
+    """
+    from .designer import check_rest_field
+    from .optimise import force_constraints, optimise, optimise_geometry
+
+    own = study.geometry()
+    check_rest_field(study.at(**own) if own else study)  # before any work
+    if constraints is None:
+        constraints = force_constraints(models, study)
+    if study.geometric_variables:
+        opt = optimise_geometry(models, study, constraints)
+        values = dict(opt.choice.values)
+        if not study.M_z_variable:
+            values.pop("M_z", None)
+    else:
+        opt = optimise(models, study, constraints)
+        d = opt.choice.design
+        values = {"H": d.H, "G": d.G} | ({} if d.M_z is None else {"M_z": d.M_z})
+    original = {"H": study.design.H_original, "G": study.design.G_original} | own
+    return Result(study, models, models_source, opt, _answer(models, study, values, "chosen"),
+                  _answer(models, study, original, "original"), values)
+
+
+def models_for(study: Study, *, data: str | Path | None = None,
+               models: str | Path | None = None, refit: bool = False,
+               log: Callable[[str], None] | None = None) -> tuple[ModelSet, str]:
+    """The models of a study and where they come from, in words.
+
+    ``models`` (a folder of model files, ``magtact fit``) when given; else the shipped fit when
+    it matches the data set and the fit settings (and not ``refit``), else a new fit (minutes)
+    to ``data`` (a DOE data set) or, without it, to the data set bundled with magtact (when it
+    describes the study).
+
+    Raises
+    ------
+    MagtactError
+        A study the bundled data set does not describe and no ``data``; unreadable files.
+    """
+    from .metamodel import load_models, select_metamodels
+
+    if models is not None:
+        return (load_models(models, definition=study.sensitivity.definition),
+                f"model files in {models}")
+    from .doe import bundled_for, load_dataset
+
+    ds = load_dataset(data) if data is not None else bundled_for(study)
+    selection = select_metamodels(study, ds, refit=refit, log=log)
+    return selection.models, selection.source
+
+
+def design(study: Study | str | Path | None = None, *, data: str | Path | None = None,
+           models: str | Path | None = None, constraints: ForceConstraints | None = None,
+           refit: bool = False, log: Callable[[str], None] | None = None) -> Result:
+    """From a study to its answer in one call.
+
+    Picks the models (:func:`models_for`: the shipped fit of the bundled DOE when they match,
+    else a fit to ``data``, or the model files in ``models``) and runs :func:`solve`
+    (docs/method.md §7, §10).
 
     Parameters
     ----------
@@ -142,6 +306,10 @@ def design(study: Study | str | Path | None = None, *, data: str | Path | None =
         Default: the built-in MagOne study.
     data : path, optional
         A DOE data set (``magtact doe``) for a study the bundled data set does not describe.
+    models : path, optional
+        A folder of model files (``magtact fit``) to use instead of fitting.
+    constraints : ForceConstraints, optional
+        Default: the study's ``[constraints]``.
     refit : bool
         Fit the metamodels even when the shipped fit matches.
     log : callable, optional
@@ -156,20 +324,9 @@ def design(study: Study | str | Path | None = None, *, data: str | Path | None =
     --------
     >>> import magtact
     >>> result = magtact.design("magone")                      # doctest: +SKIP
-    >>> result.chosen.H_mm, result.chosen.G_kPa                 # doctest: +SKIP
+    >>> result.chosen_design["H_mm"], result.chosen_design["G_kPa"]   # doctest: +SKIP
     """
-    from .doe import bundled_for, load_dataset
-    from .metamodel import select_metamodels
-    from .optimise import optimise, per_design
-
     if not isinstance(study, Study):
         study = load_study(study)
-    ds = load_dataset(data) if data is not None else bundled_for(study)
-    selection = select_metamodels(study, ds, refit=refit, log=log)
-    opt = optimise(selection.models, study)
-    definition = study.sensitivity.definition
-    d = study.design
-    original = per_design(selection.models, d.H_original, d.G_original, study)
-    return Design(study, DesignSummary.of(opt.choice.design, definition),
-                  DesignSummary.of(original, definition), tuple(opt.choice.active),
-                  selection.source, opt)
+    m, source = models_for(study, data=data, models=models, refit=refit, log=log)
+    return solve(m, study, constraints, models_source=source)

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from ._errors import MissingFileError
 from ._files import write_json
+from ._front import solve
 from ._versions import RUN, package_versions
 from .study import Study
 
@@ -90,8 +91,8 @@ class _Context:
     log: Callable[[str], None]
     dataset: object = None
     models: object = None
-    chosen: object = None
-    card: object = None
+    models_source: str = "none"
+    result: object = None
     doe_source: str = "none"
 
 
@@ -186,7 +187,7 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
     manifest["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
     manifest["wall_time_s"] = time.perf_counter() - start
     _write_json(folder / "run.json", manifest)
-    from .report._html import build_report
+    from .report import build_report
 
     report = build_report(folder)
     return RunResult(folder=folder, report=report, stages=tuple(records),
@@ -248,6 +249,7 @@ def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
 
     chosen = select_metamodels(ctx.study, ctx.dataset, refit=ctx.refit,
                                log=lambda m: ctx.log(f"      {m}"))
+    ctx.models_source = chosen.source
     if chosen.shipped is not None:
         ctx.models, _ = copy_prefitted(chosen.shipped, ctx.folder / "metamodel")
         return ("B_r, B_z, f_r, f_z: the fit shipped with magtact for this very data set and "
@@ -271,6 +273,7 @@ def _fit_geometry(ctx: _Context) -> str:
 
     result = fit_models(ctx.dataset, ctx.study, log=lambda m: ctx.log(f"      {m}"))
     ctx.models = result.model_set(ctx.study)
+    ctx.models_source = "fitted now to the data set"
     save_models(ctx.models, ctx.folder / "metamodel")
     worst = max((r.test.max_rel_err for r in result.reports.values() if r.test is not None),
                 default=float("nan"))
@@ -279,56 +282,28 @@ def _fit_geometry(ctx: _Context) -> str:
             f"held-out relative error {worst:.3g}")
 
 
-def _optimise_geometry(ctx: _Context) -> str:
-    from .optimise import write_geometry_outputs
-    from .optimise._geometry import describe
-    from .report import fig_geometry_pareto
-
-    r = write_geometry_outputs(ctx.models, ctx.study, ctx.folder / "optimise",
-                               figures=fig_geometry_pareto)
-    return (f"design chosen: {describe(r.choice.values)} (exact reduction: "
-            f"{describe(r.exact_choice.values)}; NSGA-II within {100 * r.gap:.2g} % of the "
-            "exact front)")
-
-
 def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
-    if ctx.study.geometric_variables:
-        return _optimise_geometry(ctx)
-    from .designer import check_rest_field
-    from .optimise._run import FrontGapWarning, write_optimise_outputs
-    from .report import optimise_figures
-
-    check_rest_field(ctx.study)
+    from .optimise import FrontGapWarning, describe
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", FrontGapWarning)
-        ctx.chosen = write_optimise_outputs(ctx.models, ctx.study, ctx.folder / "optimise",
-                                            figures=optimise_figures)
+        result = solve(ctx.models, ctx.study, models_source=ctx.models_source)
     for w in caught:  # a disagreement of NSGA-II and the exact reduction is said in the report
         if issubclass(w.category, FrontGapWarning):
             rec.notes.append(f"WARNING: {w.message}")
             ctx.log(f"      WARNING: {w.message}")
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    ctx.card = design_card(ctx.models, ctx.study, ctx.chosen, ctx.folder / "optimise")
+    result.write(ctx.folder / "optimise")
+    ctx.result = result
+    if ctx.study.geometric_variables:
+        r = result.optimisation
+        return (f"design chosen: {describe(r.choice.values)} (exact reduction: "
+                f"{describe(r.exact_choice.values)}; NSGA-II within {100 * r.gap:.2g} % of the "
+                "exact front)")
     return "design chosen"
-
-
-def design_card(models, study, choice, folder) -> dict:
-    """The designer's answer for the chosen and the original design, written to
-    ``folder/card.json``; returns the card (header, rows, answers)."""
-    from .designer import answer
-    from .report import read_card, write_card
-
-    answers = [answer(models, study, choice.design.H, choice.design.G, "chosen",
-                      choice.design.M_z),
-               answer(models, study, study.design.H_original, study.design.G_original,
-                      "original")]
-    write_card(answers, folder, choice.constraints, rtol=study.optimise.active_rtol,
-               study=study)
-    return read_card(folder)
 
 
 def _stage_validation(ctx: _Context, rec: StageRecord) -> str:

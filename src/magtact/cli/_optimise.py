@@ -43,18 +43,12 @@ def parse_design(text: str, what: str) -> tuple[float, float]:
 
 
 def study_models(study: Study, models: Path | None):
-    """The metamodels: from ``models`` (a ``magtact fit`` output folder) if given, else the fit
-    shipped for the bundled DOE data set (when the study's fit settings match), else fitted."""
-    from ..metamodel import load_models
+    """The metamodels (:func:`magtact.models_for`): from ``models`` (a ``magtact fit`` output
+    folder) if given, else the shipped fit or a new fit to the bundled DOE data set."""
+    from .. import models_for
 
-    if models is not None:
-        return load_models(models, definition=study.sensitivity.definition)
-    from ..doe import bundled_for
-    from ..metamodel import select_metamodels
-
-    ds = bundled_for(study)
-    return select_metamodels(study, ds,
-                             log=lambda m: console.print(m, highlight=False)).models
+    return models_for(study, models=models,
+                      log=lambda m: console.print(m, highlight=False))
 
 
 @app.command("optimise")
@@ -72,12 +66,12 @@ def optimise_command(
 ) -> None:
     """Sensitivity-optimal design: maps, Pareto set (NSGA-II + exact reduction), chosen design.
 
-    Writes OUT/design.json, pareto.csv, reduction.csv, maps.csv and the figures.
+    Writes OUT/design.json, pareto.csv, reduction.csv, maps.csv, card.json and the figures
+    (OUT/geometry.json and its figure with geometric design variables).
     """
+    from .. import solve
     from ..designer import check_rest_field
-    from ..optimise import force_constraints, optimise
-    from ..pipeline import design_card
-    from ..report import optimise_figures
+    from ..optimise import force_constraints
 
     s = get_study(study)
     Frc = None if Frc is None else checked_si(Frc, "N", "--Frc")
@@ -85,14 +79,15 @@ def optimise_command(
     reference = (parse_design(constraints_from, "--constraints-from")
                  if constraints_from is not None else None)
     folder = out_dir(out)  # a folder that cannot be written is refused before the work
-    check_rest_field(s)  # a chip that cannot read any design is refused before the work
-    m = study_models(s, models)
+    own = s.geometry()
+    check_rest_field(s.at(**own) if own else s)  # a chip that reads nothing: before the work
+    m, source = study_models(s, models)
     constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
     with console.status("optimising"):
-        result = optimise(m, s, constraints)
-    result.write(folder, figures=optimise_figures)
+        result = solve(m, s, constraints, models_source=source)
+    result.write(folder)
     print_choice(result)
-    print_card(design_card(m, s, result.choice, folder))
+    print_card(result.card)
     console.print(f"written to {folder}", highlight=False)
 
 
@@ -110,26 +105,35 @@ def print_card(card: dict | None, stdout: Console | None = None) -> None:
 
 
 def print_choice(result, stdout: Console | None = None) -> None:
-    """Print the chosen design and the constraints used (rich table on standard output)."""
-    c, ch = result.constraints, result.choice
-    d = ch.design
+    """Print the chosen design of a :class:`magtact.Result` beside the exact reduction's
+    choice, and the constraints used (rich table on standard output)."""
+    opt, c = result.optimisation, result.constraints
     table = Table(title=f"Chosen design ({result.study.name}; "
                         f"{result.study.sensitivity.definition} Γ)",
                   caption=f"constraints ({c.source}): F_r,min <= {c.F_r_c:.4g} N, "
-                          f"F_z,max >= {c.F_z_c:.4g} N; active: {', '.join(ch.active) or 'none'}")
+                          f"F_z,max >= {c.F_z_c:.4g} N; active: "
+                          f"{', '.join(result.active_constraints) or 'none'}")
     table.add_column("quantity", justify="left")
     table.add_column("NSGA-II + decision", justify="right")
     table.add_column("exact reduction", justify="right")
-    e = result.reduction_choice.design
-    rows = [("H [mm]", from_si(d.H, "mm"), from_si(e.H, "mm")),
-            ("G [kPa]", from_si(d.G, "kPa"), from_si(e.G, "kPa"))]
-    if d.M_z is not None and e.M_z is not None:
-        rows.append(("M_z [MA/m]", from_si(d.M_z, "MA_per_m"), from_si(e.M_z, "MA_per_m")))
+    if result.study.geometric_variables:
+        a, b = opt.choice.values, opt.exact_choice.values
+        names = [k for k in a if k != "M_z" or result.study.M_z_variable]
+    else:
+        d, e = opt.choice.design, opt.reduction_choice.design
+        a = {"H": d.H, "G": d.G, "M_z": d.M_z}
+        b = {"H": e.H, "G": e.G, "M_z": e.M_z}
+        names = ["H", "G"] + (["M_z"] if d.M_z is not None and e.M_z is not None else [])
+    unit = {"G": ("kPa", "kPa"), "M_z": ("MA_per_m", "MA/m")}
+    rows = [(f"{k} [{unit.get(k, ('mm', 'mm'))[1]}]", from_si(a[k], unit.get(k, ("mm",))[0]),
+             from_si(b[k], unit.get(k, ("mm",))[0])) for k in names]
+    d, e = opt.choice.design, (opt.exact_choice if result.study.geometric_variables
+                               else opt.reduction_choice).design
     rows += [("Γ_r,max [N/T]", d.Gamma_r_max, e.Gamma_r_max),
              ("Γ_z,max [N/T]", d.Gamma_z_max, e.Gamma_z_max),
              ("F_r,min [N]", d.F_r_min, e.F_r_min), ("F_z,max [N]", d.F_z_max, e.F_z_max)]
-    for label, a, b in rows:
-        table.add_row(escape(label), f"{a:.5g}", f"{b:.5g}")
+    for label, x, y in rows:
+        table.add_row(escape(label), f"{x:.5g}", f"{y:.5g}")
     (stdout or Console()).print(table)
 
 
@@ -148,7 +152,7 @@ def compare_command(
     d1 = parse_design(first, "first design")
     d2 = parse_design(second, "second design")
     s = get_study(study)
-    m = study_models(s, models)
+    m, _ = study_models(s, models)
     cmp = compare(per_design(m, *d1, s), per_design(m, *d2, s))
     table = Table(title=f"{first} → {second} (mm,kPa)")
     for col in ("quantity", "design 1", "design 2", "change (%)"):

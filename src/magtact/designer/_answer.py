@@ -97,6 +97,13 @@ class DesignAnswer:
         """Γ and σ_F at G (1 + δ) over their nominal values."""
         return 1.0 + self.tolerance
 
+    def __str__(self) -> str:
+        d = self.design
+        M = "" if d.M_z is None else f", M_z = {from_si(d.M_z, 'MA_per_m'):.4g} MA/m"
+        return (f"H = {mm(d.H):.3f} mm, G = {from_si(d.G, 'kPa'):.2f} kPa{M}: "
+                f"Γ_r,max = {d.Gamma_r_max:.4g} N/T, Γ_z,max = {d.Gamma_z_max:.4g} N/T, "
+                f"F_r,min = {d.F_r_min:.4g} N, F_z,max = {d.F_z_max:.4g} N")
+
 
 def check_rest_field(study: Study) -> None:
     """Refuse a chip range below the field at rest of every design in the study's range.

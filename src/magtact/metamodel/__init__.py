@@ -24,7 +24,7 @@ from ._io import (
     save_model,
     save_models,
 )
-from ._model import RESPONSES, Metamodel, ModelSet
+from ._model import RESPONSES, Metamodel, ModelSet, Response
 from ._outputs import write_fit_outputs
 from ._parse import format_expression, parse_expression
 from ._prefitted import copy_prefitted, find_prefitted, prefitted_dir
@@ -34,7 +34,7 @@ from ._symbols import H, feature_jacobian, features, p, q, q_hessian, t, theta
 
 __all__ = [
     "Accuracy", "ComposedForce", "ExactField", "FieldForceModel", "FitReport", "FitResult",
-    "H", "Metamodel", "ModelSet", "OPERATOR_SETS", "RESPONSES", "Selection",
+    "H", "Metamodel", "ModelSet", "OPERATOR_SETS", "RESPONSES", "Response", "Selection",
     "SymbolicRegressor", "TRAIN_TARGET", "TRANSFORMS", "accuracy", "copy_prefitted",
     "data_hash", "feature_jacobian", "features", "find_prefitted", "fit_models",
     "fit_response", "format_expression", "hall_features", "holdout_paths", "load_field_models",

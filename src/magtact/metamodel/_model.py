@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import symengine as se
@@ -88,6 +88,25 @@ def _evaluate(fn, n_sym: int, order: int, *args) -> list[np.ndarray]:
         res.append(out[:, k:k + size].reshape(shape + (n_sym,) * n))
         k += size
     return res
+
+
+@runtime_checkable
+class Response(Protocol):
+    """What every model of a response offers (:class:`Metamodel`, the exact field
+    :class:`magtact.metamodel.ExactField`, a force composed from a field model): values and
+    derivatives over (t, θ, H), broadcast, SI; ``geometry`` the values [m] of the geometric
+    design variables the model depends on (``R_m``, ``H_m``, ``R``).
+    """
+
+    name: str
+    units: str
+
+    def value(self, t, theta, H, **geometry) -> np.ndarray:
+        """The response at (t, θ, H)."""
+
+    def jet(self, t, theta, H, order: int = 1, **geometry) -> list[np.ndarray]:
+        """Value and derivatives w.r.t. the features (p, q) = (t, t tan θ) at fixed H, up to
+        ``order``: ``[f, ∇f, ∇²f, ...]``."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,14 +269,14 @@ class _Bound:
 class ModelSet:
     """The four responses of a study: B_r, B_z [T] and f_r, f_z = F / G [N/Pa] over (t, θ, H).
 
-    ``B_r`` and ``B_z`` may be any object with the :class:`Metamodel` evaluation interface
-    (``value``, ``grad``, ``hess``, ``jet``), such as the exact field model.
+    Each is a :class:`Response` (a :class:`Metamodel`, or for ``B_r`` and ``B_z`` the exact
+    field model).
     """
 
-    B_r: Metamodel
-    B_z: Metamodel
-    f_r: Metamodel
-    f_z: Metamodel
+    B_r: Response
+    B_z: Response
+    f_r: Response
+    f_z: Response
 
     @classmethod
     def from_exprs(cls, exprs: dict, info: dict | None = None) -> ModelSet:

@@ -24,6 +24,7 @@ from ._geometry import (
     DesignSet,
     GeometricChoice,
     GeometryOptimisation,
+    describe,
     geometry_json,
     optimise_geometry,
     write_geometry_outputs,
@@ -31,6 +32,7 @@ from ._geometry import (
 from ._pareto import (
     Choice,
     Comparison,
+    DesignProblem,
     ForceConstraints,
     InfeasibleError,
     ParetoSet,
@@ -47,16 +49,25 @@ from ._pareto import (
     pareto_nsga2,
     sweep,
 )
-from ._run import Optimisation, Timings, optimise, write_optimise_outputs
+from ._run import (
+    CAPTIONS,
+    FrontGapWarning,
+    Optimisation,
+    Timings,
+    optimise,
+    write_optimise_outputs,
+)
 
 __all__ = [
     "DesignSet", "GeometricChoice", "GeometryOptimisation", "geometry_json",
     "optimise_geometry", "write_geometry_outputs",
-    "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignResult",
+    "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignProblem",
+    "DesignResult",
     "ForceConstraints", "HeightResult", "HeightTable", "InfeasibleError", "Optimisation",
     "ParetoSet", "Reduction", "ShearBoundConditioning", "Timings", "as_responses",
     "batch_optimum", "best_magnetisation", "box_optimum", "chip_margin", "choose", "compare",
     "decision_index", "design_maps", "exact_reduction", "feasible_G", "force_constraints",
-    "front_gap", "heights_batch", "nondominated", "optimise", "pareto_nsga2", "per_design",
+    "front_gap", "heights_batch", "CAPTIONS", "FrontGapWarning", "describe", "nondominated",
+    "optimise", "pareto_nsga2", "per_design",
     "per_height", "shear_bound_conditioning", "sweep", "write_optimise_outputs",
 ]

@@ -16,7 +16,7 @@ from ..study import Study, hall_chip
 N_T, N_THETA = 41, 11
 
 
-def chip_margin(study: Study, H, t_m, theta_m) -> np.ndarray:
+def chip_margin(study: Study, H, t_m, theta_m, geometry: dict | None = None) -> np.ndarray:
     """How far the exact field exceeds the chip's range over each height's stable region.
 
     .. math:: m(H) = \\max_{t \\le t_m,\\ θ \\le θ_m}
@@ -29,6 +29,9 @@ def chip_margin(study: Study, H, t_m, theta_m) -> np.ndarray:
         Geometry, loading path and the ``[hall]`` chip.
     H, t_m, theta_m : array_like, shape (n,)
         Heights [m] and their stable shear bounds (t_m, θ_m [rad]).
+    geometry : dict of array_like, optional
+        Each row's values [m] of the study's geometric design variables (shape (n,)); the
+        field depends on the magnet's (R_m, H_m).
 
     Returns
     -------
@@ -41,6 +44,9 @@ def chip_margin(study: Study, H, t_m, theta_m) -> np.ndarray:
     u = np.linspace(0.0, 1.0, N_THETA)[None, :, None]
     T, TH = s * t_m[None, None, :], u * theta_m[None, None, :]
     HH = np.broadcast_to(H[None, None, :], T.shape)
-    ratio = np.maximum(np.abs(ExactField(study, "B_r").value(T, TH, HH)) / chip.range_x,
-                       np.abs(ExactField(study, "B_z").value(T, TH, HH)) / chip.range_z)
+    B_r, B_z = ExactField(study, "B_r"), ExactField(study, "B_z")
+    geo = {k: np.broadcast_to(np.asarray(v, float), H.shape)[None, None, :]
+           for k, v in (geometry or {}).items() if k in B_r.geometry}
+    ratio = np.maximum(np.abs(B_r.value(T, TH, HH, **geo)) / chip.range_x,
+                       np.abs(B_z.value(T, TH, HH, **geo)) / chip.range_z)
     return ratio.max(axis=(0, 1)) - 1.0

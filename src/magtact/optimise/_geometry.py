@@ -14,14 +14,18 @@ bound to it (:meth:`magtact.metamodel.ModelSet.at`), so both answers are built f
 from __future__ import annotations
 
 import itertools
+import json
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from .._files import write_text
 from ..metamodel import ModelSet
 from ..study import Study, from_si
-from ._design import DesignResult, heights_batch, per_design
+from ._design import DesignResult, per_design
 from ._pareto import (
+    DesignProblem,
     ForceConstraints,
     InfeasibleError,
     curve_gap,
@@ -34,9 +38,9 @@ from ._pareto import (
 
 #: Newton iterations at most per per-height problem, in both answers over the geometry. A flat
 #: valley of f_r keeps some problems iterating on round-off long after their values are
-#: resolved: capped at 15 instead of 100, the extrema of the tiny (H, R_m) study change by
+#: resolved. A cap of 15 instead of 100 changed the extrema of the tiny (H, R_m) study by
 #: < 1e-12 (f_r,min, Γ) and 1.2e-4 (F_z,max, whose box follows the valley's ill-defined
-#: minimum) relative. The chosen designs are evaluated again in full.
+#: minimum) relative; 20 leaves a margin above that. The chosen designs are evaluated again in full.
 MAXITER = 20
 
 
@@ -212,66 +216,22 @@ def exact_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
 
 def nsga2_geometry(models: ModelSet, study: Study, constraints: ForceConstraints
                    ) -> tuple[DesignSet, int]:
-    """NSGA-II (pymoo, seeded) over (H, G[, M_z], geometric variables), each design evaluated
-    exactly at its geometry; variables scaled to [0, 1], constraints as in
-    :func:`magtact.optimise.pareto_nsga2` (the chip's range is not a constraint here).
+    """NSGA-II over (H, G[, M_z], geometric variables), each design evaluated exactly at its
+    geometry (:class:`magtact.optimise.DesignProblem`, the same problem and constraints as over
+    (H, G), the chip's range included), sorted by Γ_r,max.
 
     Raises
     ------
     InfeasibleError
         If NSGA-II finds no feasible design.
     """
-    from pymoo.algorithms.moo.nsga2 import NSGA2
-    from pymoo.core.problem import Problem
-    from pymoo.optimize import minimize
-
-    o = study.optimise
-    geo_names = tuple(study.geometric_variables)
-    bounds = {"H": study.design.H, "G": study.design.G}
-    if study.M_z_variable:
-        bounds["M_z"] = study.design.M_z
-    bounds |= study.geometric_variables
-    lo = np.array([b[0] for b in bounds.values()])
-    hi = np.array([b[1] for b in bounds.values()])
-    M0 = study.magnet.M_z
-    s_r = abs(constraints.F_r_c) or 1.0
-    s_z = abs(constraints.F_z_c) or 1.0
-
-    def evaluate(x):
-        v = lo + x * (hi - lo)
-        cols = dict(zip(bounds, v.T, strict=True))
-        # every design at its own geometry, all in one batch
-        tab = heights_batch(models, cols["H"], study, maxiter=MAXITER,
-                            geometry={k: cols[k] for k in geo_names})
-        G = cols["G"]
-        M = cols.get("M_z", np.full(x.shape[0], M0))
-        k = G * M0 / M
-        g_r, g_z = constraints.margins(G * tab.f_r_min, G * tab.f_z_max)
-        return cols, M, k * tab.gamma_r_max, k * tab.gamma_z_max, g_r, g_z
-
-    class _Designs(Problem):
-        def __init__(self):
-            super().__init__(n_var=lo.size, n_obj=2, n_ieq_constr=2, xl=np.zeros(lo.size),
-                             xu=np.ones(lo.size))
-
-        def _evaluate(self, x, out, *args, **kwargs):
-            _, _, Gr, Gz, g_r, g_z = evaluate(x)
-            out["F"] = np.stack([Gr, Gz], axis=1)
-            out["G"] = np.stack([g_r / s_r, g_z / s_z], axis=1)
-
-    res = minimize(_Designs(), NSGA2(pop_size=o.population), ("n_gen", o.nsga2_generations),
-                   seed=o.seed, verbose=False)
-    opt = res.opt
-    feasible = np.zeros(0, bool) if opt is None else np.ravel(opt.get("CV")) <= 0
-    if not feasible.any():
-        raise InfeasibleError("NSGA-II found no feasible design over the geometric design "
-                              "space; increase optimise.nsga2_generations or population")
-    X = np.atleast_2d(opt.get("X"))[feasible]
-    cols, M, Gr, Gz, _, _ = evaluate(X)
-    order = np.argsort(Gr, kind="stable")
-    values = {"H": cols["H"], "G": cols["G"], "M_z": M} | {k: cols[k] for k in geo_names}
-    return (DesignSet({k: np.asarray(v)[order] for k, v in values.items()}, Gr[order],
-                      Gz[order]), int(res.algorithm.evaluator.n_eval))
+    problem = DesignProblem(models, study, constraints, maxiter=MAXITER)
+    X, n_eval = problem.solve()
+    cols, obj, _, _ = problem.evaluate(X)
+    order = np.argsort(obj[:, 0], kind="stable")
+    values = {k: cols[k] for k in ("H", "G", "M_z", *study.geometric_variables)}
+    return (DesignSet({k: np.asarray(v)[order] for k, v in values.items()}, obj[order, 0],
+                      obj[order, 1]), n_eval)
 
 
 def _choose(models: ModelSet, study: Study, designs: DesignSet,
@@ -284,12 +244,12 @@ def _choose(models: ModelSet, study: Study, designs: DesignSet,
     return GeometricChoice(values, d, g_r, g_z)
 
 
-def optimise_geometry(models: ModelSet, study: Study, *, F_r_c: float | None = None,
-                      F_z_c: float | None = None) -> GeometryOptimisation:
+def optimise_geometry(models: ModelSet, study: Study,
+                      constraints: ForceConstraints | None = None) -> GeometryOptimisation:
     """Optimise over H, G (M_z) and the study's geometric design variables (module notes).
 
-    The force constraints come from the study (or ``F_r_c``, ``F_z_c`` [N]); a reference design
-    is evaluated at the study's own geometry (``magnet.R_m`` ...).
+    ``constraints``: default :func:`force_constraints` of the study (a reference design is
+    evaluated at the study's own geometry, ``magnet.R_m`` ...).
 
     Raises
     ------
@@ -300,8 +260,8 @@ def optimise_geometry(models: ModelSet, study: Study, *, F_r_c: float | None = N
     """
     if not study.geometric_variables:
         raise ValueError("the study has no geometric design variable besides H; use optimise")
-    m0, s0 = bound(models, study, study.geometry())
-    constraints = force_constraints(m0, s0, F_r_c=F_r_c, F_z_c=F_z_c)
+    if constraints is None:
+        constraints = force_constraints(models, study)
     exact, grid, resolution = exact_geometry(models, study, constraints)
     pareto, n_eval = nsga2_geometry(models, study, constraints)
     geo = tuple(study.geometric_variables)
@@ -348,18 +308,12 @@ def geometry_json(r: GeometryOptimisation) -> dict:
             "pareto": _set_json(r.pareto), "exact_front": _set_json(r.exact)}
 
 
-def write_geometry_outputs(models: ModelSet, study: Study, folder, figures=None
-                           ) -> GeometryOptimisation:
-    """Run :func:`optimise_geometry` and write ``folder/geometry.json`` (and, with
-    ``figures``, its figure: a callable ``figures(result, folder)``)."""
-    import json
-    from pathlib import Path
-
-    from .._files import write_text
-
+def write_geometry_outputs(result: GeometryOptimisation, folder, figures=None) -> list[Path]:
+    """Write ``folder/geometry.json`` (and, with ``figures``, its figure: a callable
+    ``figures(result, folder)`` returning its files); return the files written."""
     folder = Path(folder)
-    result = optimise_geometry(models, study)
-    write_text(folder / "geometry.json", json.dumps(geometry_json(result), indent=1) + "\n")
+    files = [write_text(folder / "geometry.json",
+                        json.dumps(geometry_json(result), indent=1) + "\n")]
     if figures is not None:
-        figures(result, folder)
-    return result
+        files += figures(result, folder)
+    return files

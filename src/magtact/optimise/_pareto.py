@@ -69,7 +69,8 @@ def force_constraints(models: Responses | ModelSet, study: Study, *, F_r_c: floa
     F_r_c, F_z_c : float, optional
         Numbers [N] overriding the study's (a missing one is taken from the study).
     reference : (H [m], G [Pa]), optional
-        Use this design's F_r,min and F_z,max as F_r,c and F_z,c.
+        Use this design's F_r,min and F_z,max as F_r,c and F_z,c (at the study's own geometry
+        where it has geometric design variables).
 
     Notes
     -----
@@ -90,6 +91,9 @@ def force_constraints(models: Responses | ModelSet, study: Study, *, F_r_c: floa
         reference = (study.design.H_original, study.design.G_original)
     k = 1.0 / (1.0 - c.G_tolerance)  # every force scales with G: F(G (1 − δ)) = (1 − δ) F(G)
     if reference is not None:
+        if study.geometric_variables:  # a reference design has the study's own geometry
+            geometry = study.geometry()
+            models, study = as_responses(models).models.at(**geometry), study.at(**geometry)
         d = per_design(models, reference[0], reference[1], study)
         return ForceConstraints(k * d.F_r_min, k * d.F_z_max, "reference", d, c.G_tolerance)
     return ForceConstraints(k * (c.F_r_c if F_r_c is None else float(F_r_c)),
@@ -329,9 +333,130 @@ class ParetoSet:
         return np.stack([self.Gamma_r_max, self.Gamma_z_max], axis=1)
 
 
+class DesignProblem:
+    """NSGA-II's design problem for every kind of study (a pymoo ``Problem`` via
+    :meth:`problem`).
+
+    Variables: H, G, M_z where it is a design variable, and the study's geometric design
+    variables (R_m, H_m, R), each scaled to [0, 1] over its bounds. Objectives
+    (Γ_r,max, Γ_z,max) [N/T]; inequality constraints g_r / |F_r,c| ≤ 0 and g_z / |F_z,c| ≤ 0
+    (1 N where a limit is zero, so both weigh alike in the constraint violation) and, with
+    ``[constraints] chip_range``, the chip's relative margin over the stable region
+    (:func:`chip_margin`; the field scales with M_z). These are the constraints the exact
+    reduction applies, so the two answers solve one problem.
+
+    Parameters
+    ----------
+    models : Responses or ModelSet
+    study : Study
+    constraints : ForceConstraints
+    warm : HeightTable, optional
+        A dense :func:`sweep` of a study without geometric variables: each design's per-height
+        problems start from the optima at the bracketing swept heights (:func:`heights_batch`),
+        and the chip's margin, which depends on H alone there, is read off it.
+    maxiter : int
+        Newton iterations at most per per-height problem.
+    """
+
+    def __init__(self, models: Responses | ModelSet, study: Study,
+                 constraints: ForceConstraints, warm: HeightTable | None = None,
+                 maxiter: int = 100):
+        self.R = models if study.geometric_variables else as_responses(models)
+        self.study, self.constraints, self.warm, self.maxiter = study, constraints, warm, maxiter
+        bounds = {"H": study.design.H, "G": study.design.G}
+        if study.M_z_variable:
+            bounds["M_z"] = study.M_z_bounds
+        bounds |= study.geometric_variables
+        self.names = tuple(bounds)
+        self.geometric = tuple(study.geometric_variables)
+        self.lo = np.array([float(b[0]) for b in bounds.values()])
+        self.hi = np.array([float(b[1]) for b in bounds.values()])
+        self.scale = (abs(constraints.F_r_c) or 1.0, abs(constraints.F_z_c) or 1.0)
+        self.chip_range = bool(study.constraints.chip_range)
+        self._chip_on_sweep = (chip_margin(study, warm.H, warm.t_m, warm.theta_m)
+                               if self.chip_range and warm is not None and not self.geometric
+                               else None)
+
+    def values(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Scaled variables ``x`` (n, n_var) → SI values by name (M_z always present)."""
+        v = self.lo + np.atleast_2d(x) * (self.hi - self.lo)
+        cols = dict(zip(self.names, v.T, strict=True))
+        cols.setdefault("M_z", np.full(v.shape[0], self.study.magnet.M_z))
+        return cols
+
+    def evaluate(self, x: np.ndarray):
+        """(values, objectives (n, 2) [N/T], constraint columns (n, n_constr), table)."""
+        cols = self.values(x)
+        H, G, M = cols["H"], cols["G"], cols["M_z"]
+        geo = {k: cols[k] for k in self.geometric}
+        if self.warm is not None and not geo:
+            tab = heights_batch(self.R, H, self.study, warm=self.warm, coarse_start=False,
+                                maxiter=self.maxiter)
+        else:
+            tab = heights_batch(self.R, H, self.study, geometry=geo or None,
+                                maxiter=self.maxiter)
+        k = G * self.study.magnet.M_z / M  # Γ ∝ G / M_z
+        objectives = np.stack([k * tab.gamma_r_max, k * tab.gamma_z_max], axis=1)
+        g_r, g_z = self.constraints.margins(G * tab.f_r_min, G * tab.f_z_max)
+        g = [g_r / self.scale[0], g_z / self.scale[1]]
+        if self.chip_range:
+            if self._chip_on_sweep is not None:
+                m0 = np.interp(H, self.warm.H, self._chip_on_sweep)
+            else:
+                m0 = chip_margin(self.study, H, tab.t_m, tab.theta_m, geometry=geo)
+            g.append(M / self.study.magnet.M_z * (1.0 + m0) - 1.0)
+        return cols, objectives, np.stack(g, axis=1), tab
+
+    def problem(self):
+        """The pymoo ``Problem`` over the scaled variables."""
+        from pymoo.core.problem import Problem
+
+        outer = self
+
+        class _Designs(Problem):
+            def __init__(self):
+                n = outer.lo.size
+                super().__init__(n_var=n, n_obj=2, n_ieq_constr=2 + outer.chip_range,
+                                 xl=np.zeros(n), xu=np.ones(n))
+
+            def _evaluate(self, x, out, *args, **kwargs):
+                _, out["F"], out["G"], _ = outer.evaluate(x)
+
+        return _Designs()
+
+    def solve(self) -> tuple[np.ndarray, int]:
+        """Run NSGA-II (pymoo, population ``optimise.population``, ``nsga2_generations``
+        generations, seed ``optimise.seed``: the same seed gives the same set).
+
+        Returns
+        -------
+        numpy.ndarray, int
+            The scaled variables of the feasible non-dominated designs (m, n_var), and the
+            number of design evaluations.
+
+        Raises
+        ------
+        InfeasibleError
+            If NSGA-II found no feasible design.
+        """
+        from pymoo.algorithms.moo.nsga2 import NSGA2
+        from pymoo.optimize import minimize
+
+        o = self.study.optimise
+        res = minimize(self.problem(), NSGA2(pop_size=o.population),
+                       ("n_gen", o.nsga2_generations), seed=o.seed, verbose=False)
+        opt = res.opt  # None when no feasible design was found
+        feasible = np.zeros(0, bool) if opt is None else np.ravel(opt.get("CV")) <= 0
+        if not feasible.any():
+            raise InfeasibleError("NSGA-II found no feasible design; increase "
+                                  "optimise.nsga2_generations or optimise.population")
+        return np.atleast_2d(opt.get("X"))[feasible], int(res.algorithm.evaluator.n_eval)
+
+
 def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceConstraints,
                  table: HeightTable | None = None) -> ParetoSet:
-    """NSGA-II (pymoo, seeded) over (H, G) minimising (Γ_r,max, Γ_z,max) under the constraints.
+    """NSGA-II over (H, G[, M_z]) minimising (Γ_r,max, Γ_z,max) under the constraints
+    (:class:`DesignProblem`).
 
     Parameters
     ----------
@@ -342,72 +467,22 @@ def pareto_nsga2(models: Responses | ModelSet, study: Study, constraints: ForceC
     Raises
     ------
     InfeasibleError
-        If no design is feasible (message from :func:`exact_reduction`).
-
-    Notes
-    -----
-    Variables (H, G and, where it is a design variable, M_z) are scaled to [0, 1] over the
-    bounds; constraints enter NSGA-II as
-    g_r / |F_r,c| ≤ 0 and g_z / |F_z,c| ≤ 0 (1 N where a limit is zero) so that both weigh alike
-    in the constraint violation; the chip's margin (already relative) is interpolated on the
-    sweep's heights. Population ``optimise.population``, ``nsga2_generations``
-    generations, seed ``optimise.seed``; the same seed gives the same set.
+        If no design is feasible (message from :func:`exact_reduction` where it explains).
     """
-    from pymoo.algorithms.moo.nsga2 import NSGA2
-    from pymoo.core.problem import Problem
-    from pymoo.optimize import minimize
-
     R = as_responses(models)
     o = study.optimise
     table = sweep(R, study) if table is None else table
-    (H_lo, H_hi), (G_lo, G_hi) = study.design.H, study.design.G
-    (M_lo, M_hi), M0 = study.M_z_bounds, study.magnet.M_z
-    n_var = 3 if study.M_z_variable else 2
-    s_r = abs(constraints.F_r_c) or 1.0
-    s_z = abs(constraints.F_z_c) or 1.0
-    # the chip's margin at M_z,0 depends on H alone: read it off the dense sweep
-    chip = (chip_margin(study, table.H, table.t_m, table.theta_m)
-            if study.constraints.chip_range else None)
-
-    def designs(x):
-        M = M_lo + x[:, 2] * (M_hi - M_lo) if n_var == 3 else np.full(x.shape[0], M0)
-        return H_lo + x[:, 0] * (H_hi - H_lo), G_lo + x[:, 1] * (G_hi - G_lo), M
-
-    def evaluate(x):
-        H, G, M = designs(x)
-        tab = heights_batch(R, H, study, warm=table, coarse_start=False)
-        g_r, g_z = constraints.margins(G * tab.f_r_min, G * tab.f_z_max)
-        return H, G, M, tab, g_r, g_z
-
-    class _Designs(Problem):
-        def __init__(self):
-            super().__init__(n_var=n_var, n_obj=2, n_ieq_constr=2 if chip is None else 3,
-                             xl=np.zeros(n_var), xu=np.ones(n_var))
-
-        def _evaluate(self, x, out, *args, **kwargs):
-            H, G, M, tab, g_r, g_z = evaluate(x)
-            k = G * M0 / M
-            out["F"] = np.stack([k * tab.gamma_r_max, k * tab.gamma_z_max], axis=1)
-            g = [g_r / s_r, g_z / s_z]
-            if chip is not None:  # the field scales with M_z
-                g.append(M / M0 * (1.0 + np.interp(H, table.H, chip)) - 1.0)
-            out["G"] = np.stack(g, axis=1)
-
-    res = minimize(_Designs(), NSGA2(pop_size=o.population), ("n_gen", o.nsga2_generations),
-                   seed=o.seed, verbose=False)
-    opt = res.opt  # None when no feasible design was found
-    feasible = np.zeros(0, bool) if opt is None else np.ravel(opt.get("CV")) <= 0
-    if not feasible.any():
+    problem = DesignProblem(R, study, constraints, warm=table)
+    try:
+        X, n_eval = problem.solve()
+    except InfeasibleError:
         exact_reduction(R, study, constraints, table)  # raises the informative error
-        raise InfeasibleError("NSGA-II found no feasible design although some exist; "
-                              "increase optimise.nsga2_generations or optimise.population")
-    X = np.atleast_2d(opt.get("X"))[feasible]
+        raise
     X = X[np.argsort(X[:, 0], kind="stable")]
-    H, G, M, tab, _, _ = evaluate(X)
-    k = G * M0 / M
-    return ParetoSet(H, G, k * tab.gamma_r_max, k * tab.gamma_z_max, G * tab.f_r_min,
-                     G * tab.f_z_max, constraints, o.seed, o.nsga2_generations,
-                     int(res.algorithm.evaluator.n_eval), M)
+    cols, obj, _, tab = problem.evaluate(X)
+    G = cols["G"]
+    return ParetoSet(cols["H"], G, obj[:, 0], obj[:, 1], G * tab.f_r_min, G * tab.f_z_max,
+                     constraints, o.seed, o.nsga2_generations, n_eval, cols["M_z"])
 
 
 def curve_gap(points: np.ndarray, front: np.ndarray, joined: np.ndarray | None = None) -> float:

@@ -237,20 +237,24 @@ CAPTIONS = {
 }
 
 
-def write_optimise_outputs(models: Responses | ModelSet, study: Study, folder: str | Path,
-                           constraints: ForceConstraints | None = None, *,
-                           figures: Callable[..., list[Path]] | None = None) -> Choice:
-    """Run :func:`optimise` and write its files into ``folder``; return the chosen design.
+def write_optimise_outputs(result: Optimisation, models: Responses | ModelSet,
+                           folder: str | Path, *,
+                           figures: Callable[..., list[Path]] | None = None) -> list[Path]:
+    """Write an optimisation's files into ``folder``; return the files written.
 
     Besides :meth:`Optimisation.write` (which receives ``figures``), writes ``chosen.json``
-    (the chosen design as flat values in user units, for the report) and ``captions.json``.
+    (the chosen design as flat values in user units, for the report), ``shear_bound.csv``
+    (how well-posed the stable-shear bound is per height, from ``models``) and
+    ``captions.json``.
     """
-    result = optimise(models, study, constraints)
     folder = Path(folder)
-    result.write(folder, figures=figures)
+    study = result.study
+    files = result.write(folder, figures=figures)
     cond = shear_bound_conditioning(models, study, np.linspace(*study.design.H, 9))
-    _csv(folder / "shear_bound.csv", ["H_mm", "t_m", "t_within_1_percent", "F_z_max_drop_percent"],
-         zip(from_si(cond.H, "mm"), cond.t_m, cond.t_tol, 100 * cond.dF_z_rel, strict=True))
+    files.append(_csv(folder / "shear_bound.csv",
+                      ["H_mm", "t_m", "t_within_1_percent", "F_z_max_drop_percent"],
+                      zip(from_si(cond.H, "mm"), cond.t_m, cond.t_tol, 100 * cond.dF_z_rel,
+                          strict=True)))
     c = result.choice
     flat = {k: v for k, v in _choice_json(c).items() if k != "active_constraints"}
     flat["active_constraints"] = ", ".join(c.active) or "none"
@@ -258,6 +262,7 @@ def write_optimise_outputs(models: Responses | ModelSet, study: Study, folder: s
     flat["constraints"] = {"F_r_c_N": result.constraints.F_r_c,
                            "F_z_c_N": result.constraints.F_z_c,
                            "source": result.constraints.source}
-    (folder / "chosen.json").write_text(json.dumps(flat, indent=2) + "\n")
-    (folder / "captions.json").write_text(json.dumps(CAPTIONS, indent=2) + "\n")
-    return c
+    for name, doc in (("chosen.json", flat), ("captions.json", CAPTIONS)):
+        (folder / name).write_text(json.dumps(doc, indent=2) + "\n")
+        files.append(folder / name)
+    return files

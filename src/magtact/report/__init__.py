@@ -11,15 +11,22 @@ from ._fig_field import fig_field
 from ._fig_geometry import draw_geometry_pareto, fig_geometry_pareto
 from ._fig_mechanics import fig_deformed_body
 from ._fig_metamodel import fig_force_map, fig_gamma, fig_parity
-from ._fig_optimise import fig_maps, fig_pareto
+from ._fig_optimise import draw_maps, draw_pareto, fig_maps, fig_pareto
 from ._fig_validation import fig_validation
 from ._html import build_report
 from ._publication import publication_figures
-from ._stages import field_figures, fit_figures, optimise_figures, validation_figures
+from ._stages import (
+    field_figures,
+    fit_figures,
+    optimise_figure_objects,
+    optimise_figures,
+    validation_figures,
+)
 from ._style import CMAP_DIV, CMAP_SEQ, save, style
 
 __all__ = [
-    "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "draw_geometry_pareto",
+    "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "draw_geometry_pareto", "draw_maps",
+    "draw_pareto", "optimise_figure_objects",
     "field_figures", "fig_deformed_body", "fig_doe", "fig_field", "fig_force_map", "fig_gamma",
     "fig_geometry_pareto", "fig_maps", "fig_pareto", "fig_parity", "fig_validation",
     "fit_figures", "optimise_figures", "publication_figures", "read_card", "save", "style",

@@ -20,24 +20,17 @@ def _contours(ax, X, Y, Z, color, ls, label):
     return cs
 
 
-def fig_maps(maps, constraints, out_dir: str | Path) -> list[Path]:
-    """Contour maps over (H, G): objectives and constraints (two figures, PNG + SVG).
-
-    ``maps_objectives``: Γ_r,max solid, Γ_z,max dashed [N/T]. ``maps_constraints``: F_r,min
-    solid, F_z,max dashed [N], with the limits F_r,c and F_z,c drawn bold.
-    """
-    out_dir = Path(out_dir)
+def draw_maps(maps, constraints) -> dict:
+    """The figures of :func:`fig_maps` (matplotlib Figures, not saved), by name."""
     X, Y = np.meshgrid(mm(maps.H), kpa(maps.G), indexing="ij")
-    files = []
     with style():
-        fig, ax = subplots(figsize=(3.4, 2.8))
+        fig_o, ax = subplots(figsize=(3.4, 2.8))
         _contours(ax, X, Y, maps.Gamma_r_max, "C0", "solid", GR + " [N/T]")
         _contours(ax, X, Y, maps.Gamma_z_max, "C3", "dashed", GZ + " [N/T]")
         ax.set(xlabel="H [mm]", ylabel="G [kPa]")
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, frameon=False)
-        files += save(fig, out_dir / "maps_objectives")
 
-        fig, ax = subplots(figsize=(3.4, 2.8))
+        fig_c, ax = subplots(figsize=(3.4, 2.8))
         _contours(ax, X, Y, maps.F_r_min, "C0", "solid", FR + " [N]")
         _contours(ax, X, Y, maps.F_z_max, "C3", "dashed", FZ + " [N]")
         for Z, level, color, ls in ((maps.F_r_min, constraints.F_r_c, "C0", "solid"),
@@ -47,7 +40,19 @@ def fig_maps(maps, constraints, out_dir: str | Path) -> list[Path]:
         ax.plot([], [], color="k", lw=2.2, label="limits")
         ax.set(xlabel="H [mm]", ylabel="G [kPa]")
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3, frameon=False)
-        files += save(fig, out_dir / "maps_constraints")
+    return {"maps_objectives": fig_o, "maps_constraints": fig_c}
+
+
+def fig_maps(maps, constraints, out_dir: str | Path) -> list[Path]:
+    """Contour maps over (H, G): objectives and constraints (two figures, PNG + SVG).
+
+    ``maps_objectives``: Γ_r,max solid, Γ_z,max dashed [N/T]. ``maps_constraints``: F_r,min
+    solid, F_z,max dashed [N], with the limits F_r,c and F_z,c drawn bold.
+    """
+    files = []
+    with style():
+        for name, fig in draw_maps(maps, constraints).items():
+            files += save(fig, Path(out_dir) / name)
     return files
 
 
@@ -58,6 +63,12 @@ def fig_pareto(opt, path: str | Path) -> list[Path]:
     when it is a single point) on its curve over all feasible H, the chosen design as a star
     (PNG + SVG).
     """
+    with style():
+        return save(draw_pareto(opt), path)
+
+
+def draw_pareto(opt):
+    """The figure of :func:`fig_pareto` (a matplotlib Figure, not saved)."""
     p, r, c = opt.pareto, opt.reduction, opt.constraints
     front = r.front
     chosen = opt.choice.design
@@ -96,4 +107,4 @@ def fig_pareto(opt, path: str | Path) -> list[Path]:
         ax.set(xlabel="H [mm]", ylabel="G [kPa]", title="Design space",
                xlim=(mm(H_lo), mm(H_hi)), ylim=(kpa(G_lo), kpa(G_hi)))
         ax.legend(loc="upper right")
-        return save(fig, path)
+    return fig

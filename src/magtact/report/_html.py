@@ -23,6 +23,7 @@ from pathlib import Path
 
 from .._errors import MissingFileError
 from ._card import read_card
+from ._labels import label, value_text
 from ._publication import publication_section
 
 #: Stages in pipeline order: (folder, title, what it is).
@@ -203,17 +204,58 @@ def _summary(manifest: dict, stages: dict, folder: Path) -> str:
 
 
 def _chosen(folder: Path | None) -> str:
+    """The chosen design in words and units (every number in ``optimise/chosen.json``, or
+    ``geometry.json`` over geometric design variables)."""
     data = _load_json(folder / "chosen.json") if folder is not None else None
-    if not data:
+    geo = _load_json(folder / "geometry.json") if folder is not None else None
+    if isinstance(geo, dict) and isinstance(geo.get("choice"), dict) and not data:
+        data, source = geo["choice"] | {"constraints": geo.get("constraints")}, "geometry.json"
+    else:
+        source = "chosen.json"
+    if not isinstance(data, dict) or not data:
         return ('<h2 id="chosen">Chosen design</h2><div class="missing">No chosen design in '
                 "this folder (the optimisation stage did not produce "
                 "<code>optimise/chosen.json</code>).</div>")
-    rows = "".join(f'<tr><td class="l">{_e(k)}</td><td>{_fmt(v)}</td></tr>'
-                   for k, v in data.items() if not isinstance(v, (dict, list)))
-    extra = "".join(f"<h3>{_e(k)}</h3>{_dict_table(v)}" for k, v in data.items()
-                    if isinstance(v, dict))
-    return (f'<h2 id="chosen">Chosen design</h2><div class="design"><table>{rows}</table>'
-            f"{extra}{_design_rule(data)}</div>")
+
+    def num(key, fmt=".4g"):
+        v = data.get(key)
+        return f"{v:{fmt}}" if isinstance(v, (int, float)) and not isinstance(v, bool) else "?"
+
+    rows = []
+    if "design" in data:
+        rows.append(("design", str(data["design"])))
+    if "H_mm" in data:
+        rows += [("base height H", f"{num('H_mm')} mm"),
+                 ("shear modulus G of the elastomer", f"{num('G_kPa')} kPa")]
+    if "M_z_A_per_m" in data:
+        rows.append(("magnetisation M_z", f"{num('M_z_A_per_m', '.4g')} A/m"))
+    rows += [("worst shear sensitivity Γ_r,max over the stable region",
+              f"{num('Gamma_r_max_N_per_T')} N/T"),
+             ("worst normal sensitivity Γ_z,max over the stable region",
+              f"{num('Gamma_z_max_N_per_T')} N/T"),
+             ("largest stable shear force F_r,min", f"{num('F_r_min_N')} N"),
+             ("largest normal force in the stable region F_z,max", f"{num('F_z_max_N')} N")]
+    if "t_m" in data:
+        rows.append(("stable region", f"t ≤ {num('t_m', '.3g')}, θ ≤ "
+                                      f"{num('theta_m_rad', '.3g')} rad"))
+    c = data.get("constraints")
+    if isinstance(c, dict):
+        rows.append(("force constraints", f"F_r,min ≤ {_plain(c.get('F_r_c_N'))} N, F_z,max ≥ "
+                                          f"{_plain(c.get('F_z_c_N'))} N "
+                                          f"({_plain(c.get('source', '?'))})"))
+    rows.append(("margins to the constraints", f"{num('g_r_N', '.3g')} N shear, "
+                                               f"{num('g_z_N', '.3g')} N normal (≤ 0: met)"))
+    if "active_constraints" in data:
+        rows.append(("active constraints", _plain(data["active_constraints"])))
+    if data.get("degenerate"):
+        rows.append(("note", _plain(data["degenerate"])))
+    if "sensitivity_definition" in data:
+        rows.append(("sensitivity Γ", f"{_plain(data['sensitivity_definition'])} definition"))
+    body = "".join(f'<tr><td class="l">{_e(k)}</td><td class="l">{_e(v)}</td></tr>'
+                   for k, v in rows)
+    return (f'<h2 id="chosen">Chosen design</h2><div class="design"><table>{body}</table>'
+            f"<p><small>Every number in <code>optimise/{source}</code>.</small></p>"
+            f"{_design_rule(data)}</div>")
 
 
 def _design_rule(chosen: dict) -> str:
@@ -326,8 +368,22 @@ def _settings(path: Path) -> str:
     if not path.is_file():
         return ('<h2 id="settings">Study settings</h2><div class="missing">No study.toml in this '
                 "folder.</div>")
-    return ('<h2 id="settings">Study settings</h2><p>The full study (user units), as loaded and '
-            f"validated.</p><pre>{_e(path.read_text(encoding='utf-8'))}</pre>")
+    import tomllib
+
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        return (f'<h2 id="settings">Study settings</h2><div class="missing">study.toml '
+                f"unreadable ({_e(exc)}).</div>")
+    out = ['<h2 id="settings">Study settings</h2><p>The full study (user units), as loaded '
+           "and validated; the file is <code>study.toml</code>.</p>"]
+    top = {k: v for k, v in data.items() if not isinstance(v, dict)}
+    if top:
+        out.append(_dict_table(top))
+    for section, values in data.items():
+        if isinstance(values, dict):
+            out.append(f"<h3>{_e(section)}</h3>{_dict_table(values)}")
+    return "\n".join(out)
 
 
 def _versions(manifest: dict) -> str:
@@ -406,7 +462,8 @@ def _csv_table(path: Path, caption: str | None) -> str:
     html_rows = "".join("<tr>" + "".join(f"<td>{_e(_num(c))}</td>" for c in r) + "</tr>"
                         for r in body[:MAX_ROWS])
     table = ("<div style=\"overflow-x:auto\"><table><tr>"
-             + "".join(f"<th>{_e(h)}</th>" for h in head) + "</tr>" + html_rows + "</table></div>")
+             + "".join(f"<th>{_e(label(h))}</th>" for h in head) + "</tr>" + html_rows
+             + "</table></div>")
     if len(body) <= MAX_ROWS:
         return f"<h3>{_e(title)}</h3><p><small>{_e(path.name)}</small></p>{table}"
     # long data tables: collapsed, first rows only (the file has them all)
@@ -423,17 +480,14 @@ def _json_summary(path: Path, level: int = 3) -> str:
     body = _dict_table(data) if isinstance(data, dict) else ""
     if isinstance(data, dict):
         body += "".join(_records_table(k, v) for k, v in _record_lists(data))
-    raw = json.dumps(data, indent=1, ensure_ascii=False)
-    if len(raw) > 20000:
-        raw = raw[:20000] + "\n… (truncated; see the file)"
-    return (f"<h{level}>{_e(title)}</h{level}><p><small>{_e(path.name)}</small></p>{body}"
-            f"<details><summary>raw {_e(path.name)}</summary><pre>{_e(raw)}</pre></details>")
+    return (f"<h{level}>{_e(title)}</h{level}><p><small>{_e(path.name)}: nested values and "
+            f"every digit in the file</small></p>{body}")
 
 
 def _dict_table(data: dict, prefix: str = "", depth: int = 0) -> str:
     rows = []
     for k, v in _flatten(data, prefix, depth):
-        rows.append(f'<tr><td class="l">{_e(k)}</td><td class="l">{_fmt(v)}</td></tr>')
+        rows.append(f'<tr><td class="l">{_e(label(k))}</td><td class="l">{_fmt(v)}</td></tr>')
     return f"<table>{''.join(rows)}</table>" if rows else ""
 
 
@@ -469,8 +523,9 @@ def _records_table(name: str, records: list[dict]) -> str:
                    for r in records[:MAX_ROWS])
     more = f"<p><small>{len(records) - MAX_ROWS} more rows</small></p>" if len(
         records) > MAX_ROWS else ""
-    return (f"<p><b>{_e(name)}</b></p><div style=\"overflow-x:auto\"><table><tr>"
-            + "".join(f"<th>{_e(k)}</th>" for k in keys) + f"</tr>{rows}</table></div>{more}")
+    return (f"<p><b>{_e(label(name))}</b></p><div style=\"overflow-x:auto\"><table><tr>"
+            + "".join(f"<th>{_e(label(k))}</th>" for k in keys)
+            + f"</tr>{rows}</table></div>{more}")
 
 
 def _is_synthetic(folder: Path) -> bool:
@@ -493,10 +548,16 @@ def _e(x) -> str:
 
 
 def _plain(v) -> str:
-    return f"{v:.6g}" if isinstance(v, float) else str(v)
+    return value_text(v)
 
 
 def _fmt(v) -> str:
+    """A value in a table cell; an expression or a file's text (model files) as code."""
+    if isinstance(v, str) and "\n" in v:
+        return (f"<details><summary>text, {v.count(chr(10)) + 1} lines</summary>"
+                f"<pre>{_e(v)}</pre></details>")
+    if isinstance(v, str) and "*" in v and "(" in v:
+        return f"<code>{_e(v)}</code>"
     return _e(_plain(v))
 
 

@@ -12,7 +12,8 @@ writer                                      figures
 ``magtact.validation.write_outputs``        :func:`validation_figures`
 =========================================  ==============================================
 
-Every function writes PNG and SVG files and returns the paths written.
+Every function writes PNG and SVG files and returns the paths written;
+:func:`optimise_figure_objects` returns the optimisation's figures as objects instead.
 """
 
 from __future__ import annotations
@@ -20,8 +21,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from ._fig_field import fig_field
+from ._fig_geometry import draw_geometry_pareto
 from ._fig_metamodel import fig_force_map, fig_gamma, fig_parity
-from ._fig_optimise import fig_maps, fig_pareto
+from ._fig_optimise import draw_maps, draw_pareto, fig_maps, fig_pareto
 from ._fig_validation import fig_validation
 
 
@@ -75,6 +77,20 @@ def optimise_figures(optimisation, folder: str | Path) -> list[Path]:
     folder = Path(folder)
     return (fig_maps(optimisation.maps, optimisation.constraints, folder)
             + fig_pareto(optimisation, folder / "pareto_set"))
+
+
+def optimise_figure_objects(optimisation) -> dict:
+    """The optimisation's figures as matplotlib Figures by name (not saved): those of
+    :func:`optimise_figures`, or ``geometry_pareto`` over geometric design variables.
+
+    Parameters
+    ----------
+    optimisation : magtact.optimise.Optimisation or GeometryOptimisation
+    """
+    if hasattr(optimisation, "maps"):
+        return (draw_maps(optimisation.maps, optimisation.constraints)
+                | {"pareto_set": draw_pareto(optimisation)})
+    return {"geometry_pareto": draw_geometry_pareto(optimisation)}
 
 
 def validation_figures(validation, path: str | Path) -> list[Path]:

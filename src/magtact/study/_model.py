@@ -205,7 +205,7 @@ class Constraints:
 
 
 @dataclass(frozen=True)
-class Metamodel:
+class MetamodelSettings:
     """Genetic-programming metamodels (docs/method.md §5); fixed generations and seed:
     reproducible."""
 
@@ -317,7 +317,7 @@ class Study:
     magnetics: Magnetics = field(default_factory=Magnetics)
     mechanics: Mechanics = field(default_factory=Mechanics)
     constraints: Constraints = field(default_factory=Constraints)
-    metamodel: Metamodel = field(default_factory=Metamodel)
+    metamodel: MetamodelSettings = field(default_factory=MetamodelSettings)
     sensitivity: Sensitivity = field(default_factory=Sensitivity)
     hall: Hall = field(default_factory=Hall)
     optimise: Optimise = field(default_factory=Optimise)

@@ -1,0 +1,69 @@
+"""Words and units for the keys of magtact's files, as the report shows them.
+
+Files keep machine keys with the unit in the name (``Gamma_r_max_N_per_T``, ``G_kPa``); a
+reader of the report sees ``Γ_r,max [N/T]`` and ``G [kPa]``. The rule is mechanical, so a key
+the table below does not name is still shown in words: a unit suffix becomes ``[unit]``, Greek
+names their letter, and the underscores after a symbol's subscript become commas
+(``F_r_min`` → ``F_r,min``); keys that are words (``active_constraints``) read as words.
+"""
+
+from __future__ import annotations
+
+#: Unit suffixes of keys (longest first) and how they read.
+UNITS: tuple[tuple[str, str], ...] = (
+    ("_mN_per_uT", "mN/µT"), ("_N_per_T", "N/T"), ("_A_per_m", "A/m"),
+    ("_MA_per_m", "MA/m"), ("_percent", "%"), ("_kPa", "kPa"), ("_MPa", "MPa"), ("_mm", "mm"),
+    ("_mN", "mN"), ("_uT", "µT"), ("_mT", "mT"), ("_rad", "rad"), ("_deg", "°"), ("_Hz", "Hz"),
+    ("_N", "N"), ("_s", "s"), ("_Pa", "Pa"), ("_K", "K"),
+)
+#: Names whose reading is not mechanical.
+NAMES = {
+    "G_star": "G*", "M_z_star": "M_z*", "g_r": "margin g_r", "g_z": "margin g_z",
+    "t_m": "t_m (stable shear bound)", "theta_m": "θ_m (stable shear bound)",
+    "n_t": "levels of t", "n_theta": "levels of θ", "n_H": "levels of H", "n_G": "levels of G",
+    "R_m": "magnet radius R_m", "H_m": "magnet height H_m", "R": "body radius R",
+}
+GREEK = {"Gamma": "Γ", "gamma": "γ", "theta": "θ", "sigma": "σ", "mu": "μ", "delta": "δ",
+         "eps": "ε", "alpha": "α"}
+#: Subscript words kept as such after a symbol (F_r_min → F_r,min).
+SUBSCRIPTS = {"min", "max", "c", "r", "z", "x", "y", "0", "rest", "sat", "m", "g", "f"}
+
+
+def split_unit(key: str) -> tuple[str, str | None]:
+    """(name, unit) of a key: ``"Gamma_r_max_N_per_T"`` → (``"Gamma_r_max"``, ``"N/T"``)."""
+    for suffix, unit in UNITS:
+        if key.endswith(suffix) and len(key) > len(suffix):
+            return key[: -len(suffix)], unit
+    return key, None
+
+
+def name(key: str) -> str:
+    """A key's name in words or symbols, without its unit."""
+    if key in NAMES:
+        return NAMES[key]
+    parts = key.split("_")
+    parts = [GREEK.get(p, p) for p in parts]
+    head = parts[0]
+    symbol = len(head) <= 2 or head in GREEK.values()
+    if symbol and len(parts) > 1 and all(p in SUBSCRIPTS or p.isdigit() for p in parts[1:]):
+        return head + "_" + ",".join(parts[1:])
+    return " ".join(parts)
+
+
+def label(key: str) -> str:
+    """A file key as a reader sees it: name and ``[unit]``."""
+    base, unit = split_unit(str(key))
+    out = name(base) if "." not in base else " · ".join(name(p) for p in base.split("."))
+    return f"{out} [{unit}]" if unit else out
+
+
+def value_text(v) -> str:
+    """A value as a reader sees it: ``None`` as a dash, floats to 6 significant digits,
+    booleans as yes/no."""
+    if v is None:
+        return "—"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    return str(v)

@@ -1,0 +1,170 @@
+"""The one chain from a study to its answer: ``magtact.design``, ``magtact optimise`` and the
+pipeline's optimisation stage give the same chosen design, for (H, G), with the magnetisation
+and with a geometric design variable; the result object evaluates any design; NSGA-II applies
+every constraint the exact reduction applies (the chip's range included, over the geometry)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import magtact
+from magtact.cli._app import app
+from magtact.metamodel import prefitted_dir, save_models
+from magtact.study import load_study, study_from_dict
+from test_geometry_batch import SMALL, radius_models
+
+#: Small optimiser budgets: the chain, not the optimiser's accuracy, is under test here.
+pytestmark = pytest.mark.filterwarnings("ignore::magtact.optimise.FrontGapWarning")
+
+FAST = {"population": 24, "nsga2_generations": 12, "grid_n": 2, "sweep_n": 61,
+        "sweep_coarse": 9}
+
+
+def _chosen_json(folder):
+    return json.loads((folder / "design.json").read_text())["chosen"]
+
+
+def _same_design(result, chosen: dict):
+    for key, value in result.chosen_design.items():
+        assert value == pytest.approx(chosen[key], rel=1e-9), key
+
+
+def test_the_chain_has_one_definition():
+    """Every caller reaches the optimiser through ``solve``: no other module calls
+    ``optimise``/``optimise_geometry`` or builds designer answers for a result."""
+    import ast
+    from pathlib import Path
+
+    src = Path(magtact.__file__).parent
+    callers = {}
+    for path in src.rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call):
+                f = node.func
+                name = f.id if isinstance(f, ast.Name) else getattr(f, "attr", None)
+                if name in ("optimise", "optimise_geometry", "answer"):
+                    callers.setdefault(name, set()).add(path.relative_to(src).as_posix())
+    assert callers["optimise"] == {"_front.py"}
+    assert callers["optimise_geometry"] == {"_front.py"}
+    assert callers["answer"] == {"_front.py"}
+
+
+@pytest.fixture(scope="module")
+def magone(tmp_path_factory):
+    """The MagOne study with small optimiser budgets, through the front door."""
+    s = load_study("magone")
+    s = replace(s, optimise=replace(s.optimise, **FAST))
+    path = tmp_path_factory.mktemp("magone") / "study.toml"
+    path.write_text(s.to_toml(), encoding="utf-8")
+    return path, magtact.design(path, models=prefitted_dir())
+
+
+def test_design_with_the_magnetisation_as_a_design_variable(tmp_path, magone):
+    path, hg = magone
+    s = load_study(path)
+    s = replace(s, design=replace(s.design, M_z=(0.9e6, 1.3e6)))
+    result = magtact.design(s, models=prefitted_dir())
+    assert set(result.chosen_design) == {"H_mm", "G_kPa", "M_z_A_per_m"}
+    M = result.variables["M_z"]
+    assert 0.9e6 <= M <= 1.3e6 and result.chosen.design.M_z == M
+    # Γ ∝ G / M_z: the chosen design at its own magnetisation, evaluated again
+    again = result.evaluate(H_mm=result.chosen_design["H_mm"],
+                            G_kPa=result.chosen_design["G_kPa"], M_z_A_per_m=M)
+    assert again.design.Gamma_z_max == pytest.approx(result.chosen.design.Gamma_z_max,
+                                                     rel=1e-12)
+    assert any(row[0].startswith("magnetisation") for row in result.card["rows"])
+    assert result.original.design.Gamma_z_max == pytest.approx(
+        hg.original.design.Gamma_z_max, rel=1e-12)  # the original keeps the magnet's own M_z
+    result.write(tmp_path)
+    assert _chosen_json(tmp_path)["M_z_A_per_m"] == pytest.approx(M, rel=1e-12)
+
+
+def test_optimise_command_equals_design(tmp_path, magone):
+    path, result = magone
+    run = CliRunner().invoke(app, ["optimise", str(path), "--models", str(prefitted_dir()),
+                                   "--out", str(tmp_path)])
+    assert run.exit_code == 0, run.output
+    _same_design(result, _chosen_json(tmp_path))
+    assert json.loads((tmp_path / "card.json").read_text())["rows"] == result.card["rows"]
+
+
+def _geo_study(tmp_path, **constraints):
+    data = {"design": {"R_m_mm": [2.0, 3.0]}, "metamodel": {"b_model": "exact"},
+            "optimise": SMALL | {"population": 12, "nsga2_generations": 6, "geometry_n": 3,
+                                 "sweep_n": 5, "sweep_coarse": 3, "start_t": 5,
+                                 "start_theta": 3, "tol": 1e-7},
+            "constraints": {"source": "values", "F_r_c_N": -0.02, "F_z_c_N": 0.2}
+            | constraints}
+    s = study_from_dict(data)
+    path = tmp_path / "geo.toml"
+    path.write_text(s.to_toml(), encoding="utf-8")
+    folder = tmp_path / "models"
+    save_models(radius_models(s), folder)
+    return s, path, folder
+
+
+def test_geometric_design_equals_the_pipeline_and_reads_within_the_chip(tmp_path):
+    """A geometric study with ``chip_range`` and a chip range that the strongest-field designs
+    exceed: the front door (models read back from their files) and the pipeline choose the
+    same design, and every design of NSGA-II's set reads within the range over its stable
+    region, as the exact front does."""
+    from magtact import pipeline
+    from magtact.designer import answer
+    from magtact.optimise import chip_margin, per_design
+
+    s, _, folder = _geo_study(tmp_path, chip_range=True)
+    models = radius_models(s)
+    R_hi, H_lo = 3e-3, s.design.H[0]  # the widest magnet, closest to the chip
+    strong = answer(models.at(R_m=R_hi), s.at(R_m=R_hi), H_lo, 20e3).saturation
+    limit = 0.8 * max(strong.B_max_x, strong.B_max_z)
+    s = replace(s, hall=replace(s.hall, range_x=limit, range_z=limit))
+    assert chip_margin(s.at(R_m=R_hi), [H_lo], [1.0], [s.loading.theta_max])[0] > 0
+
+    result = magtact.design(s, models=folder)
+    assert set(result.chosen_design) == {"H_mm", "G_kPa", "R_m_mm"}
+    ctx = pipeline._Context(study=s, folder=tmp_path / "run", recompute=False, refit=False,
+                            data=None, cache=None, workers=None, log=lambda m: None,
+                            models=models)
+    pipeline._stage_optimise(ctx, pipeline.StageRecord("optimise", "Optimisation"))
+    assert ctx.result.variables == result.variables
+    choice = json.loads((tmp_path / "run" / "optimise" / "geometry.json").read_text())["choice"]
+    assert choice["design"] == magtact.optimise.describe(result.optimisation.choice.values)
+    assert choice["Gamma_r_max_N_per_T"] == result.chosen.design.Gamma_r_max
+
+    p = result.pareto
+    assert len(p) > 0
+    for i in range(len(p)):
+        v = p.design(i)
+        sub = s.at(R_m=v["R_m"])
+        d = per_design(models.at(R_m=v["R_m"]), v["H"], v["G"], sub)
+        assert chip_margin(sub, d.H, d.t_m, d.theta_m)[0] <= 1e-9
+    assert result.chosen.saturation.region_margin <= 1e-9
+    assert np.isfinite(result.optimisation.gap)
+    # the answer at the chosen geometry is the answer of the sub-study at that geometry
+    again = result.evaluate(H_mm=result.chosen_design["H_mm"],
+                            G_kPa=result.chosen_design["G_kPa"],
+                            R_m_mm=result.chosen_design["R_m_mm"])
+    assert again.design.Gamma_r_max == pytest.approx(result.chosen.design.Gamma_r_max,
+                                                     rel=1e-9)
+
+
+def test_every_model_kind_is_a_response(models):
+    """The fitted models, the exact field and a composed force share one interface."""
+    from magtact.metamodel import ExactField, Response
+
+    s = load_study("magone")
+    kinds = [models.B_r, models.f_z, ExactField(s, "B_z"),
+             radius_models(study_from_dict({"design": {"R_m_mm": [2.0, 3.0]},
+                                            "metamodel": {"b_model": "exact"}})).f_r]
+    for m in kinds:
+        assert isinstance(m, Response), type(m)
+        v = m.value(0.5, 0.2, 3e-3, **({"R_m": 2.5e-3} if getattr(m, "geometry", ()) else {}))
+        jet = m.jet(0.5, 0.2, 3e-3, 1, **({"R_m": 2.5e-3} if getattr(m, "geometry", ()) else {}))
+        assert np.isfinite(v) and jet[0] == pytest.approx(v, rel=1e-12)
+    assert not isinstance(object(), Response)
