@@ -5,8 +5,8 @@ from ._load import PRESETS, StudyError, load_study, magone, magone_printed, stud
 from ._model import (
     ARRAY_LAYOUTS,
     DOE,
-    Array,
     MESH_DENSITIES,
+    Array,
     Body,
     Constraints,
     Design,
