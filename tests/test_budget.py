@@ -277,6 +277,12 @@ def test_report_shows_the_budget_section(tmp_path, budget, study):
     assert "Error budget of the original design" in html and "data:image/png" in html
     sp = doc["budgets"][0]["array"]["smallest_pitch_mm"]
     assert f"<b>{sp:.6g} mm</b>" in html
+    # in a run's folder: shown only if it names the run
+    (tmp_path / "run.json").write_text('{"run_id": "abc", "stages": []}', encoding="utf-8")
+    assert "is not of this run" in build_report(tmp_path).read_text(encoding="utf-8")
+    write_budgets([budget], study, tmp_path / "budget", figures=png_only, run_id="abc")
+    html = build_report(tmp_path).read_text(encoding="utf-8")
+    assert "is not of this run" not in html and f"<td>{row['worst_mN']:.6g}</td>" in html
     (tmp_path / "budget" / "budget.json").unlink()
     assert "Error budget" not in build_report(tmp_path).read_text(encoding="utf-8")
 

@@ -408,7 +408,8 @@ def budget_card_rows(b: Budget, n: int = 3) -> list[list[str]]:
 
 
 def write_budget_outputs(models: ModelSet, study: Study, designs, folder, figures=None, *,
-                         noise=None, dataset=None, seeds=None) -> Path:
+                         noise=None, dataset=None, seeds=None, run_id: str | None = None
+                         ) -> Path:
     """Write ``folder/budget.json`` (every number, :func:`budget_json`) for ``designs``.
 
     Parameters
@@ -418,6 +419,11 @@ def write_budget_outputs(models: ModelSet, study: Study, designs, folder, figure
     figures : callable, optional
         ``figures(doc, folder)`` draws the figures of the JSON document (e.g.
         :func:`magtact.report.budget_figures`).
+    noise, dataset, seeds
+        As in :func:`error_budget`.
+    run_id : str, optional
+        The identifier of the run that writes the folder (``run.json``'s ``run_id``): the
+        report shows a budget only if it names the report's run.
 
     Returns
     -------
@@ -431,17 +437,18 @@ def write_budget_outputs(models: ModelSet, study: Study, designs, folder, figure
                                f"{type(d).__name__}")
         budgets.append(error_budget(models, study, d.H, d.G, d.M_z, label=label, design=d,
                                     noise=noise, dataset=dataset, seeds=seeds))
-    return write_budgets(budgets, study, folder, figures)
+    return write_budgets(budgets, study, folder, figures, run_id=run_id)
 
 
-def write_budgets(budgets, study: Study, folder, figures=None) -> Path:
+def write_budgets(budgets, study: Study, folder, figures=None, *, run_id: str | None = None
+                  ) -> Path:
     """Write ``folder/budget.json`` of computed budgets (and their figures, as
     :func:`write_budget_outputs`)."""
     from .._files import write_json
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    doc = {"title": "Error budget", "study": study.name,
+    doc = {"title": "Error budget", "study": study.name, "run_id": run_id,
            "budgets": [budget_json(b) for b in budgets]}
     path = write_json(folder / "budget.json", doc, indent=1, ensure_ascii=False)
     if figures is not None:

@@ -66,10 +66,12 @@ def fig_budget(entry: dict, path: str | Path) -> list[Path]:
     return save(draw_budget(entry), path)
 
 
-def budget_figures(doc: dict, folder: str | Path) -> list[Path]:
-    """The figures of ``budget.json`` (``doc``): ``budget_<label>.png`` per design."""
+def budget_figures(doc: dict, folder: str | Path, formats: tuple[str, ...] = ("png",)
+                   ) -> list[Path]:
+    """The figures of ``budget.json`` (``doc``): ``budget_<label>.png`` per design (the report
+    embeds the PNG; add ``"svg"`` to ``formats`` for print)."""
     files = []
     for entry in doc.get("budgets", []):
         slug = re.sub(r"[^A-Za-z0-9]+", "_", str(entry.get("label", "design"))).strip("_")
-        files += fig_budget(entry, Path(folder) / f"budget_{slug or 'design'}")
+        files += save(draw_budget(entry), Path(folder) / f"budget_{slug or 'design'}", formats)
     return files

@@ -162,8 +162,11 @@ def _budget_section(folder: Path, run_id: str | None) -> str:
     data = _load_json(folder / "budget.json")
     if not isinstance(data, dict) or not isinstance(data.get("budgets"), list):
         return ""
-    if not _of_run(folder, run_id):
-        return _other_run(folder, "budget", "Error budget", "")
+    if run_id is not None and data.get("run_id") != run_id and not (
+            (folder / RUN_STAMP).is_file() and _of_run(folder, run_id)):
+        return ('<h2 id="budget">Error budget</h2><div class="missing">The error budget in '
+                "<code>budget/</code> is not of this run (its <code>budget.json</code> names "
+                f"run {_e(str(data.get('run_id'))[:32])}); nothing of it is shown.</div>")
     out = ['<h2 id="budget">Error budget</h2><p>Everything besides the force that moves the '
            "field the chip reads, as a false force ΔF = J ΔB in mN (J = ∂F/∂B of the "
            "metamodels): at rest (t = 0) and worst over the stable region. Rows far above the "
