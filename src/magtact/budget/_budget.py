@@ -267,11 +267,14 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     mc = _fabrication.monte_carlo(lambda e: _fabrication.responses(unit, e),
                                   len(_fabrication.INPUTS), n, tol.seed)
     pct = _fabrication.percentiles(mc)
+    by_input = _fabrication.contributions(lambda e: _fabrication.responses(unit, e),
+                                          len(_fabrication.INPUTS))
     nominal = {"Gamma_r_0": g0[0], "Gamma_z_0": g0[1]}
     if res is not None:
         nominal |= {"sigma_Fr_0": res[0], "sigma_Fz_0": res[1]}
     for k, v in nominal.items():  # relative to the nominal unit → the metamodels' values
-        pct[k] = [p * v for p in pct[k]]
+        pct[k] = [float(p * v) for p in pct[k]]
+        by_input[k] = [float(c * v) for c in by_input[k]]
     assumptions_fab = (f"{n} units, seed {tol.seed}; 1 σ: G {100 * tol.G:.3g} %, remanence "
                        f"{100 * tol.remanence:.3g} %, magnet diameter / height "
                        f"{mm(tol.magnet_diameter):.3g} / {mm(tol.magnet_height):.3g} mm, chip "
@@ -297,7 +300,8 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
                 "stray_field": env.stray_field, "B_rest": B0.tolist(), "sources": SOURCES}
     return Budget(label, float(H), float(G), None if M_z is None else float(M_z), design.t_m,
                   design.theta_m, chip.name, noise_used, noise_source, tuple(rows), res,
-                  array_info, {"percentiles": pct, "samples": n, "seed": tol.seed,
+                  array_info, {"percentiles": pct, "by_input": by_input, "samples": n,
+                               "seed": tol.seed,
                                "inputs": list(_fabrication.INPUTS),
                                "sigmas": _fabrication.sigmas(study).tolist()},
                   env_info, tuple(not_modelled))
@@ -375,8 +379,14 @@ def budget_json(b: Budget) -> dict:
     for k, v in f["percentiles"].items():
         key, _ = units.get(k, (f"{k}_mN", None))
         pct[key] = v if k in units else [from_si(x, "mN") for x in v]
+    lin = {}
+    for k, v in f["by_input"].items():
+        key, _ = units.get(k, (f"{k}_mN", None))
+        lin[key] = dict(zip(f["inputs"], v if k in units else [from_si(x, "mN") for x in v],
+                            strict=True))
     out["fabrication"] = {"percentiles_5_50_95": pct, "samples": f["samples"],
-                          "seed": f["seed"]}
+                          "seed": f["seed"], "sigma_per_input_linear": lin,
+                          "inputs_1_sigma": dict(zip(f["inputs"], f["sigmas"], strict=True))}
     e = b.environment
     out["environment"] = {"delta_T_K": e["delta_T"], "remanence_tc_pct_per_K":
                           100 * e["remanence_tc"], "remanence_tc_tolerance_pct_per_K":

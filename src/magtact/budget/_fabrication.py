@@ -138,6 +138,14 @@ def linearised(fn, n_inputs: int, step: float = 1e-3) -> dict[str, tuple[float, 
     return out
 
 
+def contributions(fn, n_inputs: int, step: float = 1e-3) -> dict[str, list[float]]:
+    """|y(step e_i) − y(0)| / step of each response: the standard deviation each input alone
+    gives it to first order (which tolerance dominates). One-sided, because some responses
+    are magnitudes |a · ε|, whose central difference at 0 vanishes."""
+    y = fn(np.vstack([np.zeros(n_inputs), step * np.eye(n_inputs)]))
+    return {k: [float(abs(d)) for d in (v[1:] - v[0]) / step] for k, v in y.items()}
+
+
 def percentiles(samples: dict[str, np.ndarray]) -> dict[str, list[float]]:
     """The :data:`PERCENTILES` of each response."""
     return {k: [float(p) for p in np.percentile(v, PERCENTILES)] for k, v in samples.items()}
