@@ -317,6 +317,15 @@ def test_bad_budget_settings_name_the_key(table, key, message):
     assert message in str(exc.value)
 
 
+def test_a_study_over_geometry_is_refused_by_name(models, study):
+    from magtact import MagtactError
+
+    geo = study_from_dict({"design": {"R_m_mm": [2.4, 2.5]}, "doe": {"n_R_m": 2},
+                           "metamodel": {"b_model": "exact"}})
+    with pytest.raises(MagtactError, match="fix the geometric design variables"):
+        error_budget(models, geo, H0, G0)
+
+
 def test_a_pitch_equal_to_the_body_is_accepted():
     assert study_from_dict({"array": {"pitch_mm": 12.0, "layout": "hexagonal"}}).array.pitch \
         == pytest.approx(12e-3)

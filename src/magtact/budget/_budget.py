@@ -137,6 +137,11 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     -------
     Budget
 
+    Raises
+    ------
+    MagtactError
+        For a study with geometric design variables besides H (fix them first).
+
     Notes
     -----
     Rows (each ΔF = J ΔB unless said otherwise):
@@ -151,6 +156,10 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
       percentile;
     - model: the mesh's error × the force, the metamodels' held-out error, the seeds' spread.
     """
+    if study.geometric_variables:
+        raise MagtactError("the error budget is computed for one geometry: fix the geometric "
+                           f"design variables ({', '.join(study.geometric_variables)}) with "
+                           "study.at(...) and use models fitted to it")
     chip = hall_chip(study)
     env, arr = study.environment, study.array
     if design is None:
