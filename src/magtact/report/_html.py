@@ -18,6 +18,7 @@ import base64
 import csv
 import html
 import json
+import re
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -123,6 +124,7 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     parts.append(_summary(manifest, stages, folder))
     run_id = manifest.get("run_id")
     parts.append(_chosen(folder / "optimise" if _of_run(folder / "optimise", run_id) else None))
+    parts.append(_budget_section(folder / "budget", run_id))
     for key, title, what in STAGES:
         if _of_run(folder / key, run_id):
             parts.append(_stage(folder / key, key, title, what, stages.get(key)))
@@ -156,6 +158,55 @@ def _card(folder: Path) -> str:
             "<p>Resolution: 1 σ force noise from the chip's RMS field noise, "
             "σ_F = √diag(J Σ_B Jᵀ) with J = ∂F/∂B; unloaded (t = 0) and worst over the stable "
             "region. Every number in <code>optimise/card.json</code>.</p>")
+def _budget_section(folder: Path, run_id: str | None) -> str:
+    """The error budget (``budget/budget.json`` and its figures), or nothing without one."""
+    data = _load_json(folder / "budget.json")
+    if not isinstance(data, dict) or not isinstance(data.get("budgets"), list):
+        return ""
+    if run_id is not None and data.get("run_id") != run_id and not (
+            (folder / RUN_STAMP).is_file() and _of_run(folder, run_id)):
+        return ('<h2 id="budget">Error budget</h2><div class="missing">The error budget in '
+                "<code>budget/</code> is not of this run (its <code>budget.json</code> names "
+                f"run {_e(str(data.get('run_id'))[:32])}); nothing of it is shown.</div>")
+    out = ['<h2 id="budget">Error budget</h2><p>Everything besides the force that moves the '
+           "field the chip reads, as a false force ΔF = J ΔB in mN (J = ∂F/∂B of the "
+           "metamodels): at rest (t = 0) and worst over the stable region. Rows far above the "
+           "resolution are what limits the sensor, not the noise (method, §12). Every number "
+           "in <code>budget/budget.json</code>.</p>"]
+    for b in data["budgets"]:
+        if not isinstance(b, dict) or not isinstance(b.get("rows"), list):
+            continue
+        label = str(b.get("label", "design"))
+        out.append(f"<h3>{_e(label)}: H = {_fmt(b.get('H_mm'))} mm, G = "
+                   f"{_fmt(b.get('G_kPa'))} kPa</h3><p>Noise: {_e(b.get('noise_source', ''))}."
+                   "</p>")
+        rows = "".join(
+            f'<tr><td class="l">{_e(r.get("name"))}</td><td class="l">'
+            f'{_e(r.get("component"))}</td><td>{_fmt(r.get("at_rest_mN"))}</td>'
+            f'<td>{_fmt(r.get("worst_mN"))}</td></tr>'
+            for r in b["rows"] if isinstance(r, dict))
+        out.append('<table><tr><th class="l">row</th><th class="l">force</th><th>at rest '
+                   f"[mN]</th><th>worst [mN]</th></tr>{rows}</table>")
+        arr = b.get("array") if isinstance(b.get("array"), dict) else {}
+        if arr.get("smallest_pitch_mm") is not None:
+            out.append(f"<p>Smallest {_e(arr.get('layout'))} array pitch at which the "
+                       f"neighbours' crosstalk stays below the resolution: "
+                       f"<b>{_fmt(arr.get('smallest_pitch_mm'))} mm</b> "
+                       f"({_e(arr.get('criterion', ''))}).</p>")
+        slug = re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "design"
+        png = folder / f"budget_{slug}.png"
+        if png.is_file():
+            out.append(_figure(png, f"Error budget of the {label} design: false force per row "
+                                    "[mN], log scale; dashed: the resolution (1 σ, worst)"))
+        notes = "".join(f"<li>{_e(r.get('name'))} ({_e(r.get('component'))}): "
+                        f"{_e(r.get('assumptions'))}</li>" for r in b["rows"]
+                        if isinstance(r, dict) and r.get("component") == "F_r")
+        missing = "".join(f"<li>{_e(n)}</li>" for n in b.get("not_modelled", []))
+        out.append(f"<details><summary>assumptions of each row</summary><ul>{notes}</ul>"
+                   f"</details><p>Not modelled:</p><ul>{missing}</ul>")
+    return "\n".join(out)
+
+
 def _method() -> str:
     """The method (docs/method.md, shipped with the package) as the report's appendix."""
     from importlib import resources

@@ -3,11 +3,14 @@
 from ._hall import HALL_PRESETS, HallChip, HallPreset, hall_chip
 from ._load import PRESETS, StudyError, load_study, magone, magone_printed, study_from_dict
 from ._model import (
+    ARRAY_LAYOUTS,
     DOE,
     MESH_DENSITIES,
+    Array,
     Body,
     Constraints,
     Design,
+    Environment,
     Loading,
     Magnet,
     Magnetics,
@@ -15,10 +18,12 @@ from ._model import (
     Mechanics,
     Sensitivity,
     Study,
+    Tolerances,
 )
 from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
+    "ARRAY_LAYOUTS", "Array", "Environment", "Tolerances",
     "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
     "Design", "HallChip", "HallPreset", "Loading", "Magnet", "Magnetics", "Material", "Mechanics",
     "PHYSICAL", "Sensitivity", "Study", "StudyError", "check_si", "checked_si", "from_si",

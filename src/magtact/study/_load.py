@@ -291,6 +291,10 @@ def _check_consistency(s: Study, source) -> None:
                          f"the magnet's edge radius {_mm(s.mechanics.magnet_edge_radius)} mm must "
                          f"be smaller than its radius and height (min(R_m, H_m) = "
                          f"{_mm(min(mg.R_m, mg.H_m))} mm)", source)
+    if 0 < s.array.pitch < 2 * b.R:
+        raise StudyError("array.pitch_mm", f"a pitch of {_mm(s.array.pitch)} mm is smaller than "
+                                           f"the body (diameter 2 body.R_mm = {_mm(2 * b.R)} "
+                                           "mm): neighbouring bodies would overlap", source)
     _check_work(s, source)
     for name in ("H_original", "G_original"):
         value, (lo, hi) = getattr(s.design, name), getattr(s.design, name[0])

@@ -302,6 +302,81 @@ class Optimise:
                                   "exact reduction's grid")
 
 
+#: Layouts of a taxel array (docs/method.md §12).
+ARRAY_LAYOUTS = ("square", "hexagonal")
+
+
+@dataclass(frozen=True)
+class Array:
+    """The taxel array around the sensor, for the neighbours' crosstalk of the error budget
+    (docs/method.md §12): every taxel is this sensor, its magnet on its own chip's axis."""
+
+    pitch: float = setting(0.0, "mm", minimum=0.0,
+                           doc="centre distance of neighbouring taxels; 0: no array given "
+                               "(the budget then assumes touching bodies, pitch = 2 body.R)")
+    layout: str = setting("square", choices=ARRAY_LAYOUTS,
+                          doc="'square' (8 neighbours in the first ring) or 'hexagonal' (6)")
+    rings: int = setting(1, integer=True, minimum=1, maximum=10,
+                         doc="rings of neighbours around the taxel")
+
+
+@dataclass(frozen=True)
+class Environment:
+    """What moves the field besides the force: temperature and stray fields (docs/method.md
+    §12). The cited figures and their sources are in docs/method.md §12."""
+
+    delta_T: float = setting(10.0, "K", positive=True, bounds=(1e-3, 200.0),
+                             doc="temperature change the budget quotes its temperature rows "
+                                 "at (the rows per kelvin are in budget.json)")
+    remanence_tc: float = setting(-0.12e-2, "pct_per_K", bounds=(-1e-2, 1e-2),
+                                  doc="reversible temperature coefficient of the magnet's "
+                                      "remanence; default: sintered NdFeB, the strong end of "
+                                      "the typical -0.09 to -0.12 %/K")
+    remanence_tc_tolerance: float = setting(0.03e-2, "pct_per_K", minimum=0.0,
+                                            bounds=(0.0, 1e-2),
+                                            doc="how well the remanence coefficient is known "
+                                                "(the residual after temperature "
+                                                "compensation); default: the width of the "
+                                                "typical NdFeB range")
+    chip_drift: float = setting(0.0, "pct_per_K", bounds=(-1e-2, 1e-2),
+                                doc="the Hall chip's sensitivity drift; 0: not modelled (no "
+                                    "cited figure)")
+    earth_field: float = setting(65e-6, "uT", minimum=0.0, bounds=(0.0, 1e-3),
+                                 doc="magnitude of the Earth's field; default: the largest at "
+                                     "the Earth's surface (25-65 µT)")
+    stray_field: float = setting(0.0, "uT", minimum=0.0, bounds=(0.0, 0.1),
+                                 doc="magnitude of a further stray field (steel, motors); 0: "
+                                     "none")
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Fabrication tolerances of the error budget's Monte Carlo (docs/method.md §12): each the
+    standard deviation of a normal distribution around the nominal value."""
+
+    G: float = setting(0.05, "pct", minimum=0.0, bounds=(0.0, 0.3),
+                       doc="spread of the elastomer's shear modulus (relative)")
+    remanence: float = setting(0.01, "pct", minimum=0.0, bounds=(0.0, 0.3),
+                               doc="spread of the magnet's remanence within its grade "
+                                   "(relative)")
+    magnet_diameter: float = setting(0.05e-3, "mm", minimum=0.0, bounds=(1e-9, 1e-3),
+                                     doc="spread of the magnet's diameter")
+    magnet_height: float = setting(0.05e-3, "mm", minimum=0.0, bounds=(1e-9, 1e-3),
+                                   doc="spread of the magnet's height")
+    chip_lateral: float = setting(0.1e-3, "mm", minimum=0.0, bounds=(1e-9, 2e-3),
+                                  doc="spread of the chip's position under the magnet, per "
+                                      "horizontal axis")
+    chip_vertical: float = setting(0.05e-3, "mm", minimum=0.0, bounds=(1e-9, 1e-3),
+                                   doc="spread of the chip's height (and of the magnet's in "
+                                       "the cast body)")
+    magnet_tilt: float = setting(math.radians(1.0), "deg", minimum=0.0, bounds=(0.0, 0.2),
+                                 doc="spread of the magnet's tilt, per horizontal axis")
+    samples: int = setting(4000, integer=True, minimum=100, maximum=1_000_000,
+                           doc="Monte-Carlo samples")
+    seed: int = setting(0, integer=True, minimum=0, maximum=2**32 - 1,
+                        doc="seed of the Monte Carlo")
+
+
 @dataclass(frozen=True)
 class Study:
     """A complete sensor study. All quantities in SI (m, Pa, N, T, rad, A/m)."""
@@ -321,6 +396,9 @@ class Study:
     sensitivity: Sensitivity = field(default_factory=Sensitivity)
     hall: Hall = field(default_factory=Hall)
     optimise: Optimise = field(default_factory=Optimise)
+    array: Array = field(default_factory=Array)
+    environment: Environment = field(default_factory=Environment)
+    tolerances: Tolerances = field(default_factory=Tolerances)
 
     # ---- design variables --------------------------------------------------------------------
     @property

@@ -29,6 +29,9 @@ SCALE: dict[str, tuple[int, int]] = {
     "A_per_m": (1, 1),
     "MA_per_m": (1_000_000, 1),
     "s": (1, 1),
+    "K": (1, 1),
+    "pct": (1, 100),
+    "pct_per_K": (1, 100),
     "": (1, 1),
 }
 
@@ -47,7 +50,8 @@ PHYSICAL: dict[str, tuple[float, float]] = {
 
 #: Printable form of each unit suffix.
 LABEL: dict[str, str] = {"A_per_m": "A/m", "MA_per_m": "MA/m", "um": "µm", "uT": "µT",
-                         "per_mm": "1/mm", "N_per_kPa": "N/kPa", "": "-"}
+                         "per_mm": "1/mm", "N_per_kPa": "N/kPa", "pct": "%", "pct_per_K": "%/K",
+                         "": "-"}
 
 #: Permeability of free space used throughout [T·m/A] (docs/method.md §1).
 MU0 = 1.257e-6
@@ -104,7 +108,8 @@ def mt(value):
 
 #: SI unit of each user unit, for messages.
 SI_LABEL: dict[str, str] = {"mm": "m", "um": "m", "kPa": "Pa", "mT": "T", "uT": "T", "mN": "N",
-                            "A_per_m": "A/m", "MA_per_m": "A/m", "deg": "rad", "per_mm": "1/m"}
+                            "A_per_m": "A/m", "MA_per_m": "A/m", "deg": "rad", "per_mm": "1/m",
+                            "pct": "-", "pct_per_K": "1/K"}
 
 
 def bounds_text(unit: str, lo: float, hi: float) -> str:

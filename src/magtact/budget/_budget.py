@@ -1,0 +1,475 @@
+"""The error budget of a design: everything besides the force that moves the field, as a false
+force ΔF = J ΔB in newtons (docs/method.md §12).
+
+J = ∂F/∂B is the metamodels' Jacobian (:func:`magtact.sensitivity.dF_dB`); every row is a
+false force per component (F_r, F_z), at rest (t = 0) and worst over the design's stable region
+t ≤ t_m, θ ≤ θ_m, with the assumptions it rests on.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import MagtactError
+from ..designer import hall_chip, resolution
+from ..magnetics import hall_field
+from ..metamodel import ModelSet
+from ..optimise import DesignResult, per_design
+from ..sensitivity import dF_dB, gamma
+from ..study import Study, from_si, kpa, mm
+from . import _array, _fabrication
+
+#: Points per side of the grid over the stable region (worst of the temperature rows and the
+#: Jacobians the neighbours' crosstalk is read through).
+N_BOX = 41
+#: Components of every row.
+COMPONENTS = ("F_r", "F_z")
+#: Sources of the cited defaults (docs/method.md §12).
+SOURCES = {
+    "remanence_tc": "Advanced Magnetic Materials, 'What are temperature coefficients α and β "
+                    "of permanent magnets' (advancedmagnets.com): typical sintered NdFeB "
+                    "α = −0.09 to −0.12 %/°C; N48SH −0.119 %/°C from 20 to 150 °C",
+    "earth_field": "World Magnetic Model / IGRF total intensity: 25 000 to 65 000 nT at the "
+                   "Earth's surface (NOAA NCEI; as quoted in 'Earth's magnetic field', "
+                   "Wikipedia, section Intensity)",
+}
+
+
+@dataclass(frozen=True)
+class BudgetRow:
+    """One row of the budget: a false force [N] of one force component.
+
+    ``at_rest``: at t = 0; ``worst``: the largest over the stable region (NaN where a row has
+    no such value). ``group``: noise, temperature, stray field, neighbours, fabrication, model.
+    """
+
+    name: str
+    group: str
+    component: str
+    at_rest: float
+    worst: float
+    assumptions: str
+
+
+@dataclass(frozen=True)
+class Budget:
+    """The error budget of design (H [m], G [Pa][, M_z]) (docs/method.md §12).
+
+    Attributes
+    ----------
+    rows : tuple of BudgetRow
+        In newtons.
+    noise : (σ_x, σ_z) [T] or None
+        The field noise of the noise row; ``noise_source`` says where it comes from.
+    resolution : (σ_Fr,0, σ_Fz,0, σ_Fr,worst, σ_Fz,worst) [N] or None
+    array : dict
+        Layout, rings, the pitch of the neighbour rows [m] and the smallest pitch [m] at which
+        the crosstalk stays below the resolution (None without a noise figure).
+    fabrication : dict
+        Percentiles (5/50/95 %) of the Monte Carlo's responses, in SI.
+    not_modelled : tuple of str
+    """
+
+    label: str
+    H: float
+    G: float
+    M_z: float | None
+    t_m: float
+    theta_m: float
+    chip: str
+    noise: tuple[float, float] | None
+    noise_source: str
+    rows: tuple[BudgetRow, ...]
+    resolution: tuple[float, float, float, float] | None
+    array: dict = field(default_factory=dict)
+    fabrication: dict = field(default_factory=dict)
+    environment: dict = field(default_factory=dict)
+    not_modelled: tuple[str, ...] = ()
+
+    def largest(self, n: int = 3) -> list[BudgetRow]:
+        """The ``n`` rows with the largest worst-case false force."""
+        rows = [r for r in self.rows if math.isfinite(r.worst)]
+        return sorted(rows, key=lambda r: -r.worst)[:n]
+
+
+#: A false force below this fraction of the largest of its row is round-off of a zero (e.g. a
+#: shear force at rest, zero by symmetry) and is written as 0.
+ROUND_OFF = 1e-9
+
+
+def _rows(name, group, at_rest, worst, assumptions) -> list[BudgetRow]:
+    scale = max(float(np.max(np.abs(at_rest))), float(np.max(np.abs(worst))))
+    tidy = [[0.0 if abs(float(v)) <= ROUND_OFF * scale else float(v) for v in x]
+            for x in (at_rest, worst)]
+    return [BudgetRow(name, group, c, a, w, assumptions)
+            for c, a, w in zip(COMPONENTS, *tidy, strict=True)]
+
+
+def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
+                 *, label: str = "design", design: DesignResult | None = None,
+                 noise: tuple[float, float] | None = None, dataset=None,
+                 seeds: dict | None = None, samples: int | None = None) -> Budget:
+    """The error budget of design (H [m], G [Pa][, M_z [A/m]]) (docs/method.md §12).
+
+    Parameters
+    ----------
+    models : ModelSet
+        The metamodels (J = ∂F/∂B from them).
+    study : Study
+        ``[hall]`` chip, ``[environment]``, ``[array]``, ``[tolerances]``.
+    design : DesignResult, optional
+        The design's extrema (:func:`magtact.optimise.per_design`), if already computed.
+    noise : (σ_x, σ_z) [T], optional
+        Field noise for the noise row where the study's chip has none (``hall.noise_*_uT``);
+        the study's figure wins where it has one.
+    dataset : xarray.Dataset, optional
+        The DOE data set of the models (its ``err_F_z``, ``err_F_r``: the mesh's error).
+    seeds : dict, optional
+        A seed study (``publication.json`` of ``magtact reproduce``): its ``spread``.
+    samples : int, optional
+        Monte-Carlo samples; default ``tolerances.samples``.
+
+    Returns
+    -------
+    Budget
+
+    Raises
+    ------
+    MagtactError
+        For a study with geometric design variables besides H (fix them first).
+
+    Notes
+    -----
+    Rows (each ΔF = J ΔB unless said otherwise):
+
+    - noise: σ_F = √diag(J Σ_B Jᵀ) (:func:`magtact.designer.resolution`);
+    - temperature: ΔB = α B ΔT (remanence, uncompensated), δα B ΔT (after compensation with
+      the chip's temperature channel, α known to ± δα), s B ΔT (chip sensitivity drift);
+    - stray fields: largest |J b| over directions of |b| = b: b Γ_k per component; the turn
+      through 180°: 2 b Γ_k;
+    - neighbours: the change of their superposed field when loaded (:mod:`._array`);
+    - fabrication: one calibration shared by all units (:mod:`._fabrication`), 95th
+      percentile;
+    - model: the mesh's error × the force, the metamodels' held-out error, the seeds' spread.
+    """
+    if study.geometric_variables:
+        raise MagtactError("the error budget is computed for one geometry: fix the geometric "
+                           f"design variables ({', '.join(study.geometric_variables)}) with "
+                           "study.at(...) and use models fitted to it")
+    chip = hall_chip(study)
+    env, arr = study.environment, study.array
+    if design is None:
+        design = per_design(models, H, G, study, M_z)
+    scale = design.field_scale
+    s_M = study if M_z is None else replace(study, magnet=replace(study.magnet, M_z=float(M_z)))
+    rows: list[BudgetRow] = []
+    not_modelled = ["the elastomer's mechanical coupling between taxels (only their fields "
+                    "are superposed)",
+                    "the silicone's G(T): no source for the temperature coefficient of the "
+                    "elastomer's modulus",
+                    "temperature gradients between magnet and chip (the chip's temperature "
+                    "channel is taken as the magnet's temperature)"]
+
+    # ---- noise -----------------------------------------------------------------------------
+    if chip.noise is not None:
+        noise_used, noise_source = chip.noise, f"{chip.name}: [hall] of the study"
+    elif noise is not None:
+        noise_used = (float(noise[0]), float(noise[1]))
+        noise_source = "given to the budget (the study's [hall] gives no noise figure)"
+        chip = replace(chip, noise_x=noise_used[0], noise_z=noise_used[1])
+    else:
+        noise_used, noise_source = None, f"not known: give {' and '.join(chip.missing)}"
+    res = None
+    if noise_used is not None:
+        r = resolution(models, study, design, chip)
+        res = (r.sigma_r_0, r.sigma_z_0, r.sigma_r_worst, r.sigma_z_worst)
+        rows += _rows("noise (1 σ)", "noise", res[:2], res[2:],
+                      f"RMS field noise {from_si(noise_used[0], 'uT'):.3g} / "
+                      f"{from_si(noise_used[1], 'uT'):.3g} µT (x / z), {noise_source}; "
+                      "σ_F = √diag(J Σ_B Jᵀ)")
+
+    # ---- Jacobians and field over the stable region -------------------------------------
+    T, TH = np.meshgrid(np.linspace(0.0, design.t_m, N_BOX),
+                        np.linspace(0.0, design.theta_m, N_BOX), indexing="ij")
+    J = dF_dB(models, T, TH, H, G) / scale  # (N, N, 2, 2)
+    J0 = dF_dB(models, 0.0, 0.0, H, G) / scale
+    B = np.stack(hall_field(s_M, T, TH, H, solver="exact"), axis=-1)  # (N, N, 2)
+    B0 = np.array([float(v) for v in hall_field(s_M, 0.0, 0.0, H, solver="exact")])
+
+    def through(dB_grid, dB_rest):
+        worst = np.abs(np.einsum("...ij,...j->...i", J, dB_grid)).reshape(-1, 2).max(axis=0)
+        return np.abs(J0 @ dB_rest), worst
+
+    # ---- temperature -----------------------------------------------------------------------
+    dT = env.delta_T
+    a, da, sd = env.remanence_tc, env.remanence_tc_tolerance, env.chip_drift
+    rows += _rows(f"temperature: magnet remanence, uncompensated (ΔT = {dT:g} K)",
+                  "temperature", *through(a * dT * B, a * dT * B0),
+                  f"ΔB = α B ΔT with α = {100 * a:.3g} %/K (environment.remanence_tc_pct_per_K;"
+                  f" {SOURCES['remanence_tc']}); exact field at the Hall point")
+    rows += _rows(f"temperature: remanence after compensation (ΔT = {dT:g} K)", "temperature",
+                  *through(da * dT * B, da * dT * B0),
+                  f"the chip's temperature channel corrects α B ΔT with the nominal α; α is "
+                  f"known to ± {100 * da:.3g} %/K (environment.remanence_tc_tolerance_pct_per_K"
+                  ", the width of the typical NdFeB range when the grade's own figure is not "
+                  "given): ΔB = δα B ΔT")
+    if sd != 0:
+        rows += _rows(f"temperature: chip sensitivity drift, uncompensated (ΔT = {dT:g} K)",
+                      "temperature", *through(sd * dT * B, sd * dT * B0),
+                      f"the chip reads (1 + s ΔT) B, s = {100 * sd:.3g} %/K "
+                      "(environment.chip_drift_pct_per_K)")
+    else:
+        not_modelled.append("the Hall chip's sensitivity drift: no cited figure (give "
+                            "environment.chip_drift_pct_per_K)")
+
+    # ---- stray fields ----------------------------------------------------------------------
+    g0 = np.array([float(v) for v in gamma(models, 0.0, 0.0, H, G)]) / scale
+    gw = np.array([design.Gamma_r_max, design.Gamma_z_max])
+    for what, b, key in (("Earth's field", env.earth_field, "earth_field_uT"),
+                         ("stray field", env.stray_field, "stray_field_uT")):
+        if b <= 0:
+            continue
+        src = f"; {SOURCES['earth_field']}" if what == "Earth's field" else ""
+        rows += _rows(f"{what}, worst orientation", "stray field", b * g0, b * gw,
+                      f"|b| = {from_si(b, 'uT'):.3g} µT (environment.{key}{src}); largest "
+                      "|J b| over directions: |b| Γ_k (a 3-axis field of that magnitude in "
+                      "any direction)")
+        rows += _rows(f"{what}, sensor turned through 180°", "stray field", 2 * b * g0,
+                      2 * b * gw, "calibrated in one orientation and turned over: ΔB = 2 b")
+
+    # ---- neighbours ------------------------------------------------------------------------
+    pitch = arr.pitch if arr.pitch > 0 else 2 * study.body.R
+    M_eff = None if M_z is None else float(M_z)
+    ct0 = _array.crosstalk(study, H, design.t_m, design.theta_m, J0, pitch, arr.layout,
+                           arr.rings, M_eff)
+    ctw = _array.crosstalk(study, H, design.t_m, design.theta_m, J, pitch, arr.layout,
+                           arr.rings, M_eff)
+    rows += _rows(f"neighbours loaded, pitch {mm(pitch):.3g} mm ({arr.layout}, {arr.rings} "
+                  f"ring{'s' if arr.rings > 1 else ''})", "neighbours", ct0["worst"],
+                  ctw["worst"],
+                  ("array.pitch_mm" if arr.pitch > 0 else "no array.pitch_mm given: touching "
+                   "bodies, pitch = 2 body.R") + "; each neighbour the same design loaded "
+                  "through its stable region in any direction, alone or all alike; their "
+                  "fields superposed (exact cylinder field); the field at rest is an offset "
+                  "a calibration removes; mechanical coupling not modelled")
+    smallest = None
+    if res is not None:
+        smallest = _array.smallest_pitch(study, H, design.t_m, design.theta_m, J,
+                                         (res[2], res[3]), arr.layout, arr.rings, M_eff)
+    array_info = {"layout": arr.layout, "rings": arr.rings, "pitch": pitch,
+                  "pitch_given": arr.pitch > 0, "smallest_pitch": smallest,
+                  "criterion": "the worst crosstalk (one neighbour or all loaded alike, over "
+                               "this taxel's stable region) at most the worst resolution σ_F "
+                               "in both components",
+                  "one_neighbour_worst": [float(v) for v in ctw["one"]],
+                  "all_neighbours_worst": [float(v) for v in ctw["all"]]}
+
+    # ---- fabrication -----------------------------------------------------------------------
+    tol = study.tolerances
+    n = tol.samples if samples is None else int(samples)
+    unit = _fabrication.unit_context(models, study, H, G, float(M_z or study.magnet.M_z),
+                                     (design.F_r_min, design.F_z_max), noise_used)
+    mc = _fabrication.monte_carlo(lambda e: _fabrication.responses(unit, e),
+                                  len(_fabrication.INPUTS), n, tol.seed)
+    pct = _fabrication.percentiles(mc)
+    by_input = _fabrication.contributions(lambda e: _fabrication.responses(unit, e),
+                                          len(_fabrication.INPUTS))
+    nominal = {"Gamma_r_0": g0[0], "Gamma_z_0": g0[1]}
+    if res is not None:
+        nominal |= {"sigma_Fr_0": res[0], "sigma_Fz_0": res[1]}
+    for k, v in nominal.items():  # relative to the nominal unit → the metamodels' values
+        pct[k] = [float(p * v) for p in pct[k]]
+        by_input[k] = [float(c * v) for c in by_input[k]]
+    assumptions_fab = (f"{n} units, seed {tol.seed}; 1 σ: G {100 * tol.G:.3g} %, remanence "
+                       f"{100 * tol.remanence:.3g} %, magnet diameter / height "
+                       f"{mm(tol.magnet_diameter):.3g} / {mm(tol.magnet_height):.3g} mm, chip "
+                       f"lateral / vertical {mm(tol.chip_lateral):.3g} / "
+                       f"{mm(tol.chip_vertical):.3g} mm, tilt "
+                       f"{math.degrees(tol.magnet_tilt):.3g}° ([tolerances]); field by "
+                       "magpylib, linearised at rest")
+    rows += _rows("fabrication: one calibration for all units, not tared (95 %)",
+                  "fabrication", (pct["offset_r"][2], pct["offset_z"][2]),
+                  (pct["offset_r"][2], pct["offset_z"][2]),
+                  "the field at rest of a unit differs from the nominal's: a false force "
+                  "until it is tared; " + assumptions_fab)
+    rows += _rows("fabrication: one calibration for all units, tared, at full range (95 %)",
+                  "fabrication", (0.0, 0.0), (pct["cal_r"][2], pct["cal_z"][2]),
+                  "a unit read with the nominal unit's J: error (J_nom J_i⁻¹ − I) F at the "
+                  "full-range loads (F_r,min, F_z,max); " + assumptions_fab)
+
+    # ---- the model's own error -------------------------------------------------------------
+    rows += _model_rows(models, study, design, dataset, seeds)
+
+    env_info = {"delta_T": dT, "remanence_tc": a, "remanence_tc_tolerance": da,
+                "chip_drift": sd, "earth_field": env.earth_field,
+                "stray_field": env.stray_field, "B_rest": B0.tolist(), "sources": SOURCES}
+    return Budget(label, float(H), float(G), None if M_z is None else float(M_z), design.t_m,
+                  design.theta_m, chip.name, noise_used, noise_source, tuple(rows), res,
+                  array_info, {"percentiles": pct, "by_input": by_input, "samples": n,
+                               "seed": tol.seed,
+                               "inputs": list(_fabrication.INPUTS),
+                               "sigmas": _fabrication.sigmas(study).tolist()},
+                  env_info, tuple(not_modelled))
+
+
+def _model_rows(models, study, design, dataset, seeds) -> list[BudgetRow]:
+    """The model's own error: mesh discretisation, held-out error, seed spread."""
+    rows: list[BudgetRow] = []
+    G, H = design.G, design.H
+    F_ends = np.array([abs(design.F_r_min), design.F_z_max])
+    if dataset is not None and "err_F_z" in dataset:
+        Hs = np.asarray(dataset["H"].values)
+        i = int(np.argmin(np.abs(Hs - H)))
+        err = [float(np.nanmax(np.abs(dataset[f"err_{k}"].values[:, i]))) for k in COMPONENTS]
+        rows += _rows("model: mesh discretisation", "model", (0.0, 0.0), np.array(err) * F_ends,
+                      f"largest relative change of the paths at H = {mm(Hs[i]):.3g} mm against "
+                      "the next finer mesh (err_F_r: min over t of F_r; err_F_z: F_z at t = 1)"
+                      " times |F_r,min|, F_z,max; forces vanish at rest")
+    held = []
+    for k in ("f_r", "f_z"):
+        acc = (getattr(models[k], "info", {}) or {}).get("accuracy", {}).get("test", {})
+        held.append(acc.get("max_abs_err"))
+    if all(v is not None for v in held):
+        v = G * np.array(held, dtype=float)
+        rows += _rows("model: metamodels' held-out error", "model", v, v,
+                      "largest absolute error of f_r, f_z on the held-out (θ, H) paths, "
+                      "times G")
+    spread = ((seeds or {}).get("spread") or {}).get(models.definition) or {}
+    if dataset is not None and all(f"acc_{k}" in spread for k in ("f_r", "f_z")):
+        span = np.array([float((dataset[k] / dataset["G"]).max() - (dataset[k] / dataset["G"])
+                               .min()) for k in COMPONENTS]) * G
+        worst = np.array([spread[f"acc_{k}"]["max"] for k in ("f_r", "f_z")]) * span
+        rows += _rows(f"model: GP seed spread ({spread['acc_f_z'].get('n', '?')} seeds)",
+                      "model", worst, worst,
+                      "the worst seed's held-out error over the data's range of F/G, times "
+                      "that range at this G")
+    return rows
+
+
+# ---- files -------------------------------------------------------------------------------
+
+
+def budget_json(b: Budget) -> dict:
+    """Every number of a budget in user units, the unit in each key (mN, mm, kPa, µT)."""
+    def mN(v):
+        return None if v is None or not math.isfinite(v) else from_si(v, "mN")
+
+    out = {
+        "label": b.label, "H_mm": mm(b.H), "G_kPa": kpa(b.G),
+        "M_z_A_per_m": b.M_z, "t_m": b.t_m, "theta_m_rad": b.theta_m, "chip": b.chip,
+        "noise_x_uT": None if b.noise is None else from_si(b.noise[0], "uT"),
+        "noise_z_uT": None if b.noise is None else from_si(b.noise[1], "uT"),
+        "noise_source": b.noise_source,
+        "rows": [{"name": r.name, "group": r.group, "component": r.component,
+                  "at_rest_mN": mN(r.at_rest), "worst_mN": mN(r.worst),
+                  "assumptions": r.assumptions} for r in b.rows],
+        "not_modelled": list(b.not_modelled),
+    }
+    if b.resolution is not None:
+        out["resolution_mN"] = {"F_r_at_rest": mN(b.resolution[0]),
+                                "F_z_at_rest": mN(b.resolution[1]),
+                                "F_r_worst": mN(b.resolution[2]),
+                                "F_z_worst": mN(b.resolution[3])}
+    a = b.array
+    out["array"] = {"layout": a["layout"], "rings": a["rings"], "pitch_mm": mm(a["pitch"]),
+                    "pitch_given": a["pitch_given"],
+                    "smallest_pitch_mm": None if a["smallest_pitch"] is None
+                    else mm(a["smallest_pitch"]), "criterion": a["criterion"],
+                    "one_neighbour_worst_mN": [mN(v) for v in a["one_neighbour_worst"]],
+                    "all_neighbours_worst_mN": [mN(v) for v in a["all_neighbours_worst"]]}
+    f = b.fabrication
+    units = {"Gamma_r_0": ("Gamma_r_0_N_per_T", 1.0), "Gamma_z_0": ("Gamma_z_0_N_per_T", 1.0),
+             "F_r_min": ("F_r_min_N", 1.0), "F_z_max": ("F_z_max_N", 1.0)}
+    pct = {}
+    for k, v in f["percentiles"].items():
+        key, _ = units.get(k, (f"{k}_mN", None))
+        pct[key] = v if k in units else [from_si(x, "mN") for x in v]
+    lin = {}
+    for k, v in f["by_input"].items():
+        key, _ = units.get(k, (f"{k}_mN", None))
+        lin[key] = dict(zip(f["inputs"], v if k in units else [from_si(x, "mN") for x in v],
+                            strict=True))
+    out["fabrication"] = {"percentiles_5_50_95": pct, "samples": f["samples"],
+                          "seed": f["seed"], "sigma_per_input_linear": lin,
+                          "inputs_1_sigma": dict(zip(f["inputs"], f["sigmas"], strict=True))}
+    e = b.environment
+    out["environment"] = {"delta_T_K": e["delta_T"], "remanence_tc_pct_per_K":
+                          100 * e["remanence_tc"], "remanence_tc_tolerance_pct_per_K":
+                          100 * e["remanence_tc_tolerance"], "chip_drift_pct_per_K":
+                          100 * e["chip_drift"], "earth_field_uT": from_si(e["earth_field"],
+                                                                           "uT"),
+                          "stray_field_uT": from_si(e["stray_field"], "uT"),
+                          "B_rest_mT": [from_si(v, "mT") for v in e["B_rest"]],
+                          "sources": e["sources"]}
+    return out
+
+
+def budget_card_rows(b: Budget, n: int = 3) -> list[list[str]]:
+    """Rows for the design card: the largest rows of the budget in words."""
+    out = []
+    for r in b.largest(n):
+        out.append([f"error budget: {r.name} ({r.component})",
+                    f"{from_si(r.worst, 'mN'):.3g} mN worst, {from_si(r.at_rest, 'mN'):.3g} mN "
+                    "at rest"])
+    if b.resolution is not None:
+        out.append(["error budget: resolution for comparison (1 σ, worst F_r / F_z)",
+                    f"{from_si(b.resolution[2], 'mN'):.3g} / "
+                    f"{from_si(b.resolution[3], 'mN'):.3g} mN"])
+    sp = b.array.get("smallest_pitch")
+    if sp is not None:
+        out.append([f"smallest {b.array['layout']} array pitch for crosstalk below the "
+                    "resolution", f"{mm(sp):.3g} mm"])
+    return out
+
+
+def write_budget_outputs(models: ModelSet, study: Study, designs, folder, figures=None, *,
+                         noise=None, dataset=None, seeds=None, run_id: str | None = None
+                         ) -> Path:
+    """Write ``folder/budget.json`` (every number, :func:`budget_json`) for ``designs``.
+
+    Parameters
+    ----------
+    designs : sequence of (label, DesignResult)
+        E.g. the chosen and the original design of a run.
+    figures : callable, optional
+        ``figures(doc, folder)`` draws the figures of the JSON document (e.g.
+        :func:`magtact.report.budget_figures`).
+    noise, dataset, seeds
+        As in :func:`error_budget`.
+    run_id : str, optional
+        The identifier of the run that writes the folder (``run.json``'s ``run_id``): the
+        report shows a budget only if it names the report's run.
+
+    Returns
+    -------
+    Path
+        The JSON file.
+    """
+    budgets = []
+    for label, d in designs:
+        if not isinstance(d, DesignResult):
+            raise MagtactError(f"design {label!r}: expected a DesignResult, got "
+                               f"{type(d).__name__}")
+        budgets.append(error_budget(models, study, d.H, d.G, d.M_z, label=label, design=d,
+                                    noise=noise, dataset=dataset, seeds=seeds))
+    return write_budgets(budgets, study, folder, figures, run_id=run_id)
+
+
+def write_budgets(budgets, study: Study, folder, figures=None, *, run_id: str | None = None
+                  ) -> Path:
+    """Write ``folder/budget.json`` of computed budgets (and their figures, as
+    :func:`write_budget_outputs`)."""
+    from .._files import write_json
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    doc = {"title": "Error budget", "study": study.name, "run_id": run_id,
+           "budgets": [budget_json(b) for b in budgets]}
+    path = write_json(folder / "budget.json", doc, indent=1, ensure_ascii=False)
+    if figures is not None:
+        figures(doc, folder)
+    return path

@@ -1,0 +1,77 @@
+"""Figure of the error budget: the false force of every row in mN, log scale, the resolution
+marked (docs/method.md §12)."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+from ._style import save, style, subplots
+
+#: Colours of the worst-case and at-rest bars.
+WORST, REST = "C3", "C0"
+
+
+def budget_labels(entry: dict) -> list[str]:
+    """The row names of a budget (``budget_json`` entry) in the order of the figure."""
+    return list(dict.fromkeys(r["name"] for r in entry["rows"]))
+
+
+def draw_budget(entry: dict):
+    """The bar chart of one budget (an entry of ``budget.json``'s ``budgets``).
+
+    Two panels, F_r and F_z: per row a bar of its worst false force over the stable region and
+    one of its false force at rest [mN], on a log axis (a zero is not drawn); the resolution
+    (1 σ, worst) as a dashed line. Returns the figure.
+    """
+    names = budget_labels(entry)
+    value = {(r["name"], r["component"]): r for r in entry["rows"]}
+    res = entry.get("resolution_mN") or {}
+    with style():
+        fig, axes = subplots(1, 2, figsize=(9.5, 0.34 * len(names) + 1.6), sharey=True)
+        y = list(range(len(names)))
+        for ax, comp in zip(axes, ("F_r", "F_z"), strict=True):
+            drawn = []
+            for offset, key, colour, label in ((-0.2, "worst_mN", WORST, "worst over the "
+                                                "stable region"),
+                                               (0.2, "at_rest_mN", REST, "at rest")):
+                ys, ws = [], []
+                for k, n in enumerate(names):
+                    v = (value.get((n, comp)) or {}).get(key)
+                    if v is not None and math.isfinite(v) and v > 0:
+                        ys.append(k + offset)
+                        ws.append(v)
+                ax.barh(ys, ws, height=0.38, color=colour, label=label, gid=f"{comp}:{key}")
+                drawn += ws
+            sigma = res.get(f"{comp}_worst")
+            if sigma:
+                ax.axvline(sigma, color="k", ls="--", lw=1.0, label="resolution (1 σ, worst)")
+                drawn.append(sigma)
+            ax.set_xscale("log")
+            if drawn:
+                ax.set_xlim(min(drawn) / 3, max(drawn) * 3)
+            ax.set_xlabel(f"false force in ${comp[0]}_{comp[2]}$ [mN]")
+        axes[0].set_yticks(y, names)
+        axes[0].invert_yaxis()
+        handles, labels = axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside lower center", ncol=3, frameon=False)
+        fig.suptitle(f"{entry.get('label', '')}: H = {entry['H_mm']:.3g} mm, "
+                     f"G = {entry['G_kPa']:.3g} kPa")
+    return fig
+
+
+def fig_budget(entry: dict, path: str | Path) -> list[Path]:
+    """Draw :func:`draw_budget` and save it as ``path`` (PNG + SVG)."""
+    return save(draw_budget(entry), path)
+
+
+def budget_figures(doc: dict, folder: str | Path, formats: tuple[str, ...] = ("png",)
+                   ) -> list[Path]:
+    """The figures of ``budget.json`` (``doc``): ``budget_<label>.png`` per design (the report
+    embeds the PNG; add ``"svg"`` to ``formats`` for print)."""
+    files = []
+    for entry in doc.get("budgets", []):
+        slug = re.sub(r"[^A-Za-z0-9]+", "_", str(entry.get("label", "design"))).strip("_")
+        files += save(draw_budget(entry), Path(folder) / f"budget_{slug or 'design'}", formats)
+    return files
