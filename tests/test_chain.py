@@ -168,3 +168,18 @@ def test_every_model_kind_is_a_response(models):
         jet = m.jet(0.5, 0.2, 3e-3, 1, **({"R_m": 2.5e-3} if getattr(m, "geometry", ()) else {}))
         assert np.isfinite(v) and jet[0] == pytest.approx(v, rel=1e-12)
     assert not isinstance(object(), Response)
+
+
+def test_the_result_budgets_its_designs(magone):
+    """The result's budget is the budget of its design (same rows as the budget package's
+    function on the same models and design)."""
+    from magtact.budget import error_budget
+
+    _, result = magone
+    b = result.budget(result.original, noise=(1e-6, 1e-6))
+    a = result.original
+    ref = error_budget(result.models, result.study, a.H, a.G, label="original",
+                       noise=(1e-6, 1e-6))
+    assert b.label == "original" and [r.name for r in b.rows] == [r.name for r in ref.rows]
+    np.testing.assert_allclose([r.worst for r in b.rows], [r.worst for r in ref.rows],
+                               rtol=1e-12)

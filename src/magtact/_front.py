@@ -20,6 +20,7 @@ from .study import Study, checked_si, from_si, load_study
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from .budget import Budget
     from .designer import DesignAnswer
     from .metamodel import ModelSet
     from .optimise import ForceConstraints, GeometryOptimisation, Optimisation
@@ -178,6 +179,33 @@ class Result:
                                    f"{known}")
             own[name] = checked_si(v, "mm", key)
         return _answer(self.models, self.study, values | own, label)
+
+    def budget(self, answer: DesignAnswer | None = None, *, dataset=None,
+               seeds: dict | None = None, noise: tuple[float, float] | None = None) -> Budget:
+        """The error budget of a design (docs/method.md §12): every disturbance of the field
+        as a false force in mN beside the resolution.
+
+        Parameters
+        ----------
+        answer : DesignAnswer, optional
+            :attr:`chosen` (default), :attr:`original` or one of :meth:`evaluate`.
+        dataset : xarray.Dataset, optional
+            The models' DOE data set, for the mesh's error (its ``err_F_*``).
+        seeds : dict, optional
+            A seed study (``magtact reproduce``'s ``publication.json``) for the seed spread.
+        noise : (σ_x, σ_z) [T], optional
+            Field noise where the study's chip has none.
+
+        Raises
+        ------
+        MagtactError
+            For a study with geometric design variables (the budget is for one geometry).
+        """
+        from .budget import error_budget
+
+        a = self.chosen if answer is None else answer
+        return error_budget(self.models, self.study, a.H, a.G, a.design.M_z, label=a.label,
+                            design=a.design, noise=noise, dataset=dataset, seeds=seeds)
 
     def figures(self) -> dict[str, Figure]:
         """The optimisation's figures as matplotlib figures, by name."""

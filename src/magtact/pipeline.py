@@ -306,6 +306,23 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     return "design chosen"
 
 
+def _stage_budget(ctx: _Context, rec: StageRecord) -> str:
+    if ctx.result is None:
+        raise StageSkipped("needs the chosen design, which is missing")
+    if ctx.study.geometric_variables:
+        raise StageSkipped("the error budget belongs to one geometry: budget the chosen "
+                           "geometry with its own study (fixed R_m, H_m, R)")
+    from .budget import write_budgets
+    from .report import budget_figures
+
+    r = ctx.result
+    budgets = [r.budget(a, dataset=ctx.dataset) for a in (r.chosen, r.original)]
+    write_budgets(budgets, ctx.study, ctx.folder / "budget", figures=budget_figures)
+    top = budgets[0].largest(1)[0]
+    return (f"largest row of the chosen design: {top.name} ({top.component}), "
+            f"{1e3 * top.worst:.3g} mN worst")
+
+
 def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
@@ -337,6 +354,7 @@ STAGES: tuple[tuple[str, str, Callable], ...] = (
     ("doe", "Design of experiments", _stage_doe),
     ("metamodel", "Metamodels", _stage_metamodel),
     ("optimise", "Optimisation", _stage_optimise),
+    ("budget", "Error budget", _stage_budget),
     ("validation", "Validation against experiments", _stage_validation),
 )
 

@@ -39,6 +39,8 @@ STAGES: tuple[tuple[str, str, str], ...] = (
     ("optimise", "Optimisation",
      "Per-design extrema, maps over (H, G), Pareto set (NSGA-II) and its exact reduction, "
      "and the chosen design."),
+    ("budget", "Error budget",
+     "Everything besides the force that moves the field, as a false force in mN."),
     ("validation", "Validation against experiments",
      "Mean ± standard deviation of repeat indentation tests against the model; c_v and ε."),
 )
@@ -124,9 +126,10 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     parts.append(_summary(manifest, stages, folder))
     run_id = manifest.get("run_id")
     parts.append(_chosen(folder / "optimise" if _of_run(folder / "optimise", run_id) else None))
-    parts.append(_budget_section(folder / "budget", run_id))
     for key, title, what in STAGES:
-        if _of_run(folder / key, run_id):
+        if key == "budget":  # a section of its own, from budget.json
+            parts.append(_budget_section(folder / "budget", run_id))
+        elif _of_run(folder / key, run_id):
             parts.append(_stage(folder / key, key, title, what, stages.get(key)))
         else:
             parts.append(_other_run(folder / key, key, title, what))
@@ -162,7 +165,9 @@ def _budget_section(folder: Path, run_id: str | None) -> str:
     """The error budget (``budget/budget.json`` and its figures), or nothing without one."""
     data = _load_json(folder / "budget.json")
     if not isinstance(data, dict) or not isinstance(data.get("budgets"), list):
-        return ""
+        return ('<h2 id="budget">Error budget</h2><div class="missing">No error budget in this '
+                "folder (<code>budget/budget.json</code>: the stage did not run, or failed; "
+                "see the run summary).</div>")
     if run_id is not None and data.get("run_id") != run_id and not (
             (folder / RUN_STAMP).is_file() and _of_run(folder, run_id)):
         return ('<h2 id="budget">Error budget</h2><div class="missing">The error budget in '
