@@ -29,6 +29,7 @@ SCALE: dict[str, tuple[int, int]] = {
     "A_per_m": (1, 1),
     "MA_per_m": (1_000_000, 1),
     "s": (1, 1),
+    "Hz": (1, 1),
     "": (1, 1),
 }
 
