@@ -188,8 +188,8 @@ def hall_chip(study: Study) -> HallChip:
         given = ChipSetting(**{k: fixed.get(k) for k in MLX_FIELDS}).words()
         words = ("picked per design: the lowest force noise whose range holds the field over "
                  "the stable region" + (f", with {given}" if fixed else ""))
-        return HallChip(table.name, None, None, rx, rz, words, table.data["document"],
-                        picked=True)
+        nx, nz = own_noise(study)  # measured figures hold whatever the setting
+        return HallChip(table.name, nx, nz, rx, rz, words, table.data["document"], picked=True)
     preset = HALL_PRESETS.get(h.chip)
 
     def pick(value: float, attr: str):
