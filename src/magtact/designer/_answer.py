@@ -11,10 +11,10 @@ from scipy.optimize import minimize
 
 from ..metamodel import ExactField, ModelSet
 from ..optimise import DesignResult, chip_margin, per_design
+from ..optimise._setting import SettingChoice, setting_for, with_setting
 from ..parts import SettingFigures, grade, silicones_around
 from ..sensitivity import force_noise
 from ..study import MU0, HallChip, Study, StudyError, from_si, hall_chip, mm, mt
-from ._setting import SettingChoice, setting_for, with_setting
 
 #: Points per side of the grid over the stable box (the worst σ_F starts from its best point).
 N_BOX = 41

@@ -215,7 +215,8 @@ class ChipTable:
         rng = tuple(min(limit * v, self.B_sat) for v in lsb)
         n7 = self.gain7_noise(o, f)
         lsb7 = self.lsb(7, r)
-        analog = tuple((a, a / l7 * lv) for a, l7, lv in zip(n7, lsb7, lsb, strict=True))
+        analog = tuple((a, a if g == 7 else a / l7 * lv)
+                       for a, l7, lv in zip(n7, lsb7, lsb, strict=True))
         conv = d["conversion"]
         src = (f"{d['document']}: {d['noise']['source']} ({d['noise']['precision']})")
         if g != 7:

@@ -110,6 +110,10 @@ def check_hall(study: Study) -> None:
     """Refuse a ``[hall]`` setting the chip does not have or permit, a sample rate it cannot
     reach, and a custom chip without its noise (StudyError naming the key)."""
     h = study.hall
+    if study.optimise.objective == "sigma_F" and study.sensitivity.definition != "jacobian":
+        raise StudyError("optimise.objective", "the force noise σ_F needs the Jacobian "
+                                               "sensitivity (sensitivity.definition = "
+                                               "'jacobian')")
     fixed = fixed_setting(study)
     if h.chip not in ("MLX90393",):
         for k in fixed:

@@ -318,6 +318,11 @@ class Optimise:
                                doc="start grid along theta of the batched per-height solver")
     active_rtol: float = setting(1e-2, positive=True, bounds=(1e-12, 1.0),
                                  doc="a constraint is active when |margin| <= this x |limit|")
+    objective: str = setting("gamma", choices=("gamma", "sigma_F"),
+                             doc="'gamma': minimise the sensitivities Γ_r,max, Γ_z,max [N/T] "
+                                 "(the publication's); 'sigma_F': the force noise σ_F,r, "
+                                 "σ_F,z [N] with the [hall] chip at its setting (docs/method.md "
+                                 "§10)")
     geometry_n: int = setting(11, integer=True, minimum=2, maximum=1001,
                               doc="levels of each geometric design variable besides H in the "
                                   "exact reduction's grid")

@@ -17,11 +17,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..metamodel import ExactField, ModelSet
-from ..optimise import DesignResult, per_design
 from ..parts import ChipSetting, SettingFigures
-from ..sensitivity import dF_dB
-from ..study import Study
+from ..sensitivity import Responses, dF_dB
+from ..study import Study, StudyError, hall_chip
 from ..study._hall import candidate_settings, setting_figures
+from ._design import DesignResult, per_design
 
 #: Points per side of the grid over the stable box on which settings are compared.
 N_GRID = 41
@@ -111,3 +111,49 @@ def with_setting(study: Study, setting: ChipSetting) -> Study:
         return study
     return replace(study, hall=replace(study.hall, **{k: int(v) for k, v in
                                                       setting.__dict__.items()}))
+
+
+@dataclass(frozen=True)
+class SigmaObjective:
+    """The force-noise objective of the optimisation (docs/method.md §10).
+
+    ``responses`` serve γ_r, γ_z as the force noise per unit G, √(J_kx² σ_x² + J_kz² σ_z²) / G
+    [N/Pa], with (σ_x, σ_z) the chip's noise at ``figures`` (the upper end of its interval),
+    so that every optimisation over designs (per-design extrema, exact reduction, NSGA-II)
+    minimises σ_F,r,max and σ_F,z,max [N] instead of Γ. The setting is the study's where it
+    fixes one, else the one picked for design (H, G) (by default the original design);
+    ``figures`` is None for a chip without a setting table (the study's noise).
+    """
+
+    responses: Responses
+    noise: tuple[float, float]
+    figures: SettingFigures | None
+    H: float
+    G: float
+
+
+def sigma_objective(models: ModelSet, study: Study, H: float | None = None,
+                    G: float | None = None, M_z: float | None = None) -> SigmaObjective:
+    """The σ_F objective of ``study`` with the chip setting of design (H [m], G [Pa][, M_z])
+    (default: the original design) where the study leaves the setting to magtact.
+
+    Raises
+    ------
+    StudyError
+        Naming ``hall.noise_x_uT`` when the chip's noise is not known.
+    """
+    H = study.design.H_original if H is None else float(H)
+    G = study.design.G_original if G is None else float(G)
+    chip = hall_chip(study)
+    figures = chip.figures
+    if chip.picked and chip.noise is None:
+        figures = setting_for(models, study, per_design(models, H, G, study, M_z)).figures
+    if figures is not None:
+        noise = (figures.sigma_x[1], figures.sigma_z[1])
+    elif chip.noise is not None:
+        noise = chip.noise
+    else:
+        raise StudyError("hall.noise_x_uT", f"the σ_F objective needs the {chip.name}'s RMS "
+                                            "field noise: give hall.noise_x_uT and "
+                                            "hall.noise_z_uT (> 0)")
+    return SigmaObjective(Responses(models, noise), noise, figures, H, G)
