@@ -124,6 +124,7 @@ def test_min_rate_trades_force_noise_for_speed(models, study):
     assert slow.figures.range_z == fast.figures.range_z == 50e-3
 
 
+@pytest.mark.long
 def test_sigma_objective_is_the_force_noise_and_nsga2_meets_the_exact_reduction(models, study):
     from magtact.optimise import exact_reduction, force_constraints, front_gap, pareto_nsga2, sweep
     from magtact.optimise._setting import sigma_objective
@@ -206,6 +207,7 @@ def test_bad_chip_input_names_the_key(table, key, message):
         study_from_dict(table)
 
 
+@pytest.mark.long
 def test_cli_refuses_a_bad_setting_in_one_line(tmp_path):
     import subprocess
     import sys
