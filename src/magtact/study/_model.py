@@ -99,7 +99,7 @@ class Material:
                            doc="shear modulus of the structural solves (F scales with G)")
     bulk_ratio: float = setting(5000.0, minimum=1000.0, bounds=(1000.0, 1e9),
                                 doc="bulk / shear modulus (nearly incompressible)")
-    silicone: str = setting("none", choices=("none", *SILICONES),
+    silicone: str = setting("Ecoflex 00-30", choices=("none", *SILICONES),
                             doc="the silicone the sensor is cast from (docs/method.md §10); "
                                 "the design card says whether its G range holds each design's "
                                 "G; 'none': not named")
@@ -270,12 +270,14 @@ class Hall:
                              doc="measuring range ± along x; 0: the preset's")
     range_z: float = setting(0.0, "mT", minimum=0.0, bounds=(0.0, 100.0),
                              doc="measuring range ± along z; 0: the preset's")
-    gain_sel: int = setting(-1, integer=True, minimum=-1,
+    gain_sel: int = setting(-1, integer=True, minimum=-1, maximum=255,
                             doc="MLX90393 GAIN_SEL (0-7); -1: magtact picks the setting with "
                                 "the lowest force noise per design")
-    res: int = setting(-1, integer=True, minimum=-1, doc="MLX90393 RES_XYZ (0-3); -1: picked")
-    osr: int = setting(-1, integer=True, minimum=-1, doc="MLX90393 OSR (0-3); -1: picked")
-    dig_filt: int = setting(-1, integer=True, minimum=-1,
+    res: int = setting(-1, integer=True, minimum=-1, maximum=255,
+                       doc="MLX90393 RES_XYZ (0-3); -1: picked")
+    osr: int = setting(-1, integer=True, minimum=-1, maximum=255,
+                       doc="MLX90393 OSR (0-3); -1: picked")
+    dig_filt: int = setting(-1, integer=True, minimum=-1, maximum=255,
                             doc="MLX90393 DIG_FILT (0-7); -1: picked")
     min_rate: float = setting(0.0, "Hz", minimum=0.0, bounds=(1e-3, 1e6),
                               doc="smallest sample rate (full XYZ read) the chip setting must "
