@@ -70,9 +70,8 @@ class HallChip:
 
     @property
     def missing(self) -> tuple[str, ...]:
-        """Study keys whose figure is unknown (none when the setting is picked per design)."""
-        if self.picked:
-            return ()
+        """Study keys whose figure is unknown without a design (a setting picked per design
+        brings its noise: :func:`magtact.designer.answer`)."""
         return tuple(k for k, v in (("hall.noise_x_uT", self.noise_x),
                                     ("hall.noise_z_uT", self.noise_z)) if v is None)
 
