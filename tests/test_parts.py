@@ -88,13 +88,20 @@ def test_a_setting_that_is_not_permitted_is_refused():
 
 
 # ---- σ_F with the setting's noise --------------------------------------------------------------
-def test_force_noise_is_J_sigma_J_with_the_settings_noise_and_quantisation(models, study):
+@pytest.fixture(scope="module")
+def fast_answer(models, study):
+    """The original design's answer at GAIN_SEL 7, RES 0, OSR 0, DIG_FILT 2."""
     from magtact.designer import answer
+
+    return answer(models, _hall(study, gain_sel=7, res=0, osr=0, dig_filt=2), H0, G0,
+                  "original")
+
+
+def test_force_noise_is_J_sigma_J_with_the_settings_noise_and_quantisation(models, fast_answer):
     from magtact.report import card_rows
     from magtact.sensitivity import dF_dB
 
-    s = _hall(study, gain_sel=7, res=0, osr=0, dig_filt=2)
-    a = answer(models, s, H0, G0, "original")
+    a = fast_answer
     # datasheet figures typed here: Fig. 2/3 at OSR 0, DIG_FILT 2; Table 17 GAIN_SEL 7, RES 0
     sx = math.hypot(3.04e-6, 0.150e-6 / math.sqrt(12))
     sz = math.hypot(4.63e-6, 0.242e-6 / math.sqrt(12))
@@ -111,11 +118,12 @@ def test_force_noise_is_J_sigma_J_with_the_settings_noise_and_quantisation(model
     assert "±4.92 / 7.93 mT: saturates (normal axis) at t = 0.00" in text
 
 
-def test_min_rate_trades_force_noise_for_speed(models, study):
-    from magtact.designer import best_setting
+def test_min_rate_trades_force_noise_for_speed(models, study, fast_answer):
+    from magtact.designer import setting_for
 
-    slow = best_setting(models, study, H0, G0)
-    fast = best_setting(models, _hall(study, min_rate=200.0), H0, G0)
+    design = fast_answer.design  # the design's extrema do not depend on the chip
+    slow = setting_for(models, study, design)
+    fast = setting_for(models, _hall(study, min_rate=200.0), design)
     assert slow.figures.rate < 200 <= fast.figures.rate
     assert slow.setting != fast.setting
     assert fast.sigma_r_worst > slow.sigma_r_worst and fast.sigma_z_worst > slow.sigma_z_worst
