@@ -8,6 +8,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from conftest import G_ORIGINAL, H_ORIGINAL
 from magtact.parts import GRADES, SILICONES, ChipSetting, SettingError, chip_table
@@ -245,3 +247,21 @@ def test_report_argues_where_the_chip_saturates():
     for part in ("Δz_sat = 2.97 mm", "|B_z| = 171 mT there", "onset of 50 mT",
                  "t = 0.24 of the original design", "36 mT at rest", "chip of about 171 mT"):
         assert part in text
+
+
+@settings(max_examples=40, deadline=None)
+@given(chip=st.sampled_from(["MLX90393", "TLV493D", "TLE493D"]),
+       fields=st.dictionaries(st.sampled_from(["gain_sel", "res", "osr", "dig_filt"]),
+                              st.integers(-3, 300), max_size=4),
+       rate=st.one_of(st.just(0.0), st.floats(0.0, 1e7, allow_nan=False)))
+def test_any_hall_setting_loads_or_is_refused_naming_a_hall_key(chip, fields, rate):
+    table = {"hall": {"chip": chip, **fields, "min_rate_Hz": rate}}
+    try:
+        s = study_from_dict(table)
+    except StudyError as exc:
+        assert exc.key.startswith("hall.")
+        return
+    if chip == "MLX90393":  # what loads has a permitted setting fast enough
+        from magtact.study._hall import candidate_settings, setting_figures
+
+        assert any(setting_figures(s, c).rate >= rate for c in candidate_settings(s))
