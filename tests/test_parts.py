@@ -132,6 +132,10 @@ def test_min_rate_trades_force_noise_for_speed(models, study, fast_answer):
     # no setting holds MagOne's 171 mT: both saturate where the widest range does
     assert not slow.holds and slow.B_max_z > 0.17
     assert slow.figures.range_z == fast.figures.range_z == 50e-3
+    # asked to read only the first fifth of the loads, a setting holds the field there
+    # (|B_z| reaches 50 mT at t = 0.24 of the original design)
+    part = setting_for(models, _hall(study, read_fraction=0.2), design)
+    assert part.holds and part.figures.range_z >= 0.036  # above the field at rest
 
 
 @pytest.mark.long

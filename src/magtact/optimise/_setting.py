@@ -2,12 +2,13 @@
 
 For a design (H, G[, M_z]) the best setting of a chip with a setting table is the one with the
 lowest force noise whose range holds the exact field over the design's stable region
-t ≤ t_m, θ ≤ θ_m, among the settings the study allows (its fixed ``[hall]`` fields) whose
-sample rate reaches ``[hall] min_rate_Hz``. The force noise of a setting is the root sum of
-squares of its worst σ_Fr and σ_Fz over the stable region, σ_F = √diag(J Σ_B Jᵀ) with Σ_B =
-diag(σ_x², σ_z²) at the upper end of the setting's noise interval (the end that holds under
-both assumptions). Ties go to the lower end, then to the faster setting. Where no setting holds
-the field, those that saturate at the largest load t compete, and the answer says so.
+t ≤ t_m, θ ≤ θ_m (or over its loads t ≤ f t_m, f = ``[hall] read_fraction``), among the
+settings the study allows (its fixed ``[hall]`` fields) whose sample rate reaches
+``[hall] min_rate_Hz``. The force noise of a setting is the root sum of squares of its worst
+σ_Fr and σ_Fz over the stable region, σ_F = √diag(J Σ_B Jᵀ) with Σ_B = diag(σ_x², σ_z²) at the
+upper end of the setting's noise interval (the end that holds under both assumptions). Ties go
+to the lower end, then to the faster setting. Where no setting holds the field, those that
+saturate at the largest load t compete, and the answer says so.
 """
 
 from __future__ import annotations
@@ -36,7 +37,8 @@ class SettingChoice:
     figures : SettingFigures
         LSB, range, noise (interval) and rate of the setting.
     holds : bool
-        Whether its range holds the exact field over the stable region.
+        Whether its range holds the exact field over the stable region (the part of it
+        ``[hall] read_fraction`` asks for).
     B_max_x, B_max_z : float
         Largest |B_x|, |B_z| [T] over the stable region.
     sigma_r_worst, sigma_z_worst : float
@@ -95,7 +97,8 @@ def setting_for(models: ModelSet, study: Study, design: DesignResult) -> Setting
     rz = np.array([f.range_z for f in figs])
     over = (Bx_t[None, :] > rx[:, None]) | (Bz_t[None, :] > rz[:, None])  # (settings, t)
     onset = np.where(over.any(axis=1), over.argmax(axis=1), N_GRID)  # first saturated level
-    holds = onset == N_GRID
+    asked = T[:, 0] <= study.hall.read_fraction * design.t_m * (1 + 1e-12)  # levels to hold
+    holds = onset >= int(asked.sum())
     pool = onset == onset.max()  # those that hold, else those that read the farthest
     idx = np.flatnonzero(pool)
     rate = np.array([f.rate for f in figs])

@@ -279,6 +279,10 @@ class Hall:
                        doc="MLX90393 OSR (0-3); -1: picked")
     dig_filt: int = setting(-1, integer=True, minimum=-1, maximum=255,
                             doc="MLX90393 DIG_FILT (0-7); -1: picked")
+    read_fraction: float = setting(1.0, positive=True, bounds=(1e-3, 1.0),
+                                   doc="the picked chip setting must hold the field over the "
+                                       "loads t <= read_fraction * t_m of the stable region "
+                                       "(1: all of it)")
     min_rate: float = setting(0.0, "Hz", minimum=0.0, bounds=(1e-3, 1e6),
                               doc="smallest sample rate (full XYZ read) the chip setting must "
                                   "reach; 0: any")
