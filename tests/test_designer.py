@@ -111,9 +111,10 @@ def test_a_strong_field_saturates_the_chip_with_t_and_force_named(models, study)
 def test_card_asks_for_the_noise_the_preset_lacks(models, study):
     from magtact.report import card_rows
 
-    a = answer(models, study, H0, G0, "original")
-    assert a.resolution is None and hall_chip(study).missing == ("hall.noise_x_uT",
-                                                                 "hall.noise_z_uT")
+    tle = _hall(study, chip="TLE493D")  # the TLE493D's sources state no noise
+    a = answer(models, tle, H0, G0, "original")
+    assert a.resolution is None and hall_chip(tle).missing == ("hall.noise_x_uT",
+                                                               "hall.noise_z_uT")
     header, rows = card_rows([a])
     text = " ".join(" ".join(r) for r in rows)
     assert "give hall.noise_x_uT and hall.noise_z_uT" in text
@@ -215,7 +216,8 @@ def test_seed_records_hold_the_chosen_designs_force_noise(models, study):
     from magtact.publication._seeds import _resolution
 
     sigma = 2e-6
-    assert _resolution(models, study, H0, G0) == {}  # the preset's noise is not known
+    # the noise of a setting picked per design is not the study's
+    assert _resolution(models, study, H0, G0) == {}
     rec = _resolution(models, _hall(study, noise_x=sigma, noise_z=sigma), H0, G0)
     d = per_design(models, H0, G0, study)
     assert rec["sigma_Fr_worst_mN"] == pytest.approx(d.Gamma_r_max * sigma * 1e3, rel=1e-6)

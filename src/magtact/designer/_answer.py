@@ -11,8 +11,10 @@ from scipy.optimize import minimize
 
 from ..metamodel import ExactField, ModelSet
 from ..optimise import DesignResult, chip_margin, per_design
+from ..optimise._setting import SettingChoice, setting_for, with_setting
+from ..parts import SettingFigures, grade, silicones_around
 from ..sensitivity import force_noise
-from ..study import HallChip, Study, StudyError, from_si, hall_chip, mm, mt
+from ..study import MU0, HallChip, Study, StudyError, from_si, hall_chip, mm, mt
 
 #: Points per side of the grid over the stable box (the worst σ_F starts from its best point).
 N_BOX = 41
@@ -60,6 +62,30 @@ class Saturation:
 
 
 @dataclass(frozen=True)
+class Parts:
+    """The parts of a design: the magnet's grade and size as the study names them, and the
+    silicones whose shear-modulus range holds G (docs/method.md §10)."""
+
+    grade: str
+    size: str
+    M_z: float
+    silicone: str
+    #: Silicones whose G range holds G, and the nearest softer and stiffer ones outside.
+    inside: tuple[str, ...]
+    softer: str | None
+    stiffer: str | None
+
+
+def parts_of(study: Study, G: float, M_z: float | None = None) -> Parts:
+    """The parts of a design of ``study`` with shear modulus G [Pa] (and M_z [A/m])."""
+    inside, below, above = silicones_around(G)
+    return Parts(study.magnet.grade, study.magnet.size,
+                 study.magnet.M_z if M_z is None else float(M_z), study.material.silicone,
+                 tuple(x.name for x in inside), None if below is None else below.name,
+                 None if above is None else above.name)
+
+
+@dataclass(frozen=True)
 class DesignAnswer:
     """What a designer asks of design (H, G) with the study's Hall chip.
 
@@ -83,6 +109,17 @@ class DesignAnswer:
     resolution: Resolution | None
     saturation: Saturation
     tolerance: float
+    #: The chip setting chosen for this design (chips with a setting table; None otherwise).
+    choice: SettingChoice | None = None
+    #: σ_F at the lower end of the setting's noise interval (None: no interval).
+    resolution_low: Resolution | None = None
+    #: The parts: magnet grade and size, silicones whose G range holds G.
+    parts: Parts | None = None
+
+    @property
+    def figures(self) -> SettingFigures | None:
+        """LSB, range, noise and rate of the chip at the setting used (None: no table)."""
+        return self.chip.figures
 
     @property
     def H(self) -> float:
@@ -131,19 +168,32 @@ def check_rest_field(study: Study) -> None:
 def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design",
            M_z: float | None = None) -> DesignAnswer:
     """The designer's answer for design (H [m], G [Pa][, M_z [A/m]]) with the study's
-    ``[hall]`` chip.
+    ``[hall]`` chip: for a chip with a setting table whose setting the study leaves to magtact,
+    at the best setting for this design (:func:`magtact.designer.best_setting`); σ_F at the
+    upper end of the setting's noise interval and, where it is an interval, at its lower end.
 
     A chip range below this design's field at rest shows as saturation at t = 0. ``M_z``
     (where it is a design variable) scales the field and divides the force noise.
     """
     chip = hall_chip(study)
     design = per_design(models, H, G, study, M_z)
+    choice = setting_for(models, study, design) if chip.picked else None
+    if choice is not None:  # the chip at the setting chosen for this design
+        study = with_setting(study, choice.setting)
+        chip = hall_chip(study)
+    parts = parts_of(study, G, M_z)
     if M_z is not None:  # the exact field of this design's magnet
         study = replace(study, magnet=replace(study.magnet, M_z=float(M_z)))
     sat = replace(saturation(study, models, H, G, chip),
                   region_margin=float(chip_margin(study, H, design.t_m, design.theta_m)[0]))
     res = None if chip.noise is None else resolution(models, study, design, chip)
-    return DesignAnswer(label, design, chip, res, sat, study.constraints.G_tolerance)
+    low = None
+    if chip.figures is not None and chip.figures.interval:
+        f = chip.figures
+        low = resolution(models, study, design, replace(chip, noise_x=f.sigma_x[0],
+                                                        noise_z=f.sigma_z[0]))
+    return DesignAnswer(label, design, chip, res, sat, study.constraints.G_tolerance, choice,
+                        low, parts)
 
 
 def resolution(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
@@ -220,6 +270,35 @@ def answer_json(a: DesignAnswer) -> dict:
         "G_tolerance": a.tolerance, "worst_case_factor": a.worst_factor,
         "missing": list(a.chip.missing),
     }
+    f = a.chip.figures
+    if f is not None:
+        out |= {"setting": {k: v for k, v in f.setting.__dict__.items() if v is not None},
+                "setting_words": f.words, "sample_rate_Hz": f.rate,
+                "conversion_time_ms": f.conversion_time * 1e3,
+                "LSB_x_uT": from_si(f.lsb_x, "uT"), "LSB_z_uT": from_si(f.lsb_z, "uT"),
+                "noise_x_uT_interval": [from_si(v, "uT") for v in f.sigma_x],
+                "noise_z_uT_interval": [from_si(v, "uT") for v in f.sigma_z],
+                "noise_source": f.noise_source}
+    if a.choice is not None:
+        out |= {"setting_holds_field": a.choice.holds,
+                "settings_compared": a.choice.considered,
+                "B_max_stable_x_mT": mt(a.choice.B_max_x),
+                "B_max_stable_z_mT": mt(a.choice.B_max_z)}
+    if a.parts is not None:
+        p = a.parts
+        out |= {"magnet_grade": p.grade, "magnet_size": p.size, "silicone": p.silicone,
+                "silicones_holding_G": list(p.inside), "silicone_softer": p.softer,
+                "silicone_stiffer": p.stiffer}
+        if p.grade != "custom":
+            g = grade(p.grade)
+            out["magnet_B_r_T"] = [g.B_r_min, g.B_r, g.B_r_max]
+            out["magnet_M_z_spread_A_per_m"] = list(g.M_z(MU0))
+    low = a.resolution_low
+    if low is not None:
+        out |= {"sigma_Fr_0_mN_low": from_si(low.sigma_r_0, "mN"),
+                "sigma_Fz_0_mN_low": from_si(low.sigma_z_0, "mN"),
+                "sigma_Fr_worst_mN_low": from_si(low.sigma_r_worst, "mN"),
+                "sigma_Fz_worst_mN_low": from_si(low.sigma_z_worst, "mN")}
     if r is not None:
         out |= {"sigma_Fr_0_mN": from_si(r.sigma_r_0, "mN"),
                 "sigma_Fz_0_mN": from_si(r.sigma_z_0, "mN"),

@@ -188,7 +188,7 @@ def optimise(models: Responses | ModelSet, study: Study,
     InfeasibleError
         If no design in the bounds meets the constraints (with the best reachable values).
     """
-    R = as_responses(models)
+    R = as_responses(models, study)
     R.models.check_finite(study)  # no NaN or inf from a model into the results
     clock = time.perf_counter
     t0 = clock()

@@ -36,23 +36,39 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
         row("magnetisation M_z (magnet grade)",
             lambda a: "the magnet's own" if a.design.M_z is None
             else f"{from_si(a.design.M_z, 'MA_per_m'):.3g} MA/m")
-    if chip.noise is None:
+    if any(a.chip.figures is not None for a in answers):
+        row(f"{chip.name} setting and sample rate", _setting_text)
+    if any(a.resolution is None for a in answers):
         keys = " and ".join(chip.missing)
         row(f"resolution with the {chip.name}",
             lambda a: f"give {keys} (RMS field noise at your chip setting, > 0)")
     else:
-        note = f"{chip.name}, noise {from_si(chip.noise_x, 'uT'):.3g} / " \
-               f"{from_si(chip.noise_z, 'uT'):.3g} µT RMS (x / z)"
+        if all(a.chip.figures is None for a in answers):
+            note = f"{chip.name}, noise {from_si(chip.noise_x, 'uT'):.3g} / " \
+                   f"{from_si(chip.noise_z, 'uT'):.3g} µT RMS (x / z)"
+        else:
+            note = f"{chip.name} at the setting above"
         row(f"shear resolution σ_Fr, unloaded / worst ({note})",
-            lambda a: f"{_mN(a.resolution.sigma_r_0)} / {_mN(a.resolution.sigma_r_worst)}")
-        row("normal resolution σ_Fz, unloaded / worst",
-            lambda a: f"{_mN(a.resolution.sigma_z_0)} / {_mN(a.resolution.sigma_z_worst)}")
+            lambda a: _sigma_text(a, "r"))
+        row("normal resolution σ_Fz, unloaded / worst", lambda a: _sigma_text(a, "z"))
+        if any(a.chip.figures is not None for a in answers):
+            row("field noise σ_B of the setting (x / z, RMS, with LSB/√12) and its source",
+                _noise_text)
     row("normal force range (largest F_z in the stable region)",
         lambda a: f"{a.design.F_z_max:.3g} N")
     row("shear force range (F_r before shear turns unstable)",
         lambda a: f"{a.design.F_r_min:.3g} N")
-    row(f"chip range ({from_si(chip.range_x, 'mT'):.3g} / {from_si(chip.range_z, 'mT'):.3g} mT)",
-        _saturation_text)
+    row("chip range (x / z) and saturation", _saturation_text)
+    if any(a.parts is not None for a in answers):
+        row("magnet (grade, size)", _magnet_text)
+        named = answers[0].parts.silicone if answers[0].parts is not None else "none"
+        label = "silicones whose G range holds G"
+        if named != "none":
+            from ..parts import SILICONES
+
+            lo, hi = SILICONES[named].G_range
+            label += f" (the study's {named}: {_kpa_range(lo, hi)})"
+        row(label, _silicone_text)
     if constraints is not None:
         row("active constraints", lambda a: _active(a, constraints, rtol))
     if answers[0].tolerance > 0:
@@ -66,12 +82,93 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
 
 def _saturation_text(a) -> str:
     s = a.saturation
+    rng = f"±{from_si(a.chip.range_x, 'mT'):.3g} / {from_si(a.chip.range_z, 'mT'):.3g} mT: "
     if not s.saturates:
-        return (f"not reached (largest |B| {from_si(s.B_max_x, 'mT'):.3g} / "
+        return (rng + f"not reached (largest |B| {from_si(s.B_max_x, 'mT'):.3g} / "
                 f"{from_si(s.B_max_z, 'mT'):.3g} mT)")
     where = "inside" if s.in_region else "beyond"
-    return (f"saturates ({'shear' if s.axis == 'x' else 'normal'} axis) at t = {s.t:.2f}, "
+    return (rng + f"saturates ({'shear' if s.axis == 'x' else 'normal'} axis) at t = {s.t:.2f}, "
             f"F_z = {s.F_z:.3g} N, {where} the stable region")
+
+
+def _setting_text(a) -> str:
+    f = a.chip.figures
+    if f is None:
+        return "no setting table"
+    text = f"{f.words}; {f.rate:.4g} Hz (full XYZ read, {1e3 * f.conversion_time:.3g} ms)"
+    c = a.choice
+    if c is not None and not c.holds:
+        text += ("; no allowed setting holds the field over the stable region (largest |B| "
+                 f"{from_si(c.B_max_x, 'mT'):.3g} / {from_si(c.B_max_z, 'mT'):.3g} mT): the one "
+                 "that saturates at the largest load")
+    elif c is None:
+        text += " (the study's)"
+    return text
+
+
+def _sigma_text(a, axis: str) -> str:
+    r, low = a.resolution, a.resolution_low
+    s0, sw = (r.sigma_r_0, r.sigma_r_worst) if axis == "r" else (r.sigma_z_0, r.sigma_z_worst)
+    text = f"{_mN(s0)} / {_mN(sw)}"
+    if low is not None:
+        l0, lw = ((low.sigma_r_0, low.sigma_r_worst) if axis == "r"
+                  else (low.sigma_z_0, low.sigma_z_worst))
+        text += (f" (noise interval: {from_si(l0, 'mN'):.3g}–{from_si(s0, 'mN'):.3g} / "
+                 f"{from_si(lw, 'mN'):.3g}–{from_si(sw, 'mN'):.3g} mN)")
+    return text
+
+
+def _uT(pair) -> str:
+    lo, hi = (from_si(v, "uT") for v in pair)
+    return f"{hi:.3g}" if lo == hi else f"{lo:.3g}–{hi:.3g}"
+
+
+def _noise_text(a) -> str:
+    f = a.chip.figures
+    if f is None:
+        return "as given in the study"
+    if f.noise_source.startswith("measured"):
+        src = "measured by the user (the study's hall.noise_*_uT)"
+    elif f.setting.gain_sel is None:
+        src = "the datasheet's typical figure"
+    elif f.interval:
+        src = ("datasheet Figs. 2–3 at GAIN_SEL 7, read off the plot; at this gain an "
+               "interval: lower end the gain-7 noise in µT, upper end its LSB count × this "
+               "gain's LSB")
+    else:
+        src = "datasheet Figs. 2–3 at GAIN_SEL 7, read off the plot"
+    return f"{_uT(f.sigma_x)} / {_uT(f.sigma_z)} µT; {src}"
+
+
+def _magnet_text(a) -> str:
+    p = a.parts
+    if p.grade == "custom":
+        text = f"M_z {from_si(p.M_z, 'MA_per_m'):.3g} MA/m as given (no grade named)"
+    else:
+        from ..parts import grade
+
+        g = grade(p.grade)
+        text = (f"{p.grade} (B_r {g.B_r_min:.3g}–{g.B_r_max:.3g} T, max {g.max_temperature_C:g} "
+                f"°C)")
+    return text + ("" if p.size == "custom" else f", {p.size} mm (diameter × height)")
+
+
+def _kpa_range(lo: float, hi: float) -> str:
+    return (f"{kpa(lo):.3g} kPa" if lo == hi else f"{kpa(lo):.3g}–{kpa(hi):.3g} kPa")
+
+
+def _silicone_text(a) -> str:
+    from ..parts import SILICONES
+
+    p = a.parts
+
+    def named(n):
+        return f"{n} ({_kpa_range(*SILICONES[n].G_range)})"
+
+    if p.inside:
+        return ", ".join(named(n) for n in p.inside)
+    around = [n for n in (p.softer, p.stiffer) if n is not None]
+    return "none; between " + " and ".join(named(n) for n in around) if around else "none"
 
 
 def _active(a, constraints, rtol: float) -> str:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
+
 from ..study import to_si
 from ._fig_publication import (
     fig_conditioning,
@@ -76,6 +78,7 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
             "<code>magone</code> reads it as 10–50 kPa. "
             + (f"This run used the <b>{_e(run_definition)}</b> definition. "
                if run_definition else "") + "</p>")
+    head += saturation_argument()
     doc = _load_json(folder / "publication.json")
     if not doc:
         return (head + '<div class="missing">No seed study in this folder: run '
@@ -116,6 +119,35 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
             "worst sensitivity to measurable force (figure <i>resolution–range</i>): choosing "
             "H chooses that ratio, and G then slides the design along its line.</p>")
     return head + text + table + "<h3>Spread across seeds</h3>" + spread + figs
+
+
+def saturation_argument() -> str:
+    """HTML paragraph: the publication's t = 1 against the MLX90393's saturation onset, with
+    the exact field of the publication's magnet (docs/method.md §10)."""
+    from ..metamodel import ExactField
+    from ..parts import chip_table
+    from ..study import load_study, mm, mt
+
+    s = load_study("magone")
+    H0 = s.design.H_original
+    sat = abs(float(ExactField(s, "B_z").value(1.0, 0.0, H0)))
+    rest = abs(float(ExactField(s, "B_z").value(0.0, 0.0, H0)))
+    mlx = chip_table("MLX90393")
+    t = np.linspace(0.0, 1.0, 1001)
+    t_on = float(t[np.argmax(np.abs(ExactField(s, "B_z").value(t, 0.0, H0)) > mlx.B_sat)])
+    return (
+        "<p><b>Where the chip saturates.</b> The publication defines t = 1 by the Hall chip's "
+        f"saturation, at a magnet–chip distance Δz_sat = {mm(s.loading.dz_sat):.3g} mm. The "
+        f"exact field of its magnet (R_m {mm(s.magnet.R_m):.3g} mm, H_m "
+        f"{mm(s.magnet.H_m):.3g} mm, M_z {s.magnet.M_z / 1e6:.3g} MA/m) is "
+        f"|B_z| = {mt(sat):.0f} mT there, far beyond the {mlx.name}'s saturation onset of "
+        f"{mt(mlx.B_sat):.0f} mT (its datasheet, Table 9), which the field already reaches "
+        f"at t = {t_on:.2f} of the original design (|B_z| = {mt(rest):.0f} mT at rest). Either the "
+        f"sensor had a chip of about {mt(sat):.0f} mT range, or a weaker or more distant "
+        "magnet: with the MLX90393, the part of the loading path the publication optimises "
+        "over is read only up to the onset. magtact keeps the publication's t for the "
+        "comparison and reports where the chip saturates at the setting used (the design "
+        "card).</p>")
 
 
 def _budget(doc: dict) -> str:

@@ -139,8 +139,13 @@ class Responses:
     >>> g, h = r.grad("f_r", t, theta), r.hess("f_r", t, theta)  # doctest: +SKIP
     """
 
-    def __init__(self, models: ModelSet):
+    def __init__(self, models: ModelSet, noise: tuple[float, float] | None = None):
         self.models = models
+        #: (σ_x, σ_z) [T]: with it, γ_r, γ_z are the force noise per unit G [N/Pa],
+        #: √(J_kx² σ_x² + J_kz² σ_z²) / G (docs/method.md §10) instead of |∂f/∂B|.
+        self.noise = None if noise is None else (float(noise[0]), float(noise[1]))
+        if self.noise is not None and not all(v > 0 for v in self.noise):
+            raise ValueError(f"noise must be two RMS field noises > 0 [T], got {noise!r}")
 
     def at(self, H, **geometry) -> ResponsesAtH:
         """The responses at design height ``H`` [m] (a float, or an array that broadcasts
@@ -151,8 +156,12 @@ class Responses:
             if geometry:
                 raise ValueError("the published sensitivity definition has no geometric "
                                  "design variables")
+            if self.noise is not None:
+                raise ValueError("the force noise needs the Jacobian sensitivity definition")
             return PublishedResponsesAtH(self.models, H)
-        return ResponsesAtH(self.models, H, **geometry)
+        out = ResponsesAtH(self.models, H, **geometry)
+        out.noise = self.noise
+        return out
 
     @property
     def definition(self) -> str:
@@ -162,6 +171,9 @@ class Responses:
 
 class ResponsesAtH:
     """Responses at design height(s) H [m] (and geometry); see :class:`Responses`."""
+
+    #: (σ_x, σ_z) [T] weighting the field axes (see :class:`Responses`); None: Γ.
+    noise: tuple[float, float] | None = None
 
     def __init__(self, models: ModelSet, H, **geometry):
         self.models = models
@@ -200,6 +212,9 @@ class ResponsesAtH:
         f = "f_r" if name == "gamma_r" else "f_z"
         jf, jr, jz = (self.models[k].jet(t, theta, self.H, order + 1, **self.geometry)
                       for k in (f, "B_r", "B_z"))
+        if self.noise is not None:  # B/σ: the row norm of J diag(σ), the force noise per G
+            jr = [d / self.noise[0] for d in jr]
+            jz = [d / self.noise[1] for d in jz]
         # v_i = first derivatives, shape (..., 6); dv = their x-gradients (..., 6, 2); ...
         v = np.concatenate([jf[1], jr[1], jz[1]], axis=-1)
         shape = v.shape[:-1]

@@ -14,7 +14,7 @@ import tomli_w
 
 from .._errors import MagtactError
 from ._model import GEOMETRY, SECTIONS, Study, key_of
-from ._units import LABEL, bounds_text, from_si, to_si
+from ._units import LABEL, MU0, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
 
@@ -138,9 +138,45 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
     sections = {}
     for name in SECTIONS:
         sections[name] = _section(name, getattr(base, name), data.get(name, {}), complete, source)
-    study = replace(base, **top, **sections)
+    study = _apply_parts(replace(base, **top, **sections), data.get("magnet", {}), source)
     _check_consistency(study, source)
+    _check_hall(study, source)
     return study
+
+
+def _apply_parts(s: Study, given: dict, source) -> Study:
+    """The magnet's grade sets M_z = B_r / μ0 (nominal B_r), its size R_m and H_m; a value the
+    file also gives must agree (docs/method.md §10)."""
+    from ..parts import grade, size
+
+    mg, values = s.magnet, {}
+    if mg.grade != "custom":
+        values["M_z"] = grade(mg.grade).M_z(MU0)[0]
+    if mg.size != "custom":
+        sz = size(mg.size)
+        values |= {"R_m": sz.R_m, "H_m": sz.H_m}
+    for name, value in values.items():
+        f = next(f for f in fields(mg) if f.name == name)
+        key = key_of(f)
+        if key in given and not math.isclose(getattr(mg, name), value, rel_tol=1e-9):
+            what = "grade" if name == "M_z" else "size"
+            unit = f.metadata["unit"]
+            raise StudyError(f"magnet.{key}", f"{from_si(getattr(mg, name), unit):g} conflicts "
+                                              f"with magnet.{what} = {getattr(mg, what)!r} "
+                                              f"({from_si(value, unit):.6g} "
+                                              f"{LABEL.get(unit, unit)}); give one of the two",
+                             source)
+    return replace(s, magnet=replace(mg, **values)) if values else s
+
+
+def _check_hall(s: Study, source) -> None:
+    """The ``[hall]`` chip setting and sample rate against the chip's tables."""
+    from ._hall import check_hall
+
+    try:
+        check_hall(s)
+    except StudyError as exc:
+        raise StudyError(exc.key, exc.reason, source) from None
 
 
 def _unknown(key: str, allowed, what: str) -> str:

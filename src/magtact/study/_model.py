@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from ..parts import GRADES, SILICONES, SIZES
 from ._units import PHYSICAL
 
 
@@ -70,6 +71,12 @@ class Magnet:
                              doc="'covered': H_m/2 of elastomer above, distances to the "
                                  "centre; 'flush': top at the top face, distances to the "
                                  "lower face")
+    grade: str = setting("custom", choices=("custom", *GRADES),
+                         doc="NdFeB grade (docs/method.md §10): sets M_z = B_r / μ0 with the "
+                             "grade's nominal B_r; 'custom': M_z as given")
+    size: str = setting("custom", choices=("custom", *SIZES),
+                        doc="cylinder size '<diameter>x<height>' in mm: sets R_m and H_m; "
+                            "'custom': R_m and H_m as given")
 
 
 @dataclass(frozen=True)
@@ -92,6 +99,10 @@ class Material:
                            doc="shear modulus of the structural solves (F scales with G)")
     bulk_ratio: float = setting(5000.0, minimum=1000.0, bounds=(1000.0, 1e9),
                                 doc="bulk / shear modulus (nearly incompressible)")
+    silicone: str = setting("Ecoflex 00-30", choices=("none", *SILICONES),
+                            doc="the silicone the sensor is cast from (docs/method.md §10); "
+                                "the design card says whether its G range holds each design's "
+                                "G; 'none': not named")
 
 
 @dataclass(frozen=True)
@@ -239,7 +250,7 @@ SENSITIVITY_DEFINITIONS = ("jacobian", "published")
 
 
 #: Hall chips with presets (docs/method.md §10), and "custom" for a chip of the user's.
-HALL_CHIPS = ("MLX90393", "TLE493D", "custom")
+HALL_CHIPS = ("MLX90393", "TLV493D", "TLE493D", "custom")
 
 
 @dataclass(frozen=True)
@@ -259,6 +270,22 @@ class Hall:
                              doc="measuring range ± along x; 0: the preset's")
     range_z: float = setting(0.0, "mT", minimum=0.0, bounds=(0.0, 100.0),
                              doc="measuring range ± along z; 0: the preset's")
+    gain_sel: int = setting(-1, integer=True, minimum=-1, maximum=255,
+                            doc="MLX90393 GAIN_SEL (0-7); -1: magtact picks the setting with "
+                                "the lowest force noise per design")
+    res: int = setting(-1, integer=True, minimum=-1, maximum=255,
+                       doc="MLX90393 RES_XYZ (0-3); -1: picked")
+    osr: int = setting(-1, integer=True, minimum=-1, maximum=255,
+                       doc="MLX90393 OSR (0-3); -1: picked")
+    dig_filt: int = setting(-1, integer=True, minimum=-1, maximum=255,
+                            doc="MLX90393 DIG_FILT (0-7); -1: picked")
+    read_fraction: float = setting(1.0, positive=True, bounds=(1e-3, 1.0),
+                                   doc="the picked chip setting must hold the field over the "
+                                       "loads t <= read_fraction * t_m of the stable region "
+                                       "(1: all of it)")
+    min_rate: float = setting(0.0, "Hz", minimum=0.0, bounds=(1e-3, 1e6),
+                              doc="smallest sample rate (full XYZ read) the chip setting must "
+                                  "reach; 0: any")
 
 
 @dataclass(frozen=True)
@@ -297,6 +324,11 @@ class Optimise:
                                doc="start grid along theta of the batched per-height solver")
     active_rtol: float = setting(1e-2, positive=True, bounds=(1e-12, 1.0),
                                  doc="a constraint is active when |margin| <= this x |limit|")
+    objective: str = setting("gamma", choices=("gamma", "sigma_F"),
+                             doc="'gamma': minimise the sensitivities Γ_r,max, Γ_z,max [N/T] "
+                                 "(the publication's); 'sigma_F': the force noise σ_F,r, "
+                                 "σ_F,z [N] with the [hall] chip at its setting (docs/method.md "
+                                 "§10)")
     geometry_n: int = setting(11, integer=True, minimum=2, maximum=1001,
                               doc="levels of each geometric design variable besides H in the "
                                   "exact reduction's grid")

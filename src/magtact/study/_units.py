@@ -32,6 +32,7 @@ SCALE: dict[str, tuple[int, int]] = {
     "K": (1, 1),
     "pct": (1, 100),
     "pct_per_K": (1, 100),
+    "Hz": (1, 1),
     "": (1, 1),
 }
 
