@@ -37,10 +37,10 @@ def test_pipeline_says_the_disagreement_in_the_report(monkeypatch, tmp_path):
     from magtact import pipeline
 
     class FakeResult:
-        def write(self, folder):
+        def write(self, folder, budget=True):
             return []
 
-    def fake_solve(models, study, constraints=None, models_source=""):
+    def fake_solve(models, study, constraints=None, models_source="", dataset=None):
         warnings.warn("NSGA-II's Pareto set lies 0.3 (relative) from the exact reduction's "
                       "front", run_module.FrontGapWarning, stacklevel=2)
         return FakeResult()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -94,6 +95,9 @@ class Result:
     variables : dict of float
         The chosen design's variables [SI] by name (``H``, ``G``, and ``M_z``, ``R_m``,
         ``H_m``, ``R`` where they are design variables); :attr:`chosen_design` in user units.
+    dataset : xarray.Dataset or None
+        The DOE data set the models were fitted to, where known (its per-path mesh error
+        enters the error budget).
 
     Examples
     --------
@@ -111,6 +115,7 @@ class Result:
     chosen: DesignAnswer
     original: DesignAnswer
     variables: dict[str, float]
+    dataset: object = None
 
     @property
     def constraints(self) -> ForceConstraints:
@@ -143,7 +148,21 @@ class Result:
 
         header, rows = card_rows([self.chosen, self.original], self.constraints,
                                  rtol=self.study.optimise.active_rtol)
-        return {"header": header, "rows": rows}
+        return {"header": header, "rows": rows + self._budget_rows()}
+
+    @cached_property
+    def budgets(self) -> tuple[Budget, Budget] | None:
+        """The error budgets of the chosen and the original design (:meth:`budget`, with the
+        data set's mesh error); None over geometric design variables (a budget belongs to one
+        geometry)."""
+        if self.study.geometric_variables:
+            return None
+        return tuple(self.budget(a, dataset=self.dataset) for a in (self.chosen, self.original))
+
+    def _budget_rows(self) -> list[list[str]]:
+        from .budget import budget_card_rows
+
+        return [] if self.budgets is None else budget_card_rows(self.budgets)
 
     def evaluate(self, *, H_mm: float, G_kPa: float, M_z_A_per_m: float | None = None,
                  label: str = "design", **geometry_mm: float) -> DesignAnswer:
@@ -194,7 +213,7 @@ class Result:
         seeds : dict, optional
             A seed study (``magtact reproduce``'s ``publication.json``) for the seed spread.
         noise : (σ_x, σ_z) [T], optional
-            Field noise where the study's chip has none.
+            Field noise where the chip has none (the chip at the design's setting otherwise).
 
         Raises
         ------
@@ -205,7 +224,8 @@ class Result:
 
         a = self.chosen if answer is None else answer
         return error_budget(self.models, self.study, a.H, a.G, a.design.M_z, label=a.label,
-                            design=a.design, noise=noise, dataset=dataset, seeds=seeds)
+                            design=a.design, noise=noise, dataset=dataset, seeds=seeds,
+                            chip=a.chip)
 
     def figures(self) -> dict[str, Figure]:
         """The optimisation's figures as matplotlib figures, by name."""
@@ -213,11 +233,13 @@ class Result:
 
         return optimise_figure_objects(self.optimisation)
 
-    def write(self, out: str | Path, figures: bool = True) -> list[Path]:
-        """Write the optimisation's tables, the design card (``card.json``) and, with
-        ``figures``, the figures into ``out``; return the files written."""
+    def write(self, out: str | Path, figures: bool = True, budget: bool = True) -> list[Path]:
+        """Write the optimisation's tables, the design card (``card.json``), with ``budget``
+        the error budgets (``budget.json``) and, with ``figures``, the figures into ``out``;
+        return the files written."""
+        from .budget import write_budgets
         from .optimise import write_geometry_outputs, write_optimise_outputs
-        from .report import fig_geometry_pareto, optimise_figures, write_card
+        from .report import budget_figures, fig_geometry_pareto, optimise_figures, write_card
 
         out = Path(out)
         if self.study.geometric_variables:
@@ -227,7 +249,11 @@ class Result:
             files = write_optimise_outputs(self.optimisation, self.models, out,
                                            figures=optimise_figures if figures else None)
         files.append(write_card([self.chosen, self.original], out, self.constraints,
-                                rtol=self.study.optimise.active_rtol, study=self.study))
+                                rtol=self.study.optimise.active_rtol, study=self.study,
+                                extra_rows=self._budget_rows()))
+        if budget and self.budgets is not None:
+            files.append(write_budgets(self.budgets, self.study, out,
+                                       figures=budget_figures if figures else None))
         return files
 
     def __str__(self) -> str:
@@ -248,7 +274,7 @@ def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str
 
 
 def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None = None, *,
-          models_source: str = "given") -> Result:
+          models_source: str = "given", dataset=None) -> Result:
     """From models and a study to the :class:`Result`: the one chain every caller uses.
 
     The optimisation (docs/method.md §7: NSGA-II and the exact reduction over (H, G[, M_z]),
@@ -264,6 +290,8 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
         Default: the study's ``[constraints]`` (:func:`magtact.optimise.force_constraints`).
     models_source : str
         Where the models came from, in words (kept in the result).
+    dataset : xarray.Dataset, optional
+        The DOE data set of the models (kept in the result for the error budget).
 
     Raises
     ------
@@ -289,13 +317,14 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
         values = {"H": d.H, "G": d.G} | ({} if d.M_z is None else {"M_z": d.M_z})
     original = {"H": study.design.H_original, "G": study.design.G_original} | own
     return Result(study, models, models_source, opt, _answer(models, study, values, "chosen"),
-                  _answer(models, study, original, "original"), values)
+                  _answer(models, study, original, "original"), values, dataset)
 
 
 def models_for(study: Study, *, data: str | Path | None = None,
                models: str | Path | None = None, refit: bool = False,
-               log: Callable[[str], None] | None = None) -> tuple[ModelSet, str]:
-    """The models of a study and where they come from, in words.
+               log: Callable[[str], None] | None = None) -> tuple[ModelSet, str, object]:
+    """The models of a study, where they come from (in words) and their DOE data set (None
+    when the models come from files).
 
     ``models`` (a folder of model files, ``magtact fit``) when given; else the shipped fit when
     it matches the data set and the fit settings (and not ``refit``), else a new fit (minutes)
@@ -311,12 +340,12 @@ def models_for(study: Study, *, data: str | Path | None = None,
 
     if models is not None:
         return (load_models(models, definition=study.sensitivity.definition),
-                f"model files in {models}")
+                f"model files in {models}", None)
     from .doe import bundled_for, load_dataset
 
     ds = load_dataset(data) if data is not None else bundled_for(study)
     selection = select_metamodels(study, ds, refit=refit, log=log)
-    return selection.models, selection.source
+    return selection.models, selection.source, ds
 
 
 def design(study: Study | str | Path | None = None, *, data: str | Path | None = None,
@@ -356,5 +385,5 @@ def design(study: Study | str | Path | None = None, *, data: str | Path | None =
     """
     if not isinstance(study, Study):
         study = load_study(study)
-    m, source = models_for(study, data=data, models=models, refit=refit, log=log)
-    return solve(m, study, constraints, models_source=source)
+    m, source, ds = models_for(study, data=data, models=models, refit=refit, log=log)
+    return solve(m, study, constraints, models_source=source, dataset=ds)

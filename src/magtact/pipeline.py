@@ -289,14 +289,15 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", FrontGapWarning)
-        result = solve(ctx.models, ctx.study, models_source=ctx.models_source)
+        result = solve(ctx.models, ctx.study, models_source=ctx.models_source,
+                       dataset=ctx.dataset)
     for w in caught:  # a disagreement of NSGA-II and the exact reduction is said in the report
         if issubclass(w.category, FrontGapWarning):
             rec.notes.append(f"WARNING: {w.message}")
             ctx.log(f"      WARNING: {w.message}")
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    result.write(ctx.folder / "optimise")
+    result.write(ctx.folder / "optimise", budget=False)  # the budget is a stage of its own
     ctx.result = result
     if ctx.study.geometric_variables:
         r = result.optimisation
@@ -315,8 +316,7 @@ def _stage_budget(ctx: _Context, rec: StageRecord) -> str:
     from .budget import write_budgets
     from .report import budget_figures
 
-    r = ctx.result
-    budgets = [r.budget(a, dataset=ctx.dataset) for a in (r.chosen, r.original)]
+    budgets = ctx.result.budgets  # computed for the design card
     write_budgets(budgets, ctx.study, ctx.folder / "budget", figures=budget_figures)
     top = budgets[0].largest(1)[0]
     return (f"largest row of the chosen design: {top.name} ({top.component}), "

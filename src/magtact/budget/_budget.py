@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
-from ..designer import hall_chip, resolution
+from ..designer import HallChip, hall_chip, resolution
 from ..magnetics import hall_field
 from ..metamodel import ModelSet
 from ..optimise import DesignResult, per_design
@@ -112,7 +112,8 @@ def _rows(name, group, at_rest, worst, assumptions) -> list[BudgetRow]:
 def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
                  *, label: str = "design", design: DesignResult | None = None,
                  noise: tuple[float, float] | None = None, dataset=None,
-                 seeds: dict | None = None, samples: int | None = None) -> Budget:
+                 seeds: dict | None = None, samples: int | None = None,
+                 chip: HallChip | None = None) -> Budget:
     """The error budget of design (H [m], G [Pa][, M_z [A/m]]) (docs/method.md §12).
 
     Parameters
@@ -132,6 +133,9 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
         A seed study (``publication.json`` of ``magtact reproduce``): its ``spread``.
     samples : int, optional
         Monte-Carlo samples; default ``tolerances.samples``.
+    chip : HallChip, optional
+        The chip at the setting the design's answer uses (:attr:`DesignAnswer.chip`); default
+        the study's ``[hall]`` chip.
 
     Returns
     -------
@@ -160,7 +164,8 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
         raise MagtactError("the error budget is computed for one geometry: fix the geometric "
                            f"design variables ({', '.join(study.geometric_variables)}) with "
                            "study.at(...) and use models fitted to it")
-    chip = hall_chip(study)
+    own = chip is None
+    chip = hall_chip(study) if own else chip
     env, arr = study.environment, study.array
     if design is None:
         design = per_design(models, H, G, study, M_z)
@@ -176,7 +181,8 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
 
     # ---- noise -----------------------------------------------------------------------------
     if chip.noise is not None:
-        noise_used, noise_source = chip.noise, f"{chip.name}: [hall] of the study"
+        noise_used, noise_source = chip.noise, (f"{chip.name}: [hall] of the study" if own
+                                                else f"{chip.name} at {chip.setting}")
     elif noise is not None:
         noise_used = (float(noise[0]), float(noise[1]))
         noise_source = "given to the budget (the study's [hall] gives no noise figure)"
@@ -408,21 +414,27 @@ def budget_json(b: Budget) -> dict:
     return out
 
 
-def budget_card_rows(b: Budget, n: int = 3) -> list[list[str]]:
-    """Rows for the design card: the largest rows of the budget in words."""
-    out = []
-    for r in b.largest(n):
-        out.append([f"error budget: {r.name} ({r.component})",
-                    f"{from_si(r.worst, 'mN'):.3g} mN worst, {from_si(r.at_rest, 'mN'):.3g} mN "
-                    "at rest"])
-    if b.resolution is not None:
-        out.append(["error budget: resolution for comparison (1 σ, worst F_r / F_z)",
-                    f"{from_si(b.resolution[2], 'mN'):.3g} / "
-                    f"{from_si(b.resolution[3], 'mN'):.3g} mN"])
-    sp = b.array.get("smallest_pitch")
-    if sp is not None:
-        out.append([f"smallest {b.array['layout']} array pitch for crosstalk below the "
-                    "resolution", f"{mm(sp):.3g} mm"])
+def budget_card_rows(budgets, n: int = 3) -> list[list[str]]:
+    """Rows for the design card, one column per budget (a :class:`Budget` or a sequence of
+    them, e.g. the chosen and the original design): the ``n`` largest rows of the first
+    budget in words, each with its worst and at-rest false force, and the smallest array
+    pitch for crosstalk below the resolution."""
+    budgets = [budgets] if isinstance(budgets, Budget) else list(budgets)
+
+    def cell(b: Budget, name: str, component: str) -> str:
+        for r in b.rows:
+            if r.name == name and r.component == component:
+                return (f"{from_si(r.worst, 'mN'):.3g} mN worst, "
+                        f"{from_si(r.at_rest, 'mN'):.3g} mN at rest")
+        return "—"
+
+    out = [[f"error budget: {r.name} ({r.component})",
+            *(cell(b, r.name, r.component) for b in budgets)] for r in budgets[0].largest(n)]
+    pitches = [b.array.get("smallest_pitch") for b in budgets]
+    if any(p is not None for p in pitches):
+        out.append([f"smallest {budgets[0].array['layout']} array pitch for crosstalk below "
+                    "the resolution", *("—" if p is None else f"{mm(p):.3g} mm"
+                                        for p in pitches)])
     return out
 
 

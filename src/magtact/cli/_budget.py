@@ -68,7 +68,7 @@ def budget_command(
 ) -> None:
     """The error budget of design (H, G): every false force besides the load, in mN."""
     from ..budget import budget_card_rows, budget_json, error_budget, write_budgets
-    from ..optimise import per_design
+    from ..designer import answer
     from ..report import budget_figures
 
     s = get_study(study)
@@ -77,13 +77,13 @@ def budget_command(
     sigma = None if noise is None else parse_noise(noise)
     seed_data = _seeds(seeds)
     folder = None if out is None else out_dir(out)
-    m = study_models(s, models)
+    m, _ = study_models(s, models)
     dataset = _dataset(s) if models is None else None
-    design = per_design(m, H_si, G_si, s)
-    b = error_budget(m, s, H_si, G_si, label="design", design=design, noise=sigma,
-                     dataset=dataset, seeds=seed_data)
+    a = answer(m, s, H_si, G_si)  # the chip at this design's setting
+    b = error_budget(m, s, H_si, G_si, label="design", design=a.design, noise=sigma,
+                     dataset=dataset, seeds=seed_data, chip=a.chip)
     print_budget(budget_json(b))
-    for name, text in budget_card_rows(b):
+    for name, text in budget_card_rows([b]):
         console.print(f"{escape(name)}: {escape(text)}", highlight=False)
     if folder is not None:
         path = write_budgets([b], s, folder, figures=budget_figures)

@@ -48,7 +48,7 @@ def study_models(study: Study, models: Path | None):
     from .. import models_for
 
     return models_for(study, models=models,
-                      log=lambda m: console.print(m, highlight=False))
+                      log=lambda m: console.print(m, highlight=False))[:2]
 
 
 @app.command("optimise")
@@ -146,25 +146,25 @@ def compare_command(
     models: ModelsOpt = None,
 ) -> None:
     """Percentage changes of Γ_r,max, Γ_z,max, F_r,min, F_z,max from design 1 to design 2."""
-    from ..designer import hall_chip, resolution
-    from ..optimise import compare, per_design
+    from ..designer import answer
+    from ..optimise import compare
 
     d1 = parse_design(first, "first design")
     d2 = parse_design(second, "second design")
     s = get_study(study)
     m, _ = study_models(s, models)
-    cmp = compare(per_design(m, *d1, s), per_design(m, *d2, s))
+    a1, a2 = answer(m, s, *d1), answer(m, s, *d2)  # each with the chip at its own setting
+    cmp = compare(a1.design, a2.design)
     table = Table(title=f"{first} → {second} (mm,kPa)")
     for col in ("quantity", "design 1", "design 2", "change (%)"):
         table.add_column(col, justify="left" if col == "quantity" else "right")
     for label, unit, v1, v2, pct in cmp.rows:
         table.add_row(escape(f"{label} [{unit}]"), f"{v1:.5g}", f"{v2:.5g}", f"{pct:+.2f}")
-    chip = hall_chip(s)
-    if chip.noise is None:
-        table.caption = (f"resolution with the {chip.name}: give "
-                         f"{' and '.join(chip.missing)} in the study (RMS noise, µT)")
+    r1, r2 = a1.resolution, a2.resolution
+    if r1 is None or r2 is None:
+        table.caption = (f"resolution with the {a1.chip.name}: give "
+                         f"{' and '.join(a1.chip.missing)} in the study (RMS noise, µT)")
     else:
-        r1, r2 = (resolution(m, s, per_design(m, *d, s), chip) for d in (d1, d2))
         for label, a, b in (("σ_Fr at t = 0", r1.sigma_r_0, r2.sigma_r_0),
                             ("σ_Fz at t = 0", r1.sigma_z_0, r2.sigma_z_0),
                             ("σ_Fr, worst in the stable region", r1.sigma_r_worst,
@@ -174,5 +174,6 @@ def compare_command(
             v1, v2 = from_si(a, "mN"), from_si(b, "mN")
             table.add_row(escape(f"{label} [mN]"), f"{v1:.5g}", f"{v2:.5g}",
                           f"{100 * (v2 - v1) / v1:+.2f}")
-        table.caption = f"σ_F with the {chip.name} ({chip.setting}), noise from the study"
+        table.caption = (f"σ_F with the {a1.chip.name}: design 1 at {a1.chip.setting}, "
+                         f"design 2 at {a2.chip.setting}")
     Console().print(table)

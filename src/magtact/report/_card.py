@@ -179,15 +179,18 @@ def _active(a, constraints, rtol: float) -> str:
     return ", ".join(active) or "none"
 
 
-def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None) -> Path:
+def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None,
+               extra_rows: list[list[str]] | None = None) -> Path:
     """Write ``card.json`` (the card's rows and every number of each answer) into ``folder``.
 
     ``study`` names the study and its sensitivity definition, so that :func:`read_card` can add
-    the seed spread of a ``magtact reproduce`` run of the same study.
+    the seed spread of a ``magtact reproduce`` run of the same study. ``extra_rows`` (one cell
+    per answer after the row's name, e.g. the error budget's largest rows) end the card.
     """
     from ..designer import answer_json
 
     header, rows = card_rows(answers, constraints, rtol=rtol)
+    rows = rows + [list(r) for r in (extra_rows or [])]
     doc = {"header": header, "rows": rows, "answers": [answer_json(a) for a in answers]}
     if study is not None:
         doc |= {"study": study.name, "definition": study.sensitivity.definition}
