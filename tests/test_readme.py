@@ -80,3 +80,32 @@ def test_readme_magone_table_is_the_benchmarks_result():
     assert num(original) == [round(rc["F_r_c_N"], 3), round(rc["F_z_c_N"], 2)]
     active = {"F_r": "F_r (shear)", "F_z": "F_z (normal)"}
     assert table["active constraint"][0] == ", ".join(active[k] for k in c["active_constraints"])
+
+
+def test_readme_magone_card_rows_are_what_the_designer_answers(models):
+    """The README's resolution, chip and silicone rows: the designer's answer for the two
+    designs of the table, on the shipped models."""
+    from magtact.designer import answer
+    from magtact.study import load_study
+
+    bench = json.loads((ROOT / "bench" / "results" / "optimise.json").read_text())
+    c = bench["default_constraints"]
+    s = load_study("magone")
+    chosen = answer(models, s, c["H_mm"] * 1e-3, c["G_kPa"] * 1e3)
+    original = answer(models, s, 3e-3, 29.4e3)
+    table = _readme_table()
+    for cell, a in zip(table["resolution σ_Fr / σ_Fz (1 σ, worst over the stable region)"],
+                       (chosen, original), strict=True):
+        r = a.resolution
+        shown = re.findall(r"\d+\.\d+", cell)
+        for text, value in zip(shown, (r.sigma_r_worst * 1e3, r.sigma_z_worst * 1e3),
+                               strict=True):  # correct to the digits shown
+            assert abs(float(text) - value) <= 0.5 * 10.0 ** -len(text.split(".")[1])
+    words = table["MLX90393 setting magtact picks, sample rate"][0]
+    assert words.startswith(chosen.chip.setting) and words.endswith(
+        f"{chosen.chip.figures.rate:.2g} Hz")
+    assert original.chip.setting == chosen.chip.setting
+    for cell, a in zip(table["the chip (±33 / 50 mT at that setting) saturates at"],
+                       (chosen, original), strict=True):
+        assert cell == f"t = {a.saturation.t:.2f}, F_z = {a.saturation.F_z:.2f} N"
+    assert [a.chip.range_x * 1e3 for a in (chosen, original)] == pytest.approx([33, 33], abs=0.5)
