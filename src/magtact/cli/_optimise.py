@@ -129,9 +129,13 @@ def print_choice(result, stdout: Console | None = None) -> None:
              from_si(b[k], unit.get(k, ("mm",))[0])) for k in names]
     d, e = opt.choice.design, (opt.exact_choice if result.study.geometric_variables
                                else opt.reduction_choice).design
-    rows += [("Γ_r,max [N/T]", d.Gamma_r_max, e.Gamma_r_max),
-             ("Γ_z,max [N/T]", d.Gamma_z_max, e.Gamma_z_max),
-             ("F_r,min [N]", d.F_r_min, e.F_r_min), ("F_z,max [N]", d.F_z_max, e.F_z_max)]
+    if result.study.optimise.objective == "sigma_F":  # the objective: σ_F [N] → mN
+        rows += [("σ_Fr,max (objective) [mN]", 1e3 * d.Gamma_r_max, 1e3 * e.Gamma_r_max),
+                 ("σ_Fz,max (objective) [mN]", 1e3 * d.Gamma_z_max, 1e3 * e.Gamma_z_max)]
+    else:
+        rows += [("Γ_r,max [N/T]", d.Gamma_r_max, e.Gamma_r_max),
+                 ("Γ_z,max [N/T]", d.Gamma_z_max, e.Gamma_z_max)]
+    rows += [("F_r,min [N]", d.F_r_min, e.F_r_min), ("F_z,max [N]", d.F_z_max, e.F_z_max)]
     for label, x, y in rows:
         table.add_row(escape(label), f"{x:.5g}", f"{y:.5g}")
     (stdout or Console()).print(table)

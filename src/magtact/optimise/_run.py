@@ -53,6 +53,14 @@ class Timings:
 WARN_FRONT_GAP = 0.05
 
 
+#: What the objective columns (``Gamma_*``) of the tables hold, per ``[optimise] objective``.
+OBJECTIVE_NOTE = {
+    "gamma": "Gamma_* columns: the worst sensitivity Γ = |∂F/∂B| [N/T]",
+    "sigma_F": "Gamma_* columns: the worst force noise σ_F [N] at the chip's setting "
+               "(the noise-weighted Jacobian; their keys keep the Γ names)",
+}
+
+
 class FrontGapWarning(UserWarning):
     """NSGA-II's Pareto set lies off the exact front: its chosen design is not to be trusted
     (too small a budget, or design ranges far wider than the sensor's)."""
@@ -112,6 +120,8 @@ class Optimisation:
         doc = {
             "study": self.study.name,
             "sensitivity_definition": self.study.sensitivity.definition,
+            "objective": self.study.optimise.objective,
+            "objective_note": OBJECTIVE_NOTE[self.study.optimise.objective],
             "constraints": {
                 "F_r_c_N": c.F_r_c, "F_z_c_N": c.F_z_c, "source": c.source,
                 "reference": None if c.reference is None else _design_json(c.reference),
@@ -259,6 +269,7 @@ def write_optimise_outputs(result: Optimisation, models: Responses | ModelSet,
     flat = {k: v for k, v in _choice_json(c).items() if k != "active_constraints"}
     flat["active_constraints"] = ", ".join(c.active) or "none"
     flat["sensitivity_definition"] = study.sensitivity.definition
+    flat["objective"] = study.optimise.objective
     flat["constraints"] = {"F_r_c_N": result.constraints.F_r_c,
                            "F_z_c_N": result.constraints.F_z_c,
                            "source": result.constraints.source}

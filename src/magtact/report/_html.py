@@ -285,10 +285,18 @@ def _chosen(folder: Path | None) -> str:
                  ("shear modulus G of the elastomer", f"{num('G_kPa')} kPa")]
     if "M_z_A_per_m" in data:
         rows.append(("magnetisation M_z", f"{num('M_z_A_per_m', '.4g')} A/m"))
-    rows += [("worst shear sensitivity Γ_r,max over the stable region",
-              f"{num('Gamma_r_max_N_per_T')} N/T"),
-             ("worst normal sensitivity Γ_z,max over the stable region",
-              f"{num('Gamma_z_max_N_per_T')} N/T"),
+    if data.get("objective") == "sigma_F":  # the objective columns hold σ_F [N]
+        g_r, g_z = (data.get(k) for k in ("Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T"))
+        rows += [("worst shear force noise σ_Fr over the stable region (the objective)",
+                  f"{1e3 * g_r:.4g} mN" if isinstance(g_r, (int, float)) else "?"),
+                 ("worst normal force noise σ_Fz over the stable region (the objective)",
+                  f"{1e3 * g_z:.4g} mN" if isinstance(g_z, (int, float)) else "?")]
+    else:
+        rows += [("worst shear sensitivity Γ_r,max over the stable region",
+                  f"{num('Gamma_r_max_N_per_T')} N/T"),
+                 ("worst normal sensitivity Γ_z,max over the stable region",
+                  f"{num('Gamma_z_max_N_per_T')} N/T")]
+    rows += [
              ("largest stable shear force F_r,min", f"{num('F_r_min_N')} N"),
              ("largest normal force in the stable region F_z,max", f"{num('F_z_max_N')} N")]
     if "t_m" in data:
