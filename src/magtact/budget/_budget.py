@@ -421,11 +421,13 @@ def budget_card_rows(budgets, n: int = 3) -> list[list[str]]:
     pitch for crosstalk below the resolution."""
     budgets = [budgets] if isinstance(budgets, Budget) else list(budgets)
 
+    def force(v: float) -> str:  # mN, or N from 1 N up
+        return f"{v:.3g} N" if abs(v) >= 1.0 else f"{from_si(v, 'mN'):.3g} mN"
+
     def cell(b: Budget, name: str, component: str) -> str:
         for r in b.rows:
             if r.name == name and r.component == component:
-                return (f"{from_si(r.worst, 'mN'):.3g} mN worst, "
-                        f"{from_si(r.at_rest, 'mN'):.3g} mN at rest")
+                return f"{force(r.worst)} worst, {force(r.at_rest)} at rest"
         return "—"
 
     out = [[f"error budget: {r.name} ({r.component})",
