@@ -41,7 +41,7 @@ BYTES = 4
 #: Vertices per edge of the region polygon.
 N_EDGE = 16
 #: Training and held-out readings over the region.
-N_TRAIN, N_TEST = 6000, 20000
+N_TRAIN, N_TEST = 2500, 20000
 #: Size budget when no candidate reaches the target [bytes].
 BUDGET = 32768
 
@@ -206,8 +206,8 @@ def fit_poly(smap: SensorMap, degree: int, transform: str, train, polygon) -> Ap
     eta = 2 * (v - limits[2]) / (limits[3] - limits[2]) - 1
     A = _basis(xi, eta, degree)
     F_r = np.hypot(F[:, 0], F[:, 1]) * np.sign(F[:, 0] * B[:, 0] + F[:, 1] * B[:, 1])
-    c_r = np.linalg.lstsq(A, F_r, rcond=None)[0]
-    c_z = np.linalg.lstsq(A, F[:, 2], rcond=None)[0]
+    c = np.linalg.lstsq(A, np.stack([F_r, F[:, 2]], axis=-1), rcond=None)[0]
+    c_r, c_z = c[:, 0], c[:, 1]
     return Approximation("poly", degree, transform, limits, c_r, c_z, polygon)
 
 

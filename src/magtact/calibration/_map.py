@@ -411,18 +411,18 @@ def _near_fold(w, folds, t_m) -> np.ndarray:
 
 
 def sensor_map(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
-               field_source: str = "models") -> SensorMap:
+               field_source: str = "models", design=None) -> SensorMap:
     """The field-to-force map of design (H [m], G [Pa][, M_z [A/m]]) over its stable region.
 
     The region is that of :func:`magtact.optimise.per_design`: t ≤ t_m, θ ≤ θ_m, every
-    azimuth φ.
+    azimuth φ. ``design``: that function's result for this design, if already at hand.
 
     Raises
     ------
     MagtactError
         If G or M_z is not positive, or the stable region is degenerate (t_m = 0).
     """
-    design = per_design(models, H, G, study, M_z)
+    design = per_design(models, H, G, study, M_z) if design is None else design
     if not design.t_m > 0:
         raise MagtactError(f"design H = {mm(H):.4g} mm has no stable region (t_m = 0): no map")
     return SensorMap(models, study, float(H), float(G), float(design.t_m),
