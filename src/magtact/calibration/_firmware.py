@@ -326,8 +326,9 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
     d = smap.describe()
     lo_r, hi_r, lo_v, hi_v = a.limits
     target = ("" if choice is None else
-              f" *   target sigma_F (the design's resolution): F_r {from_si(choice.target_r, 'mN'):.4g}"
-              f" mN, F_z {from_si(choice.target_z, 'mN'):.4g} mN; "
+              " *   target sigma_F (the design's resolution): "
+              f"F_r {from_si(choice.target_r, 'mN'):.4g} mN, "
+              f"F_z {from_si(choice.target_z, 'mN'):.4g} mN; "
               f"{'reached' if choice.reached else 'NOT reached'} ({choice.rule})\n")
     head = (
         "/* magtact field-to-force calibration (generated; docs/method.md section 12).\n"
@@ -362,10 +363,10 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
     if a.kind == "poly":
         n = a.degree
         terms = basis_terms(n)
-        body += ("static const unsigned char magtact_i[%d] = {%s};\n"
-                 % (len(terms), ", ".join(str(i) for i, _ in terms)))
-        body += ("static const unsigned char magtact_j[%d] = {%s};\n\n"
-                 % (len(terms), ", ".join(str(j) for _, j in terms)))
+        ii = ", ".join(str(i) for i, _ in terms)
+        jj = ", ".join(str(j) for _, j in terms)
+        body += f"static const unsigned char magtact_i[{len(terms)}] = {{{ii}}};\n"
+        body += f"static const unsigned char magtact_j[{len(terms)}] = {{{jj}}};\n\n"
         core = (
             f"    MAGTACT_REAL v = {TRANSFORMS[a.transform][1]};\n"
             f"    MAGTACT_REAL xi = 2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1;\n"

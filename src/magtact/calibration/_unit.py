@@ -27,7 +27,7 @@ from scipy.optimize import least_squares
 from .._errors import MagtactError, MissingFileError
 from ..study import from_si, mm, to_si
 from ..validation import DataError
-from ._map import OK, SensorMap, UnitParameters, _check_readings
+from ._map import SensorMap, UnitParameters, _check_readings
 
 #: Parameter names in the order of :meth:`UnitParameters.vector`, with the unit they are shown in.
 PARAMETERS = ("G_scale", "B_scale", "chip_offset_x", "chip_offset_y", "chip_offset_z",

@@ -13,7 +13,6 @@ from ..study import checked_si, from_si
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
 from ._optimise import ModelsOpt, study_models
 
-
 #: Range of a Hall chip's field noise [T]: 1 nT to 10 mT.
 NOISE_BOUNDS = (1e-9, 1e-2)
 

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from ..study import from_si
 from ._style import CMAP_SEQ, save, style, subplots
 
@@ -34,7 +32,7 @@ def draw_calibration(fig, cal) -> list:
     rows = cal.firmware.frontier()
     for kind, marker in (("poly", "o"), ("table", "s")):
         sel = [r for r in rows if r["kind"] == kind]
-        for label_on, filled in ((True, True), (False, False)):
+        for filled in (True, False):
             pts = [r for r in sel if r["on_frontier"] == filled]
             if pts:
                 ax.plot([r["bytes"] for r in pts], [r["error_over_sigma"] for r in pts],
@@ -48,14 +46,13 @@ def draw_calibration(fig, cal) -> list:
     ax.set_yscale("log")
     ax.set_xlabel("size (bytes)")
     ax.set_ylabel("largest error / σ_F")
-    ax.set_title(f"firmware candidates ({'target reached' if cal.firmware.reached else 'target NOT reached'})",
-                 fontsize=8)
+    reached = "target reached" if cal.firmware.reached else "target NOT reached"
+    ax.set_title(f"firmware candidates ({reached})", fontsize=8)
     ax.legend(frameon=False, fontsize=6)
     d = cal.map.describe()
+    noise = ", ".join(f"{from_si(v, 'uT'):.3g}" for v in cal.noise)
     fig.suptitle(f"calibration of H = {d['H_mm']:.3g} mm, G = {d['G_kPa']:.4g} kPa: "
-                 f"{a.kind} ({a.bytes} bytes); σ_F for σ_B = "
-                 f"{', '.join(f'{v:.3g}' for v in np.atleast_1d(from_si(np.array(cal.noise), 'uT')))}"
-                 " µT", fontsize=8)
+                 f"{a.kind} ({a.bytes} bytes); σ_F for σ_B = ({noise}) µT", fontsize=8)
     return list(axes)
 
 
