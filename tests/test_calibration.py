@@ -1,0 +1,278 @@
+"""The sensor's field-to-force map, its firmware export and the calibration of a built unit
+(docs/method.md §12), on the shipped MagOne models and the bundled DOE."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from magtact import MagtactError
+from magtact.calibration import (
+    OK,
+    PARAMETERS,
+    Calibration,
+    Presses,
+    UnitParameters,
+    c_header,
+    calibrate_unit,
+    error_grid,
+    fe_readings,
+    firmware_approximation,
+    load_approximation,
+    read_presses,
+    round_trip_error,
+    sensor_map,
+    write_presses,
+)
+from magtact.calibration._firmware import approximation_json
+from magtact.designer import resolution
+from magtact.doe import load_bundled
+from magtact.optimise import per_design
+from magtact.report import draw_calibration
+from magtact.study import HallChip, load_study
+
+#: The chosen design on the shipped models (README) and the original sensor.
+H, G_CHOSEN, G_ORIGINAL = 3e-3, 22.57e3, 29.4e3
+#: The field noise the resolution σ_F is computed with here: 1 µT per axis (the unit in
+#: which the README states σ_F), an assumed figure, not a datasheet's.
+NOISE = 1e-6
+
+
+@pytest.fixture(scope="module")
+def study():
+    return load_study(None)
+
+
+@pytest.fixture(scope="module")
+def design(models, study):
+    return per_design(models, H, G_CHOSEN, study)
+
+
+@pytest.fixture(scope="module")
+def smap(models, study, design):
+    return sensor_map(models, study, H, G_CHOSEN, design=design)
+
+
+@pytest.fixture(scope="module")
+def sigma(models, study, design):
+    chip = HallChip("given", NOISE, NOISE, 1.0, 1.0, "1 µT", "assumed")
+    r = resolution(models, study, design, chip)
+    return r.sigma_r_worst, r.sigma_z_worst
+
+
+@pytest.fixture(scope="module")
+def firmware(smap, sigma):
+    return firmware_approximation(smap, sigma, degrees=(10, 12), table_sizes=(16,))
+
+
+# ---- the map ---------------------------------------------------------------------------------
+@pytest.mark.parametrize("G", [G_CHOSEN, G_ORIGINAL])
+def test_round_trip_over_the_stable_region(models, study, design, G):
+    # t_m and θ_m do not depend on G (docs/method.md §7.1): the same region, forces × G
+    smap = sensor_map(models, study, H, G, design=replace(design, G=G))
+    assert smap.t_m == pytest.approx(1.0) and smap.theta_m == pytest.approx(0.42285, abs=1e-4)
+    assert round_trip_error(smap, n=1000, seed=3) <= 1e-6
+    # B(u) -> F against F(u) directly, at random azimuths: the same force, turned with B
+    L = smap.region_samples(500, seed=4)
+    B, F = smap.at_load(L[:, 0], L[:, 1], L[:, 2])
+    r = smap.force(B)
+    assert (r.flag == OK).all()
+    rng = np.array([smap.ranges[0], smap.ranges[0], smap.ranges[1]])
+    assert np.max(np.abs(r.F - F) / rng) <= 1e-6
+    np.testing.assert_allclose(r.t, L[:, 0], atol=1e-7)
+
+
+def test_conventions_signs_and_axisymmetry(smap):
+    B, F = smap.at_load(0.6, 0.3, 0.0)  # shear along +x
+    assert B[0] > 0 and F[0] < 0 and F[2] > 0 and B[1] == 0 == F[1]
+    B2, F2 = smap.at_load(0.6, 0.3, np.pi / 2)  # the same press turned by 90°
+    np.testing.assert_allclose(B2, [0.0, B[0], B[2]], atol=1e-15)
+    np.testing.assert_allclose(F2, [0.0, F[0], F[2]], atol=1e-15)
+    assert smap.folds["B"].size == 0  # one-to-one on the region
+
+
+def test_readings_outside_the_region_are_flagged_not_extrapolated(smap):
+    B_in, _ = smap.at_load(0.5, 0.2)
+    B_deep, _ = smap.at_load(1.1, 0.2)  # beyond t_m = 1
+    B_steep, _ = smap.at_load(0.5, 0.6)  # beyond θ_m
+    far = np.array([0.3, 0.0, -0.2])  # no load gives this
+    r = smap.force(np.stack([B_in, B_deep, B_steep, far]))
+    assert r.flag[0] == OK
+    assert (r.flag[1:] != OK).all()
+    assert np.isnan(r.F[1:]).all() and np.isfinite(r.F[0]).all()
+    assert r.t[1] == pytest.approx(1.1, abs=1e-6)  # the solution is reported, the force is not
+
+
+def test_nan_and_malformed_readings_refused(smap):
+    B = np.array([[0.01, 0.0, 0.05], [0.0, np.nan, 0.05]])
+    with pytest.raises(MagtactError, match=r"reading \(1,\) component y is nan"):
+        smap.force(B)
+    with pytest.raises(MagtactError, match="3 components"):
+        smap.force(np.zeros((4, 2)))
+
+
+# ---- firmware --------------------------------------------------------------------------------
+def test_firmware_within_resolution_and_json_round_trip(smap, sigma, firmware):
+    a = firmware.chosen
+    assert firmware.reached and a.err_r <= sigma[0] and a.err_z <= sigma[1]
+    # an independent check of the stated error on readings the selection never saw
+    L = smap.region_samples(3000, seed=11)
+    B, F = smap.at_load(L[:, 0], L[:, 1], L[:, 2])
+    approx, inside = a.evaluate(B)
+    assert inside.mean() > 0.99
+    assert np.abs(approx[:, 2] - F[:, 2]).max() <= 1.2 * a.err_z
+    back = load_approximation(approximation_json(firmware, smap)["approximation"])
+    np.testing.assert_array_equal(back.evaluate(B)[0], approx)
+    frontier = firmware.frontier()
+    assert {r["kind"] for r in frontier} == {"poly", "table"}
+    assert any(r["on_frontier"] for r in frontier)
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler on this machine")
+def test_c_header_compiles_and_equals_python(tmp_path, smap, firmware):
+    a = firmware.chosen
+    (tmp_path / "force.h").write_text(c_header(a, smap, firmware))
+    rng = np.random.default_rng(5)
+    L = smap.region_samples(1000, seed=6)
+    B, _ = smap.at_load(L[:, 0], L[:, 1], L[:, 2])
+    B[::10] *= rng.uniform(0.3, 1.5, (100, 1))  # some readings outside the region
+    np.savetxt(tmp_path / "in.txt", B, fmt="%.9e")
+    main = ("#include <stdio.h>\n#include \"force.h\"\nint main(void){double x,y,z;"
+            "MAGTACT_REAL o[3];while(scanf(\"%lf %lf %lf\",&x,&y,&z)==3){"
+            "int f=force((MAGTACT_REAL)x,(MAGTACT_REAL)y,(MAGTACT_REAL)z,o);"
+            "printf(\"%.9e %.9e %.9e %d\\n\",(double)o[0],(double)o[1],(double)o[2],f);}"
+            "return 0;}\n")
+    (tmp_path / "main.c").write_text(main)
+    for real, tol in (("float", 1e-5), ("double", 1e-9)):
+        exe = tmp_path / f"calib_{real}"
+        subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-pedantic", f"-DMAGTACT_REAL={real}",
+                        "-o", str(exe), str(tmp_path / "main.c"), "-lm"], check=True,
+                       capture_output=True)
+        out = np.loadtxt(subprocess.run([str(exe)], input=(tmp_path / "in.txt").read_text(),
+                                        capture_output=True, text=True, check=True).stdout)
+        F_py, inside = a.evaluate(B)
+        scale = max(smap.ranges)  # relative to the force range of the design
+        assert np.abs(out[:, :3] - F_py).max() <= tol * scale
+        assert (out[:, 3] == 0).sum() > 800
+        agree = (out[:, 3] == 0) == inside
+        assert agree.mean() >= 0.999, f"{real}: region flags differ on {np.sum(~agree)} readings"
+
+
+# ---- a built unit ----------------------------------------------------------------------------
+TRUE = UnitParameters(0.85, 1.03, (2e-4, 0.0, 1e-4))
+#: Eight presses (t, θ level index): rest, normal at three depths, shear at four.
+PRESSES = [(0.0, 0), (0.4, 0), (0.8, 0), (1.0, 0), (0.5, 4), (0.9, 4), (0.7, 2), (1.0, 4)]
+
+
+def _pick(L, presses):
+    th = np.unique(L[:, 1])
+    return np.array([np.flatnonzero(np.isclose(L[:, 0], t) & (L[:, 1] == th[k]))[0]
+                     for t, k in presses])
+
+
+def test_unit_recovered_from_eight_model_presses(smap, sigma):
+    """A synthetic unit of the models themselves, presses with 1 µT and 1 mN of noise."""
+    rng = np.random.default_rng(7)
+    unit = replace(smap, field_source="exact").with_unit(TRUE)
+    th = smap.theta_m
+    loads = np.array([[t, th * k / 4, rng.uniform(-np.pi, np.pi)] for t, k in PRESSES])
+    B, F = unit.at_load(loads[:, 0], loads[:, 1], loads[:, 2])
+    presses = Presses(B + rng.normal(0, 1e-6, B.shape), F + rng.normal(0, 1e-3, F.shape),
+                      sigma_B=1e-6, sigma_F=1e-3)
+    cal = calibrate_unit(smap, presses)
+    u = cal.unit
+    assert u.G_scale == pytest.approx(0.85, rel=0.02) and u.B_scale == pytest.approx(1.03,
+                                                                                     rel=0.02)
+    np.testing.assert_allclose(u.chip_offset, TRUE.chip_offset, atol=2e-5)
+    L = smap.region_samples(1000, seed=8)
+    Bo, Fo = unit.at_load(0.98 * L[:, 0], 0.98 * L[:, 1], L[:, 2])
+    r = cal.corrected.force(Bo)
+    assert (r.flag == OK).mean() > 0.99
+    ok = r.flag == OK
+    assert np.abs(r.F[ok, :2] - Fo[ok, :2]).max() <= 2 * sigma[0] * 5
+    assert np.abs(r.F[ok, 2] - Fo[ok, 2]).max() <= 2 * sigma[1] * 5
+
+
+def test_unit_from_fe_presses_recovers_stiffness_and_shear_offset(smap):
+    """A synthetic unit made from the bundled FE paths at H = 3 mm (forces of the FE solution,
+    the exact field at the unit's shifted chip): the metamodels' own error against the FE
+    forces limits what the fit recovers (docs/method.md §12.3)."""
+    B, F, L = fe_readings(load_bundled(), smap, TRUE, seed=3)
+    k = _pick(L, PRESSES)
+    cal = calibrate_unit(smap, Presses(B[k], F[k]))
+    assert cal.unit.G_scale == pytest.approx(0.85, rel=0.02)
+    assert cal.unit.B_scale == pytest.approx(1.03, rel=0.025)
+    assert cal.unit.chip_offset[0] == pytest.approx(2e-4, abs=2e-5)
+    assert abs(cal.unit.chip_offset[1]) <= 2e-5
+
+
+def test_all_normal_presses_do_not_identify_a_shear_offset(smap):
+    B, F, L = fe_readings(load_bundled(), smap, TRUE, seed=3)
+    k = _pick(L, [(t, 0) for t in (0.0, 0.2, 0.3, 0.4, 0.6, 0.8, 0.9, 1.0)])
+    fit = PARAMETERS[:2] + ("chip_offset_x", "chip_offset_y", "field_offset_x",
+                            "field_offset_y")
+    with pytest.raises(MagtactError, match=r"do not identify field_offset_x .*sheared along x"):
+        calibrate_unit(smap, Presses(B[k], F[k]), fit=fit)
+
+
+def test_too_few_presses_and_unknown_parameters_refused(smap):
+    B, F = smap.at_load(np.array([0.5]), 0.2)
+    with pytest.raises(MagtactError, match="1 presses cannot identify 5 parameters"):
+        calibrate_unit(smap, Presses(B, F))
+    with pytest.raises(MagtactError, match="unknown unit parameters"):
+        calibrate_unit(smap, Presses(np.repeat(B, 3, 0), np.repeat(F, 3, 0)), fit=("G",))
+
+
+# ---- press files -----------------------------------------------------------------------------
+def test_press_file_round_trip_and_bad_files(tmp_path, smap):
+    B, F = smap.at_load(np.array([0.3, 0.6, 0.9]), 0.2, 0.4)
+    path = write_presses(Presses(B, F, sigma_B=2e-6, sigma_F=3e-3), tmp_path / "p.csv")
+    back = read_presses(path)
+    np.testing.assert_allclose(back.B, B, rtol=1e-11)
+    assert back.sigma_B == pytest.approx(2e-6) and back.sigma_F == pytest.approx(3e-3)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("B_x_T,B_y_T,B_z_T,F_x_N,F_z_N\n0,0,0.03,0,0\n")
+    with pytest.raises(MagtactError, match=r"bad.csv: line 1: missing column 'F_y_N'"):
+        read_presses(bad)
+    bad.write_text("B_x_T,B_y_T,B_z_T,F_x_N,F_y_N,F_z_N\n0,0,nan,0,0,0\n")
+    with pytest.raises(MagtactError, match=r"line 2, column 'B_z_T': 'nan' is not a finite"):
+        read_presses(bad)
+    bad.write_text("B_x_T,B_y_T,B_z_T,F_x_N,F_y_N,F_z_N\n0,0,,0,0,0\n")
+    with pytest.raises(MagtactError, match=r"line 2, column 'B_z_T': empty cell"):
+        read_presses(bad)
+    with pytest.raises(MagtactError, match="no such press file"):
+        read_presses(tmp_path / "none.csv")
+
+
+def test_cli_refuses_bad_input_in_one_line(tmp_path):
+    from typer.testing import CliRunner
+
+    from magtact.cli import app
+
+    bad = tmp_path / "presses.csv"
+    bad.write_text("B_x_T,B_y_T,B_z_T,F_x_N,F_y_N\n0,0,0.03,0,0\n")
+    runner = CliRunner()
+    r = runner.invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--presses", str(bad),
+                            "--noise-uT", "1"])
+    assert r.exit_code != 0 and "missing column 'F_z_N'" in str(r.exception)
+    r = runner.invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--H", "3"])
+    assert "give both --H and --G" in str(r.exception)
+
+
+# ---- the figure ------------------------------------------------------------------------------
+def test_calibration_figure_shows_the_error_and_the_frontier(smap, sigma, firmware):
+    grid = error_grid(smap, firmware, n=9)
+    cal = Calibration(smap, (NOISE, NOISE), "given", sigma, 0.0, firmware, None, grid)
+    axes = draw_calibration(Figure(), cal)
+    shown = axes[1].collections[0].get_array().reshape(9, 9)
+    np.testing.assert_allclose(shown, grid["err_z"] * 1e3)
+    assert f"{sigma[1] * 1e3:.3g} mN" in axes[1].get_title()
+    assert axes[2].get_xlabel() == "size (bytes)"
+    xs = np.concatenate([ln.get_xdata() for ln in axes[2].lines if ln.get_label() != "chosen"
+                         and len(ln.get_xdata())])
+    assert sorted(xs) == sorted(a.bytes for a in firmware.candidates)
