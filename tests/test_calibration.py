@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import io
 import shutil
 import subprocess
 from dataclasses import replace
@@ -67,7 +68,8 @@ def sigma(models, study, design):
 
 @pytest.fixture(scope="module")
 def firmware(smap, sigma):
-    return firmware_approximation(smap, sigma, degrees=(10, 12), table_sizes=(16,))
+    return firmware_approximation(smap, sigma, degrees=(10, 12), table_sizes=(16,),
+                                  n_test=4000)
 
 
 # ---- the map ---------------------------------------------------------------------------------
@@ -148,16 +150,19 @@ def test_c_header_compiles_and_equals_python(tmp_path, smap, firmware):
             "printf(\"%.9e %.9e %.9e %d\\n\",(double)o[0],(double)o[1],(double)o[2],f);}"
             "return 0;}\n")
     (tmp_path / "main.c").write_text(main)
-    for real, tol in (("float", 1e-5), ("double", 1e-9)):
+    # the default build (double) equals the Python approximation to 1e-9 of the force range;
+    # float32 adds its rounding (about 1e-5 of the range with a degree-12 polynomial)
+    for real, tol in (("double", 1e-9), ("float", 5e-5)):
         exe = tmp_path / f"calib_{real}"
         subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-pedantic", f"-DMAGTACT_REAL={real}",
                         "-o", str(exe), str(tmp_path / "main.c"), "-lm"], check=True,
                        capture_output=True)
-        out = np.loadtxt(subprocess.run([str(exe)], input=(tmp_path / "in.txt").read_text(),
-                                        capture_output=True, text=True, check=True).stdout)
+        run = subprocess.run([str(exe)], input=(tmp_path / "in.txt").read_text(),
+                             capture_output=True, text=True, check=True)
+        out = np.loadtxt(io.StringIO(run.stdout))
         F_py, inside = a.evaluate(B)
         scale = max(smap.ranges)  # relative to the force range of the design
-        assert np.abs(out[:, :3] - F_py).max() <= tol * scale
+        assert np.abs(out[inside, :3] - F_py[inside]).max() <= tol * scale
         assert (out[:, 3] == 0).sum() > 800
         agree = (out[:, 3] == 0) == inside
         assert agree.mean() >= 0.999, f"{real}: region flags differ on {np.sum(~agree)} readings"
@@ -175,27 +180,31 @@ def _pick(L, presses):
                      for t, k in presses])
 
 
-def test_unit_recovered_from_eight_model_presses(smap, sigma):
-    """A synthetic unit of the models themselves, presses with 1 µT and 1 mN of noise."""
+@pytest.mark.parametrize("noise", [0.0, 1.0])
+def test_unit_recovered_from_eight_model_presses(smap, sigma, noise):
+    """A synthetic unit of the models themselves; presses exact, or with noise × (1 µT, 1 mN).
+    Exact presses: the corrected map within 2 σ_F on 1,000 other readings."""
     rng = np.random.default_rng(7)
     unit = replace(smap, field_source="exact").with_unit(TRUE)
     th = smap.theta_m
     loads = np.array([[t, th * k / 4, rng.uniform(-np.pi, np.pi)] for t, k in PRESSES])
     B, F = unit.at_load(loads[:, 0], loads[:, 1], loads[:, 2])
-    presses = Presses(B + rng.normal(0, 1e-6, B.shape), F + rng.normal(0, 1e-3, F.shape),
-                      sigma_B=1e-6, sigma_F=1e-3)
+    presses = Presses(B + noise * rng.normal(0, 1e-6, B.shape),
+                      F + noise * rng.normal(0, 1e-3, F.shape), sigma_B=1e-6, sigma_F=1e-3)
     cal = calibrate_unit(smap, presses)
     u = cal.unit
     assert u.G_scale == pytest.approx(0.85, rel=0.02) and u.B_scale == pytest.approx(1.03,
                                                                                      rel=0.02)
     np.testing.assert_allclose(u.chip_offset, TRUE.chip_offset, atol=2e-5)
+    if noise:
+        return
     L = smap.region_samples(1000, seed=8)
     Bo, Fo = unit.at_load(0.98 * L[:, 0], 0.98 * L[:, 1], L[:, 2])
     r = cal.corrected.force(Bo)
-    assert (r.flag == OK).mean() > 0.99
     ok = r.flag == OK
-    assert np.abs(r.F[ok, :2] - Fo[ok, :2]).max() <= 2 * sigma[0] * 5
-    assert np.abs(r.F[ok, 2] - Fo[ok, 2]).max() <= 2 * sigma[1] * 5
+    assert ok.all()
+    assert np.abs(r.F[:, :2] - Fo[:, :2]).max() <= 2 * sigma[0]
+    assert np.abs(r.F[:, 2] - Fo[:, 2]).max() <= 2 * sigma[1]
 
 
 def test_unit_from_fe_presses_recovers_stiffness_and_shear_offset(smap):
@@ -273,6 +282,6 @@ def test_calibration_figure_shows_the_error_and_the_frontier(smap, sigma, firmwa
     np.testing.assert_allclose(shown, grid["err_z"] * 1e3)
     assert f"{sigma[1] * 1e3:.3g} mN" in axes[1].get_title()
     assert axes[2].get_xlabel() == "size (bytes)"
-    xs = np.concatenate([ln.get_xdata() for ln in axes[2].lines if ln.get_label() != "chosen"
-                         and len(ln.get_xdata())])
+    xs = np.concatenate([ln.get_xdata() for ln in axes[2].lines
+                         if ln.get_label().split(" ")[0] in ("poly", "table")])
     assert sorted(xs) == sorted(a.bytes for a in firmware.candidates)
