@@ -143,11 +143,11 @@ def test_c_header_compiles_and_equals_python(tmp_path, smap, firmware):
     L = smap.region_samples(1000, seed=6)
     B, _ = smap.at_load(L[:, 0], L[:, 1], L[:, 2])
     B[::10] *= rng.uniform(0.3, 1.5, (100, 1))  # some readings outside the region
-    np.savetxt(tmp_path / "in.txt", B, fmt="%.9e")
+    np.savetxt(tmp_path / "in.txt", B, fmt="%.17e")
     main = ("#include <stdio.h>\n#include \"force.h\"\nint main(void){double x,y,z;"
             "MAGTACT_REAL o[3];while(scanf(\"%lf %lf %lf\",&x,&y,&z)==3){"
             "int f=force((MAGTACT_REAL)x,(MAGTACT_REAL)y,(MAGTACT_REAL)z,o);"
-            "printf(\"%.9e %.9e %.9e %d\\n\",(double)o[0],(double)o[1],(double)o[2],f);}"
+            "printf(\"%.17e %.17e %.17e %d\\n\",(double)o[0],(double)o[1],(double)o[2],f);}"
             "return 0;}\n")
     (tmp_path / "main.c").write_text(main)
     # the default build (double) equals the Python approximation to 1e-9 of the force range;

@@ -316,7 +316,7 @@ def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
 
 # ---- writers ---------------------------------------------------------------------------------
 def _c_array(name: str, values) -> str:
-    vals = [f"{float(v):.9e}" for v in np.ravel(values)]
+    vals = [f"{float(v):.17g}" for v in np.ravel(values)]
     lines = [", ".join(vals[k:k + 4]) for k in range(0, len(vals), 4)]
     return (f"static const MAGTACT_REAL {name}[{len(vals)}] = {{\n    "
             + ",\n    ".join(lines) + "\n};\n")
@@ -347,7 +347,8 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
            else f" {a.degree} x {a.degree} bilinear in (b_r, b_z)") + "\n"
         f" *   largest error over the region (held out): F_r {from_si(a.err_r, 'mN'):.4g} mN, "
         f"F_z {from_si(a.err_z, 'mN'):.4g} mN\n" + target +
-        f" *   size: {a.bytes} bytes as float, {a.multiplies} multiplications per call\n"
+        f" *   size: {a.bytes} bytes of float32 numbers (about twice in double), "
+        f"{a.multiplies} multiplications per call\n"
         " * force() returns 0 inside the region, 1 outside (out is then not a measurement).\n"
         " * Arithmetic in double by default; define MAGTACT_REAL as float before including for\n"
         " * single precision (its rounding adds about 1e-5 of the force range). */\n"
