@@ -154,8 +154,8 @@ def main() -> None:
             "flagged_in_region": int((inside & (r.flag != OK)).sum()),
             "map_err_max_mN": {"r": 1e3 * float(np.abs(r.F[ok, 0] - F[ok, 0]).max()),
                                "z": 1e3 * float(np.abs(r.F[ok, 2] - F[ok, 2]).max())},
-            "model_err_max_mN": {"r": 1e3 * float(np.abs(Fm[0][inside] - F[inside, 0]).max()),
-                                 "z": 1e3 * float(np.abs(Fm[1][inside] - F[inside, 2]).max())},
+            "model_err_max_mN": {"r": 1e3 * float(np.abs(Fm[inside, 0] - F[inside, 0]).max()),
+                                 "z": 1e3 * float(np.abs(Fm[inside, 1] - F[inside, 2]).max())},
             "F_z_max_N": float(F[inside, 2].max()),
         })
         print("held-out", json.dumps(held[-1]))

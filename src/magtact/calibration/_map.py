@@ -347,6 +347,9 @@ class SensorMap:
             For readings that are not finite or not 3-vectors.
         """
         B = _check_readings(B)
+        if B.size == 0:
+            e = np.zeros(B.shape[:-1])
+            return Reading(np.zeros(B.shape), e.astype(np.int8), e, e, e, np.zeros(B.shape))
         w, ok = self._invert(self.B_of, B, "B")
         flag = self._flags(w, ok, "B")
         F_model = self.F_of(w)
@@ -360,6 +363,8 @@ class SensorMap:
         """The field readings (..., 3) [T] of forces F (..., 3) [N], and their flags: the
         forward map through the inverse of F(t, θ) (NaN where the flag is not OK)."""
         F = _check_readings(F, "F")
+        if F.size == 0:
+            return np.zeros(F.shape), np.zeros(F.shape[:-1], dtype=np.int8)
         w, ok = self._invert(self.F_of, F, "F")
         flag = self._flags(w, ok, "F")
         B = np.where((flag == OK)[..., None], self.B_of(w), np.nan)
