@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import csv
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +44,8 @@ N_EDGE = 16
 N_TRAIN, N_TEST = 2500, 20000
 #: Size budget when no candidate reaches the target [bytes].
 BUDGET = 32768
+#: Slack of the two-stage candidate's region test, in the features.
+REGION_SLACK = 1e-6
 
 
 @dataclass(frozen=True)
@@ -67,17 +69,22 @@ class Approximation:
     err_r: float = float("nan")
     err_z: float = float("nan")
     meta: dict = field(default_factory=dict)
+    #: ``"features"`` only: the second stage and the unit's corrections (see
+    #: :func:`fit_features`).
+    stage: dict = field(default_factory=dict)
 
     @property
     def n_coefficients(self) -> int:
-        return int(self.coef_r.size + self.coef_z.size)
+        extra = sum(np.size(self.stage[k]) for k in ("coef_p", "coef_q")) if self.stage else 0
+        return int(self.coef_r.size + self.coef_z.size + extra)
 
     @property
     def bytes(self) -> int:
         """Stored numbers (coefficients, limits, polygon) × 4 bytes (float32), plus the
         polynomial's exponent table (2 bytes per term)."""
-        extra = 2 * len(basis_terms(self.degree)) if self.kind == "poly" else 0
-        return BYTES * (self.n_coefficients + 4 + self.polygon.size) + extra
+        extra = 2 * len(basis_terms(self.degree)) if self.kind != "table" else 0
+        consts = 4 + (4 + 9 + 2 if self.kind == "features" else 0)
+        return BYTES * (self.n_coefficients + consts + self.polygon.size) + extra
 
     @property
     def multiplies(self) -> int:
@@ -87,8 +94,10 @@ class Approximation:
             return common + 4 + 2 * 4 + 2  # scaled indices, two bilinear blends, weights
         n = self.degree
         terms = len(basis_terms(n))
-        return common + 4 + 2 * 2 * max(n - 1, 0) + 3 * terms + (1 if self.transform != "B_z"
-                                                                    else 0)
+        one = 4 + 2 * 2 * max(n - 1, 0) + 3 * terms  # scaling, recurrences, the sum
+        if self.kind == "features":  # the unit's correction, two stages, the directions
+            return common + 7 + 2 * one + 2 + (1 if self.transform != "B_z" else 0)
+        return common + one + (1 if self.transform != "B_z" else 0)
 
     # ---- evaluation ------------------------------------------------------------------------
     def planar(self, b_r, b_z) -> tuple[np.ndarray, np.ndarray]:
@@ -106,6 +115,8 @@ class Approximation:
     def evaluate(self, B) -> tuple[np.ndarray, np.ndarray]:
         """(F (..., 3) [N], inside (...)) of readings B (..., 3) [T], as the C function."""
         B = np.asarray(B, dtype=float)
+        if self.kind == "features":
+            return _evaluate_features(self, B)
         b_r = np.hypot(B[..., 0], B[..., 1])
         F_r, F_z = self.planar(b_r, B[..., 2])
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -119,11 +130,13 @@ class Approximation:
             "format": "magtact-calibration/1", "kind": self.kind, "degree": self.degree,
             "transform": self.transform, "limits": list(self.limits),
             "coef_r": self.coef_r.tolist(), "coef_z": self.coef_z.tolist(),
-            "basis": [list(ij) for ij in basis_terms(self.degree)] if self.kind == "poly"
+            "basis": [list(ij) for ij in basis_terms(self.degree)] if self.kind != "table"
             else None,
             "polygon_T": self.polygon.tolist(), "max_error_F_r_N": self.err_r,
             "max_error_F_z_N": self.err_z, "bytes": self.bytes,
-            "multiplies": self.multiplies, **self.meta,
+            "multiplies": self.multiplies,
+            "stage": {k: np.asarray(v).tolist() for k, v in self.stage.items()},
+            **self.meta,
         }
 
 
@@ -183,17 +196,18 @@ def region_polygon(smap: SensorMap, n: int = N_EDGE) -> np.ndarray:
 
 
 def _samples(smap: SensorMap, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Readings and forces of n loads over the region, at random azimuths."""
     L = smap.region_samples(n, seed)
-    B, F = smap.at_load(L[:, 0], L[:, 1], 0.0)
-    return B, F
+    return smap.at_load(L[:, 0], L[:, 1], L[:, 2])
 
 
 def _test_set(smap: SensorMap, n: int, seed: int):
     B, F = _samples(smap, n, seed)
     s = np.linspace(0.0, 1.0, 200)
-    edges = np.concatenate([smap.features(smap.t_m * s, smap.theta_m),
-                            smap.features(smap.t_m, smap.theta_m * s),
-                            smap.features(smap.t_m * s, 0.0)])
+    phi = np.random.default_rng(seed).uniform(-np.pi, np.pi, 200)
+    edges = np.concatenate([smap.features(smap.t_m * s, smap.theta_m, phi),
+                            smap.features(smap.t_m, smap.theta_m * s, phi),
+                            smap.features(smap.t_m * s, 0.0, phi)])
     return np.concatenate([B, smap.B_of(edges)]), np.concatenate([F, smap.F_of(edges)])
 
 
@@ -232,12 +246,90 @@ def fit_table(smap: SensorMap, n: int, polygon) -> Approximation:
 
 
 def _measured(a: Approximation, test) -> Approximation:
+    """``a`` with its largest errors on the readings ``test`` = (B, F): |ΔF_xy| (the shear
+    force's error, ``err_r``) and |ΔF_z|."""
     B, F = test
-    F_r = np.hypot(F[:, 0], F[:, 1]) * np.sign(F[:, 0] * B[:, 0] + F[:, 1] * B[:, 1])
-    pr, pz = a.planar(np.hypot(B[:, 0], B[:, 1]), B[:, 2])
-    return Approximation(a.kind, a.degree, a.transform, a.limits, a.coef_r, a.coef_z,
-                         a.polygon, float(np.abs(pr - F_r).max()),
-                         float(np.abs(pz - F[:, 2]).max()), a.meta)
+    approx, _ = a.evaluate(B)
+    return replace(a, err_r=float(np.hypot(*(approx[:, :2] - F[:, :2]).T).max()),
+                   err_z=float(np.abs(approx[:, 2] - F[:, 2]).max()))
+
+
+# ---- the two-stage approximation: the load features, then the force -------------------------
+def _cheb_fit(x, y, degree, targets):
+    lim = (float(x.min()), float(x.max()), float(y.min()), float(y.max()))
+    A = _basis(2 * (x - lim[0]) / (lim[1] - lim[0]) - 1, 2 * (y - lim[2]) / (lim[3] - lim[2]) - 1,
+               degree)
+    c = np.linalg.lstsq(A, np.stack(targets, axis=-1), rcond=None)[0]
+    return lim, [c[:, k] for k in range(len(targets))]
+
+
+def _cheb_eval(lim, coef, x, y, degree):
+    A = _basis(2 * (x - lim[0]) / (lim[1] - lim[0]) - 1, 2 * (y - lim[2]) / (lim[3] - lim[2]) - 1,
+               degree)
+    return [A @ c for c in coef]
+
+
+def fit_features(smap: SensorMap, degree: int, transform: str, seed: int = 0) -> Approximation:
+    """A two-stage candidate, for a design and for a built unit (docs/method.md §12.2).
+
+    A unit's field is its design's field at shifted load features, scaled and offset:
+    B(w) = s B₀(w + δ) + b with δ = (−d_z, d_x, d_y) / a (a chip offset d is a displacement of
+    the magnet the other way; a, §5), and its force is g F₀(w). So: (1) the corrected reading
+    B' = (B − b) / s; (2) the features (p', q') of the design's axisymmetric field from
+    (|B'_xy|, B'_z), a Chebyshev polynomial of degree ``degree`` as in ``poly``, and
+    q' = q' B'_xy / |B'_xy|; (3) w = w' − δ; (4) F = g (f_r(p, |q|) q / |q|, f_z(p, |q|)), the
+    design's force per Chebyshev polynomial of the same degree in (p, |q|). The region test is
+    exact in the features: 0 ≤ p ≤ t_m, |q| ≤ p tan θ_m.
+    """
+    unit = smap.unit
+    base = replace(smap, unit=type(unit)())
+    a, _ = smap._path
+    d = unit.chip_offset
+    delta = np.array([-d[2] / a, d[0] / a, d[1] / a])
+    margin = float(np.abs(delta).max()) + 0.02 * smap.t_m
+    rng = np.random.default_rng(seed + 5)
+    n = N_TRAIN
+    p = rng.uniform(-margin, smap.t_m + margin, n)
+    q = rng.uniform(0.0, 1.0, n) * (np.maximum(p, 0.0) * np.tan(smap.theta_m) + margin)
+    w = np.stack([p, q, np.zeros(n)], axis=-1)
+    B0 = base.B_of(w)
+    b_r, v = B0[:, 0], TRANSFORMS[transform][0](B0[:, 2])
+    lim_b, (c_p, c_q) = _cheb_fit(b_r, v, degree, [p, q])
+    # the force per unit of the unit's g, over the region (with the same margin)
+    pf = rng.uniform(0.0, smap.t_m + margin, n)
+    qf = rng.uniform(0.0, 1.0, n) * (pf * np.tan(smap.theta_m) + margin)
+    F0 = base.F_of(np.stack([pf, qf, np.zeros(n)], axis=-1))
+    lim_f, (c_r, c_z) = _cheb_fit(pf, qf, degree, [F0[:, 0], F0[:, 2]])
+    stage = {"coef_p": c_p, "coef_q": c_q, "limits_pq": np.array(lim_f),
+             "B_scale": unit.B_scale, "field_offset": np.array(unit.field_offset),
+             "G_scale": unit.G_scale, "delta": delta,
+             "region": np.array([smap.t_m, np.tan(smap.theta_m)])}
+    return Approximation("features", degree, transform, lim_b, c_r, c_z, np.zeros((0, 2)),
+                         stage=stage)
+
+
+def _evaluate_features(ap: Approximation, B) -> tuple[np.ndarray, np.ndarray]:
+    st = ap.stage
+    Bc = (B - np.asarray(st["field_offset"])) / st["B_scale"]
+    b_r = np.hypot(Bc[..., 0], Bc[..., 1])
+    v = TRANSFORMS[ap.transform][0](Bc[..., 2])
+    p1, q1 = _cheb_eval(ap.limits, [st["coef_p"], st["coef_q"]], b_r, v, ap.degree)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cx = np.where(b_r > 0, Bc[..., 0] / np.where(b_r > 0, b_r, 1.0), 1.0)
+        cy = np.where(b_r > 0, Bc[..., 1] / np.where(b_r > 0, b_r, 1.0), 0.0)
+    delta = np.asarray(st["delta"])
+    p = p1 - delta[0]
+    qx, qy = q1 * cx - delta[1], q1 * cy - delta[2]
+    q = np.hypot(qx, qy)
+    f_r, f_z = _cheb_eval(tuple(st["limits_pq"]), [ap.coef_r, ap.coef_z], p, q, ap.degree)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ux = np.where(q > 0, qx / np.where(q > 0, q, 1.0), 0.0)
+        uy = np.where(q > 0, qy / np.where(q > 0, q, 1.0), 0.0)
+    g = st["G_scale"]
+    t_m, tan_m = st["region"]
+    inside = (p >= -REGION_SLACK) & (p <= t_m + REGION_SLACK) & (
+        q <= np.maximum(p, 0.0) * tan_m + REGION_SLACK)
+    return np.stack([g * f_r * ux, g * f_r * uy, g * f_z], axis=-1), inside
 
 
 @dataclass(frozen=True)
@@ -295,8 +387,11 @@ def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
     polygon = region_polygon(smap)
     train = _samples(smap, N_TRAIN, seed + 1)
     test = _test_set(smap, n_test, seed + 2)
-    cands = [fit_poly(smap, n, tr, train, polygon) for tr in TRANSFORMS for n in degrees]
-    cands += [fit_table(smap, n, polygon) for n in table_sizes]
+    axisymmetric = not any(smap.unit.chip_offset) and not any(smap.unit.field_offset[:2])
+    cands = [fit_features(smap, n, tr, seed) for tr in TRANSFORMS for n in degrees]
+    if axisymmetric:  # the planar forms need a map that is the same at every azimuth
+        cands += [fit_poly(smap, n, tr, train, polygon) for tr in TRANSFORMS for n in degrees]
+        cands += [fit_table(smap, n, polygon) for n in table_sizes]
     cands = [_measured(a, test) for a in cands]
 
     def score(a):
@@ -344,14 +439,17 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
         f"F_r down to -{d['F_r_range_N']:.4g} N, F_z up to {d['F_z_range_N']:.4g} N\n"
         f" *   approximation: {a.kind}"
         + (f" of degree {a.degree} in b_r and {a.transform}" if a.kind == "poly"
-           else f" {a.degree} x {a.degree} bilinear in (b_r, b_z)") + "\n"
+           else f" {a.degree} x {a.degree} bilinear in (b_r, b_z)" if a.kind == "table"
+           else f": load features of degree {a.degree} in b_r and {a.transform}, then the "
+                f"force of degree {a.degree} in the features") + "\n"
+        + _unit_line(smap) +
         f" *   largest error over the region (held out): F_r {from_si(a.err_r, 'mN'):.4g} mN, "
         f"F_z {from_si(a.err_z, 'mN'):.4g} mN\n" + target +
         f" *   size: {a.bytes} bytes of float32 numbers (about twice in double), "
         f"{a.multiplies} multiplications per call\n"
         " * force() returns 0 inside the region, 1 outside (out is then not a measurement).\n"
         " * Arithmetic in double by default; define MAGTACT_REAL as float before including for\n"
-        " * single precision (its rounding adds about 1e-5 of the force range). */\n"
+        " * single precision (its rounding adds up to about 2e-4 of the force range). */\n"
         "#ifndef MAGTACT_CALIBRATION_H\n#define MAGTACT_CALIBRATION_H\n#include <math.h>\n"
         "#ifndef MAGTACT_REAL\n#define MAGTACT_REAL double\n#endif\n\n")
     body = _c_array("magtact_coef_r", a.coef_r) + _c_array("magtact_coef_z", a.coef_z)
@@ -411,11 +509,86 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
         "    if (br > 0) {\n        out[0] = fr * bx / br;\n        out[1] = fr * by / br;\n"
         "    } else {\n        out[0] = 0;\n        out[1] = 0;\n    }\n"
         "    out[2] = fz;\n    return inside ? 0 : 1;\n}\n\n#endif\n")
+    if a.kind == "features":
+        return head + _c_features(a)
     if a.kind == "poly" and a.transform == "B_z^(-1/3)":
         func = func.replace("1.0 / cbrt(bz)", "(MAGTACT_REAL)(1.0 / cbrt((double)bz))")
     if a.kind == "poly" and a.transform == "1/B_z":
         func = func.replace("= 1.0 / bz;", "= (MAGTACT_REAL)(1.0 / (double)bz);")
     return head + body + func
+
+
+def _unit_line(smap: SensorMap) -> str:
+    u = smap.unit
+    if u.nominal:
+        return ""
+    d = ", ".join(f"{mm(v):.4g}" for v in u.chip_offset)
+    b = ", ".join(f"{from_si(v, 'mT'):.4g}" for v in u.field_offset)
+    return (f" *   built unit: G x {u.G_scale:.5g}, remanence x {u.B_scale:.5g}, chip offset "
+            f"({d}) mm, field offset ({b}) mT\n")
+
+
+def _c_features(a: Approximation) -> str:
+    """The body of the two-stage C function (see :func:`fit_features`)."""
+    st = a.stage
+    n = a.degree
+    terms = basis_terms(n)
+    lo_r, hi_r, lo_v, hi_v = a.limits
+    lo_p, hi_p, lo_q, hi_q = (float(v) for v in st["limits_pq"])
+    b0 = [float(v) for v in st["field_offset"]]
+    d = [float(v) for v in st["delta"]]
+    t_m, tan_m = (float(v) for v in st["region"])
+    ii = ", ".join(str(i) for i, _ in terms)
+    jj = ", ".join(str(j) for _, j in terms)
+    body = (_c_array("magtact_coef_p", st["coef_p"]) + _c_array("magtact_coef_q", st["coef_q"])
+            + _c_array("magtact_coef_r", a.coef_r) + _c_array("magtact_coef_z", a.coef_z)
+            + f"static const unsigned char magtact_i[{len(terms)}] = {{{ii}}};\n"
+            + f"static const unsigned char magtact_j[{len(terms)}] = {{{jj}}};\n\n")
+    body += (
+        "/* two sums of c[k] T_i(xi) T_j(eta) over the basis (i, j) = (magtact_i[k], "
+        "magtact_j[k]) */\n"
+        "static void magtact_cheb2(const MAGTACT_REAL *c1, const MAGTACT_REAL *c2, "
+        "MAGTACT_REAL xi,\n                          MAGTACT_REAL eta, MAGTACT_REAL *s1, "
+        "MAGTACT_REAL *s2)\n{\n"
+        f"    MAGTACT_REAL tx[{n + 1}], ty[{n + 1}], a = 0, b = 0;\n    int k;\n"
+        "    tx[0] = 1; ty[0] = 1;\n    tx[1] = xi; ty[1] = eta;\n"
+        f"    for (k = 2; k <= {n}; k++) {{\n"
+        "        tx[k] = 2 * xi * tx[k - 1] - tx[k - 2];\n"
+        "        ty[k] = 2 * eta * ty[k - 1] - ty[k - 2];\n    }\n"
+        f"    for (k = 0; k < {len(terms)}; k++) {{\n"
+        "        MAGTACT_REAL t = tx[magtact_i[k]] * ty[magtact_j[k]];\n"
+        "        a += c1[k] * t;\n        b += c2[k] * t;\n    }\n"
+        "    *s1 = a;\n    *s2 = b;\n}\n\n")
+    v = {"B_z": "cz", "1/B_z": "(MAGTACT_REAL)(1.0 / (double)cz)",
+         "B_z^(-1/3)": "(MAGTACT_REAL)(1.0 / cbrt((double)cz))"}[a.transform]
+    body += (
+        "static int force(MAGTACT_REAL bx, MAGTACT_REAL by, MAGTACT_REAL bz, "
+        "MAGTACT_REAL out[3])\n{\n"
+        f"    const MAGTACT_REAL s = {float(st['B_scale']):.17g}, g = "
+        f"{float(st['G_scale']):.17g};\n"
+        f"    MAGTACT_REAL cx = (bx - ({b0[0]:.17g})) / s;\n"
+        f"    MAGTACT_REAL cy = (by - ({b0[1]:.17g})) / s;\n"
+        f"    MAGTACT_REAL cz = (bz - ({b0[2]:.17g})) / s;\n"
+        "    MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(cx * cx + cy * cy));\n"
+        f"    MAGTACT_REAL v = {v};\n"
+        "    MAGTACT_REAL p, q1, qx, qy, q, fr, fz, ux = 1, uy = 0;\n"
+        f"    magtact_cheb2(magtact_coef_p, magtact_coef_q,\n"
+        f"                  2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1,\n"
+        f"                  2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1, &p, &q1);\n"
+        "    if (br > 0) {\n        ux = cx / br;\n        uy = cy / br;\n    }\n"
+        f"    p -= ({d[0]:.17g});\n"
+        f"    qx = q1 * ux - ({d[1]:.17g});\n    qy = q1 * uy - ({d[2]:.17g});\n"
+        "    q = (MAGTACT_REAL)sqrt((double)(qx * qx + qy * qy));\n"
+        f"    magtact_cheb2(magtact_coef_r, magtact_coef_z,\n"
+        f"                  2 * (p - ({lo_p:.17g})) / ({hi_p - lo_p:.17g}) - 1,\n"
+        f"                  2 * (q - ({lo_q:.17g})) / ({hi_q - lo_q:.17g}) - 1, &fr, &fz);\n"
+        "    if (q > 0) {\n        out[0] = g * fr * qx / q;\n        out[1] = g * fr * qy / q;\n"
+        "    } else {\n        out[0] = 0;\n        out[1] = 0;\n    }\n"
+        "    out[2] = g * fz;\n"
+        f"    return (p >= -{REGION_SLACK!r} && p <= {t_m:.17g} + {REGION_SLACK!r}\n"
+        f"            && q <= (p > 0 ? p : 0) * {tan_m:.17g} + {REGION_SLACK!r}) ? 0 : 1;\n"
+        "}\n\n#endif\n")
+    return body
 
 
 def write_table_csv(smap: SensorMap, path: Path, n: int = 64) -> Path:
@@ -458,8 +631,10 @@ def load_approximation(data: dict) -> Approximation:
     return Approximation(data["kind"], int(data["degree"]), data["transform"],
                          tuple(data["limits"]), np.asarray(data["coef_r"], float),
                          np.asarray(data["coef_z"], float),
-                         np.asarray(data["polygon_T"], float), data["max_error_F_r_N"],
-                         data["max_error_F_z_N"])
+                         np.asarray(data["polygon_T"], float).reshape(-1, 2),
+                         data["max_error_F_r_N"], data["max_error_F_z_N"],
+                         stage={k: np.asarray(v, float) if isinstance(v, list) else v
+                                for k, v in (data.get("stage") or {}).items()})
 
 
 def write_json(obj: dict, path: Path) -> Path:

@@ -30,13 +30,14 @@ def draw_calibration(fig, cal) -> list:
                      f"σ_F {from_si(sigma, 'mN'):.3g} mN", fontsize=8)
     ax = axes[2]
     rows = cal.firmware.frontier()
-    for kind, marker in (("poly", "o"), ("table", "s")):
+    colours = {"features": "C2", "poly": "C0", "table": "C1"}
+    for kind, marker in (("features", "^"), ("poly", "o"), ("table", "s")):
         sel = [r for r in rows if r["kind"] == kind]
         for filled in (True, False):
             pts = [r for r in sel if r["on_frontier"] == filled]
             if pts:
                 ax.plot([r["bytes"] for r in pts], [r["error_over_sigma"] for r in pts],
-                        marker, color="C0" if kind == "poly" else "C1",
+                        marker, color=colours[kind],
                         mfc=None if filled else "none", ls="none",
                         label=f"{kind}{' (frontier)' if filled else ''}")
     ax.plot([a.bytes], [max(a.err_r / cal.sigma_F[0], a.err_z / cal.sigma_F[1])], "*",
