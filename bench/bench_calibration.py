@@ -201,6 +201,16 @@ def main() -> None:
                          **unit_result(cal, TRUE, Bo, Fo, sig)})
         print("FE unit", json.dumps(fe_units[-1]))
     out["unit_from_fe"] = fe_units
+    # the firmware export of the fitted unit (its map is not axisymmetric: two stages only)
+    choice = firmware_approximation(cal.corrected, sig)
+    a = choice.chosen
+    out["unit_firmware"] = {"kind": a.kind, "degree_or_n": a.degree, "transform": a.transform,
+                            "bytes": a.bytes, "multiplies": a.multiplies,
+                            "max_error_F_r_mN": 1e3 * a.err_r,
+                            "max_error_F_z_mN": 1e3 * a.err_z, "reached": choice.reached,
+                            "frontier": choice.frontier()}
+    print("unit firmware", json.dumps({k: v for k, v in out["unit_firmware"].items()
+                                       if k != "frontier"}))
     # the same FE readings through the exact unit map (true parameters): the models' own error
     truth = unit_map.force(Bo)
     ok = truth.flag == OK

@@ -312,3 +312,19 @@ def test_calibration_figure_shows_the_error_and_the_frontier(smap, sigma, firmwa
     xs = np.concatenate([ln.get_xdata() for ln in axes[2].lines
                          if ln.get_label().split(" ")[0] in ("features", "poly", "table")])
     assert sorted(xs) == sorted(a.bytes for a in firmware.candidates)
+
+
+def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware):
+    from magtact.calibration import write_calibration_outputs
+    from magtact.report import build_report
+
+    cal = Calibration(smap, (NOISE, NOISE), "given", sigma, 3e-12, firmware, None,
+                      error_grid(smap, firmware, n=5))
+    files = write_calibration_outputs(cal, tmp_path / "calibration")
+    assert {p.name for p in files.values()} == {"force.h", "force_map.json", "force_table.csv",
+                                                 "calibration.json"}
+    html = build_report(tmp_path).read_text()
+    section = html[html.index('id="calibration"'):]
+    a = firmware.chosen
+    assert f"{a.kind} ({a.bytes} bytes, {a.multiplies} multiplications)" in section
+    assert "3e-12 of the force range" in section and "reached" in section
