@@ -10,12 +10,15 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from matplotlib.figure import Figure
 
 from magtact import MagtactError
 from magtact.calibration import (
     OK,
     PARAMETERS,
+    PRESS_COLUMNS,
     Calibration,
     Presses,
     UnitParameters,
@@ -328,3 +331,27 @@ def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware):
     a = firmware.chosen
     assert f"{a.kind} ({a.bytes} bytes, {a.multiplies} multiplications)" in section
     assert "3e-12 of the force range" in section and "reached" in section
+
+
+# ---- hostile press files ---------------------------------------------------------------------
+_CELLS = st.one_of(st.floats(allow_nan=True, allow_infinity=True).map(repr), st.text(max_size=6),
+                   st.just(""), st.sampled_from(["1e-3", "-0.2", "nan", "inf", "0x1", "1,2"]))
+
+
+@settings(max_examples=120, deadline=2000, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(header=st.lists(st.sampled_from(list(PRESS_COLUMNS) + ["time_s", "B_x_mT", ""]),
+                       min_size=0, max_size=8),
+       rows=st.lists(st.lists(_CELLS, min_size=0, max_size=8), max_size=4),
+       meta=st.sampled_from(["", "# sigma_B_uT = 2\n", "# sigma_F_mN = -1\n", "# junk\n"]))
+def test_hostile_press_files_give_presses_or_one_message(tmp_path, header, rows, meta):
+    path = tmp_path / "p.csv"
+    path.write_text(meta + ",".join(header) + "\n" + "".join(",".join(r) + "\n" for r in rows),
+                    encoding="utf-8")
+    try:
+        p = read_presses(path)
+    except MagtactError as exc:
+        assert str(exc).startswith(str(path)) and "\n" not in str(exc)
+        return
+    assert set(PRESS_COLUMNS) <= set(header) and len(p) >= 1
+    assert np.isfinite(p.B).all() and np.isfinite(p.F).all() and p.sigma_B > 0
