@@ -200,6 +200,21 @@ def main() -> None:
                          "press_loads_t_theta": [[float(a), float(b)] for a, b, _ in Lfe[k]],
                          **unit_result(cal, TRUE, Bo, Fo, sig)})
         print("FE unit", json.dumps(fe_units[-1]))
+    # the same with the force models' own error in the weights: 1 % of |F| per axis, the order
+    # of f_z's largest relative error in its fit report (0.98 %)
+    eps = (0.01, 0.01)
+    p = Presses(B[k], F[k], sigma_B=5e-6, sigma_F=2e-3)
+    try:
+        calibrate_unit(smap, p, model_error=eps)
+        refusal = None
+    except MagtactError as exc:
+        refusal = str(exc)
+    cal_eps = calibrate_unit(smap, p, model_error=eps,
+                             tolerance={n: 1.0 for n in PARAMETERS})
+    fe_units.append({"weights_sigma_B_uT": 5.0, "weights_sigma_F_mN": 2.0,
+                     "model_error_rel": list(eps), "default_tolerance_refusal": refusal,
+                     **unit_result(cal_eps, TRUE, Bo, Fo, sig)})
+    print("FE unit, model error", json.dumps(fe_units[-1]))
     out["unit_from_fe"] = fe_units
     # the firmware export of the fitted unit (its map is not axisymmetric: two stages only)
     choice = firmware_approximation(cal.corrected, sig)

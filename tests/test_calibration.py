@@ -355,3 +355,14 @@ def test_hostile_press_files_give_presses_or_one_message(tmp_path, header, rows,
         return
     assert set(PRESS_COLUMNS) <= set(header) and len(p) >= 1
     assert np.isfinite(p.B).all() and np.isfinite(p.F).all() and p.sigma_B > 0
+
+
+def test_model_error_widens_the_deviations_and_is_checked(smap):
+    B, F, L = fe_readings(load_bundled(), smap, TRUE, seed=3)
+    p = Presses(*(x[_pick(L, PRESSES)] for x in (B, F)))
+    loose = {n: 1.0 for n in PARAMETERS}
+    plain = calibrate_unit(smap, p, tolerance=loose)
+    with_model = calibrate_unit(smap, p, tolerance=loose, model_error=(0.01, 0.01))
+    assert all(with_model.std[k] > plain.std[k] for k in plain.std)
+    with pytest.raises(MagtactError, match="model_error must be two relative errors >= 0"):
+        calibrate_unit(smap, p, model_error=(-0.1, 0.0))

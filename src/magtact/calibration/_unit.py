@@ -232,9 +232,15 @@ class _Problem:
     """The whitened residuals of the joint fit, and their Jacobian by central differences with
     every column in one batched evaluation."""
 
-    def __init__(self, smap, presses, free, theta0):
+    def __init__(self, smap, presses, free, theta0, model_error=None):
         self.smap, self.presses, self.free, self.theta0 = smap, presses, free, theta0
         self.n, self.k = len(presses), int(free.sum())
+        # the force's weight per press and axis: its noise and the force model's own error
+        eps = (0.0, 0.0) if model_error is None else model_error
+        F = np.asarray(presses.F, dtype=float)
+        rel = np.stack([eps[0] * np.hypot(F[:, 0], F[:, 1])] * 2 + [eps[1] * np.abs(F[:, 2])],
+                       axis=-1)
+        self.sigma_F = np.sqrt(presses.sigma_F**2 + rel**2)
 
     def unpack(self, x):
         x = np.asarray(x, dtype=float)
@@ -249,7 +255,7 @@ class _Problem:
         p = self.presses
         lead = x.shape[:-1]
         return np.concatenate([((B - p.B) / p.sigma_B).reshape(lead + (-1,)),
-                               ((F - p.F) / p.sigma_F).reshape(lead + (-1,))], axis=-1)
+                               ((F - p.F) / self.sigma_F).reshape(lead + (-1,))], axis=-1)
 
     def jac(self, x):
         x = np.asarray(x, dtype=float)
@@ -281,7 +287,7 @@ def _candidate_kinds(smap: SensorMap) -> dict[str, np.ndarray]:
             "presses sheared along y": np.array([[t, th, np.pi / 2], [t / 3, th, -np.pi / 2]])}
 
 
-def _advice(smap, presses, theta, free, w, bad) -> dict[str, str]:
+def _advice(smap, presses, theta, free, w, bad, model_error=None) -> dict[str, str]:
     """For each of the ``bad`` parameters, the kind of press whose addition lowers its deviation
     most (from the same conditioning, with the added presses' Jacobian at the fitted unit)."""
     names = [p for p, f in zip(PARAMETERS, free, strict=True) if f]
@@ -292,13 +298,14 @@ def _advice(smap, presses, theta, free, w, bad) -> dict[str, str]:
         extra = Presses(np.concatenate([presses.B, Bk]), np.concatenate([presses.F, Fk]),
                         sigma_B=presses.sigma_B, sigma_F=presses.sigma_F)
         x = np.concatenate([theta[free] / _SCALE[free], np.concatenate([w, wk]).ravel()])
-        prob = _Problem(smap, extra, free, theta)
+        prob = _Problem(smap, extra, free, theta, model_error)
         std[label] = _std(prob.jac(x), prob.k) * _SCALE[free]
     return {b: min(std, key=lambda lab, b=b: std[lab][names.index(b)]) for b in bad}
 
 
 def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
-                   tolerance: dict | None = None) -> UnitCalibration:
+                   tolerance: dict | None = None,
+                   model_error: tuple[float, float] | None = None) -> UnitCalibration:
     """Fit a built unit's parameters to its presses (docs/method.md §12.3).
 
     Parameters
@@ -312,6 +319,10 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
         others stay nominal.
     tolerance : dict, optional
         The largest standard deviation of each parameter [SI] (default :data:`TOLERANCE`).
+    model_error : (float, float), optional
+        Relative error (ε_xy, ε_z) of the force models: each press's force noise becomes
+        sqrt(σ_F² + (ε |F|)²) per axis, so that the fit and its conditioning count the models'
+        own error (e.g. the max relative error of their fit report). Default: none.
 
     Raises
     ------
@@ -335,7 +346,9 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
     w0 = exact.features(np.nan_to_num(start.t), np.nan_to_num(start.theta),
                         np.nan_to_num(start.phi))
     theta0 = UnitParameters().vector()
-    prob = _Problem(exact, presses, free, theta0)
+    if model_error is not None and not all(e >= 0 for e in model_error):
+        raise MagtactError(f"model_error must be two relative errors >= 0, got {model_error}")
+    prob = _Problem(exact, presses, free, theta0, model_error)
     x0 = np.concatenate([theta0[free] / _SCALE[free], w0.ravel()])
     sol = least_squares(prob, x0, jac=prob.jac, method="lm", x_scale="jac", xtol=1e-12,
                         ftol=1e-12, gtol=1e-12, max_nfev=200)
@@ -345,7 +358,7 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
     std = dict(zip(names, s.tolist(), strict=True))
     bad = [p for p in names if not std[p] <= tol[p]]
     if bad:
-        kinds = _advice(exact, presses, theta, free, w, bad)
+        kinds = _advice(exact, presses, theta, free, w, bad, model_error)
 
         def show(p, v):
             unit, f = SHOW[p]
