@@ -301,6 +301,9 @@ def test_cli_refuses_bad_input_in_one_line(tmp_path):
     assert r.exit_code != 0 and "missing column 'F_z_N'" in str(r.exception)
     r = runner.invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--H", "3"])
     assert "give both --H and --G" in str(r.exception)
+    r = runner.invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--H", "3", "--G", "22",
+                            "--model-error", "-1"])
+    assert "--model-error must be a fraction between 0 and 1" in str(r.exception)
 
 
 # ---- the figure ------------------------------------------------------------------------------

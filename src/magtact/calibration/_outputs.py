@@ -130,11 +130,13 @@ def _chip(study: Study, noise: tuple[float, float] | None) -> tuple[HallChip, st
 
 def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
               noise: tuple[float, float] | None = None, presses: Presses | None = None,
-              fit=DEFAULT_FIT, degrees=DEGREES, table_sizes=TABLE_SIZES) -> Calibration:
+              fit=DEFAULT_FIT, degrees=DEGREES, table_sizes=TABLE_SIZES,
+              model_error: tuple[float, float] | None = None) -> Calibration:
     """The calibration of design (H [m], G [Pa]) (docs/method.md §12): its map, the round-trip
     check, the resolution σ_F with the chip's noise (``noise`` = (σ_x, σ_z) [T], else the
     study's ``[hall]``), the firmware approximation held to σ_F, and, with ``presses``, the
-    built unit's parameters and corrected map (whose approximation is then exported).
+    built unit's parameters and corrected map (whose approximation is then exported;
+    ``model_error`` as in :func:`calibrate_unit`).
 
     Raises
     ------
@@ -154,7 +156,7 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
     unit = None
     target = smap
     if presses is not None:
-        unit = calibrate_unit(smap, presses, fit=fit)
+        unit = calibrate_unit(smap, presses, fit=fit, model_error=model_error)
         target = unit.corrected
     choice = firmware_approximation(target, sigma, degrees=degrees, table_sizes=table_sizes)
     return Calibration(target, chip.noise, source, sigma, trip, choice, unit,

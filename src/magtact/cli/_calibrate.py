@@ -45,6 +45,9 @@ def calibrate_command(
         "--fit", help="Comma-separated unit parameters to fit (G_scale, B_scale, "
                       "chip_offset_x/y/z, field_offset_x/y/z); default: G_scale, B_scale and "
                       "the chip offsets.")] = None,
+    model_error: Annotated[float | None, typer.Option(
+        "--model-error", help="Relative error of the force models (e.g. 0.01), counted in "
+                              "the unit fit's weights and conditioning.")] = None,
     models: ModelsOpt = None,
 ) -> None:
     """The field-to-force map of a design for firmware: force.h (C99), force_map.json,
@@ -55,6 +58,9 @@ def calibrate_command(
     s = get_study(study)
     if (H is None) != (G is None):
         raise MagtactError("give both --H and --G, or neither (the chosen design)")
+    if model_error is not None and not 0 <= model_error <= 1:
+        raise MagtactError(f"--model-error must be a fraction between 0 and 1, got "
+                           f"{model_error}")
     sigma = None if noise is None else (
         checked_si(noise, "uT", "--noise-uT", bounds=NOISE_BOUNDS),) * 2
     units = None if fit is None else tuple(p.strip() for p in fit.split(",") if p.strip())
@@ -68,8 +74,9 @@ def calibrate_command(
         label = "the given design"
     console.print(f"calibrating {label}: H = {from_si(H_si, 'mm'):.4g} mm, "
                   f"G = {from_si(G_si, 'kPa'):.4g} kPa", highlight=False)
+    eps = None if model_error is None else (model_error, model_error)
     cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
-                    fit=DEFAULT_FIT if units is None else units)
+                    fit=DEFAULT_FIT if units is None else units, model_error=eps)
     folder = out_dir(out)
     write_calibration_outputs(cal, folder, figures=calibration_figures)
     a = cal.firmware.chosen
