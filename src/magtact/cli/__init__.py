@@ -9,6 +9,7 @@ from rich.markup import escape
 from .._errors import MagtactError
 from . import (  # noqa: F401  (each module registers its command)
     _budget,
+    _calibrate,
     _doe,
     _field,
     _fit,

@@ -7,6 +7,7 @@ nothing). :func:`build_report` turns a results folder into one self-contained HT
 
 from ._card import card_rows, read_card, write_card
 from ._fig_budget import budget_figures, budget_labels, draw_budget, fig_budget
+from ._fig_calibration import calibration_figures, draw_calibration, fig_calibration
 from ._fig_doe import fig_doe
 from ._fig_field import fig_field
 from ._fig_geometry import draw_geometry_pareto, fig_geometry_pareto
@@ -29,6 +30,8 @@ __all__ = [
     "budget_figures", "budget_labels", "draw_budget", "fig_budget",
     "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "draw_geometry_pareto", "draw_maps",
     "draw_pareto", "optimise_figure_objects",
+    "CMAP_DIV", "CMAP_SEQ", "build_report", "calibration_figures", "draw_calibration",
+    "fig_calibration", "card_rows", "draw_geometry_pareto",
     "field_figures", "fig_deformed_body", "fig_doe", "fig_field", "fig_force_map", "fig_gamma",
     "fig_geometry_pareto", "fig_maps", "fig_pareto", "fig_parity", "fig_validation",
     "fit_figures", "optimise_figures", "publication_figures", "read_card", "save", "style",

@@ -133,6 +133,8 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
             parts.append(_stage(folder / key, key, title, what, stages.get(key)))
         else:
             parts.append(_other_run(folder / key, key, title, what))
+    if (folder / "calibration").is_dir() and _of_run(folder / "calibration", run_id):
+        parts.append(_calibration(folder / "calibration"))
     parts.append(publication_section(folder / "publication", _definition(folder)))
     parts.append(_evidence([folder / "evidence"] + ([Path(evidence)] if evidence else [])))
     parts.append(_settings(folder / "study.toml"))
@@ -381,6 +383,44 @@ def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> 
                                                         ".json", ".svg")]
     if others:
         out.append(f"<p>Other files: {_e(', '.join(others))}.</p>")
+    return "\n".join(out)
+
+
+def _calibration(folder: Path) -> str:
+    """The calibration section (docs/method.md §13) from ``calibration/*.json``: the map's
+    round trip, the firmware export's size and error against σ_F, a built unit's parameters,
+    the error figure and how to use the files."""
+    out = ['<h2 id="calibration">Calibration: the field-to-force map</h2>']
+    for p in sorted(folder.glob("*.json")):
+        d = _load_json(p)
+        if not (isinstance(d, dict) and d.get("format") == "magtact-calibration-summary/1"):
+            continue
+        design, fw = d.get("design") or {}, d.get("firmware") or {}
+        out.append(
+            f"<p>Design H = {_fmt(design.get('H_mm'))} mm, G = {_fmt(design.get('G_kPa'))} kPa; "
+            f"stable region t ≤ {_fmt(design.get('t_m'))}, θ ≤ "
+            f"{_fmt(design.get('theta_m_rad'))} rad. Round trip F → B → F: largest error "
+            f"{_fmt(d.get('round_trip_rel'))} of the force range. Firmware map: "
+            f"{_e(fw.get('kind'))} ({_fmt(fw.get('bytes'))} bytes, "
+            f"{_fmt(fw.get('multiplies'))} multiplications), largest error over the region "
+            f"F_r {_fmt(fw.get('max_error_F_r_mN'))} mN, F_z {_fmt(fw.get('max_error_F_z_mN'))}"
+            f" mN against σ_F {_fmt(d.get('sigma_F_r_mN'))} / {_fmt(d.get('sigma_F_z_mN'))} mN "
+            f"(field noise {_e(', '.join(_fmt(v) for v in d.get('noise_B_uT') or []))} µT from "
+            f"{_e(d.get('noise_source'))}): "
+            f"{'reached' if fw.get('reached') else 'not reached'}, {_e(fw.get('rule'))}.</p>")
+        if isinstance(d.get("unit"), dict):
+            out.append("<h3>Built unit</h3>" + _dict_table(d["unit"]))
+        out.append(f"<p>Use: {_e(d.get('usage'))}. Files in <code>{_e(folder.name)}/</code>: "
+                   "<code>force.h</code> (C99), <code>force_map.json</code>, "
+                   "<code>force_table.csv</code>.</p>")
+        rows = fw.get("frontier")
+        if isinstance(rows, list) and rows:
+            out.append("<details><summary>every firmware candidate (size and error)</summary>"
+                       + _records_table("frontier", [r for r in rows if isinstance(r, dict)])
+                       + "</details>")
+    for p in sorted(folder.glob("*.png")):
+        out.append(_figure(p, "error of the firmware map over the stable region, and the "
+                              "candidates' size against their error"))
     return "\n".join(out)
 
 

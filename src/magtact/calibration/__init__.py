@@ -1,0 +1,53 @@
+"""The sensor's own product: its field-to-force map, the firmware export and the calibration of a
+built unit from a few presses (docs/method.md §13)."""
+
+from ._firmware import (
+    Approximation,
+    FirmwareChoice,
+    approximation_json,
+    c_header,
+    firmware_approximation,
+    load_approximation,
+    region_polygon,
+    write_table_csv,
+)
+from ._map import (
+    FLAG_NAMES,
+    NO_INVERSE,
+    NOT_UNIQUE,
+    OK,
+    OUTSIDE,
+    Reading,
+    SensorMap,
+    UnitParameters,
+    sensor_map,
+)
+from ._outputs import (
+    Calibration,
+    calibrate,
+    error_grid,
+    round_trip_error,
+    write_calibration_outputs,
+)
+from ._unit import (
+    DEFAULT_FIT,
+    PARAMETERS,
+    PRESS_COLUMNS,
+    TOLERANCE,
+    Presses,
+    UnitCalibration,
+    calibrate_unit,
+    fe_readings,
+    read_presses,
+    write_presses,
+)
+
+__all__ = [
+    "DEFAULT_FIT", "FLAG_NAMES", "NOT_UNIQUE", "NO_INVERSE", "OK", "OUTSIDE", "PARAMETERS",
+    "PRESS_COLUMNS", "TOLERANCE", "Approximation", "Calibration", "FirmwareChoice", "Presses",
+    "Reading", "SensorMap", "UnitCalibration", "UnitParameters", "approximation_json",
+    "c_header", "calibrate", "calibrate_unit", "error_grid", "fe_readings",
+    "firmware_approximation", "load_approximation", "read_presses", "region_polygon",
+    "round_trip_error", "sensor_map", "write_calibration_outputs", "write_presses",
+    "write_table_csv",
+]

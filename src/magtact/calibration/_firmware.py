@@ -1,0 +1,643 @@
+"""A compact approximation of a sensor map for firmware, and its C99 header, JSON and CSV
+(docs/method.md §13.2).
+
+The map is axisymmetric, so the approximation works in the plane of the reading:
+b_r = sqrt(B_x² + B_y²) ≥ 0 and b_z = B_z; then F_x = F_r B_x / b_r, F_y = F_r B_y / b_r,
+F_z = F_z. Two kinds of candidate, measured alike on readings the fit never saw:
+
+* ``poly``: F_r and F_z each a sum of products of Chebyshev polynomials T_i(ξ) T_j(η),
+  i + j ≤ n, of the scaled variables ξ = 2 (b_r − b_r,lo) / (b_r,hi − b_r,lo) − 1 and
+  η = the same of v(b_z), with v one of ``B_z``, ``1/B_z`` (a rational map) or ``B_z^(-1/3)``
+  (∝ the magnet's distance for a dipole), fitted by least squares;
+* ``table``: F_r and F_z on an n × n grid of (b_r, b_z) over the region's bounding box,
+  interpolated bilinearly.
+
+The region test of the firmware is a polygon through the image of the region's three edges in
+(b_r, b_z) (θ = 0, θ = θ_m, t = t_m), N_EDGE vertices per edge.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from numpy.polynomial import chebyshev as cheb
+
+from .._errors import MagtactError
+from ..study import from_si, mm
+from ._map import OK, SensorMap
+
+#: Transforms of b_z for the polynomial candidates: name → (NumPy function, C expression).
+TRANSFORMS = {"B_z": (lambda v: v, "bz"), "1/B_z": (lambda v: 1.0 / v, "1.0 / bz"),
+              "B_z^(-1/3)": (lambda v: 1.0 / np.cbrt(v), "1.0 / cbrt(bz)")}
+#: Candidate degrees and table sizes.
+DEGREES = (4, 6, 8, 10, 12, 14, 16)
+TABLE_SIZES = (16, 32, 64, 128, 256)
+#: Bytes of one stored number (float32).
+BYTES = 4
+#: Vertices per edge of the region polygon.
+N_EDGE = 16
+#: Training and held-out readings over the region.
+N_TRAIN, N_TEST = 2500, 20000
+#: Size budget when no candidate reaches the target [bytes].
+BUDGET = 32768
+#: Slack of the two-stage candidate's region test, in the features.
+REGION_SLACK = 1e-6
+
+
+@dataclass(frozen=True)
+class Approximation:
+    """One firmware approximation of a map, with its measured held-out error.
+
+    ``kind`` ``"poly"`` (``degree``, ``transform``, ``coef_r``/``coef_z`` over the basis of
+    :func:`basis_terms`) or ``"table"`` (``coef_r``/``coef_z`` of shape (n, n) on the grid of
+    ``limits``). ``limits`` = (b_r,lo, b_r,hi, v_lo, v_hi) of the scaled variables (v = b_z for a
+    table). ``polygon`` (k, 2): (b_r, b_z) [T] of the region test. ``err_r``, ``err_z`` [N]: the
+    largest held-out error of F_r and F_z over the region.
+    """
+
+    kind: str
+    degree: int
+    transform: str
+    limits: tuple[float, float, float, float]
+    coef_r: np.ndarray
+    coef_z: np.ndarray
+    polygon: np.ndarray
+    err_r: float = float("nan")
+    err_z: float = float("nan")
+    meta: dict = field(default_factory=dict)
+    #: ``"features"`` only: the second stage and the unit's corrections (see
+    #: :func:`fit_features`).
+    stage: dict = field(default_factory=dict)
+
+    @property
+    def n_coefficients(self) -> int:
+        extra = sum(np.size(self.stage[k]) for k in ("coef_p", "coef_q")) if self.stage else 0
+        return int(self.coef_r.size + self.coef_z.size + extra)
+
+    @property
+    def bytes(self) -> int:
+        """Stored numbers (coefficients, limits, polygon) × 4 bytes (float32), plus the
+        polynomial's exponent table (2 bytes per term)."""
+        extra = 2 * len(basis_terms(self.degree)) if self.kind != "table" else 0
+        consts = 4 + (4 + 9 + 2 if self.kind == "features" else 0)
+        return BYTES * (self.n_coefficients + consts + self.polygon.size) + extra
+
+    @property
+    def multiplies(self) -> int:
+        """Multiplications and divisions of one evaluation (the region test excluded)."""
+        common = 3 + 2 + 3  # b_r² and the two directions; F_x, F_y
+        if self.kind == "table":
+            return common + 4 + 2 * 4 + 2  # scaled indices, two bilinear blends, weights
+        n = self.degree
+        terms = len(basis_terms(n))
+        one = 4 + 2 * 2 * max(n - 1, 0) + 3 * terms  # scaling, recurrences, the sum
+        if self.kind == "features":  # the unit's correction, two stages, the directions
+            return common + 7 + 2 * one + 2 + (1 if self.transform != "B_z" else 0)
+        return common + one + (1 if self.transform != "B_z" else 0)
+
+    # ---- evaluation ------------------------------------------------------------------------
+    def planar(self, b_r, b_z) -> tuple[np.ndarray, np.ndarray]:
+        """(F_r, F_z) [N] at (b_r, b_z) [T]."""
+        b_r, b_z = np.broadcast_arrays(np.asarray(b_r, float), np.asarray(b_z, float))
+        lo_r, hi_r, lo_v, hi_v = self.limits
+        if self.kind == "table":
+            return _bilinear(self.coef_r, self.coef_z, b_r, b_z, self.limits)
+        v = TRANSFORMS[self.transform][0](b_z)
+        xi = 2 * (b_r - lo_r) / (hi_r - lo_r) - 1
+        eta = 2 * (v - lo_v) / (hi_v - lo_v) - 1
+        A = _basis(xi, eta, self.degree)
+        return A @ self.coef_r, A @ self.coef_z
+
+    def evaluate(self, B) -> tuple[np.ndarray, np.ndarray]:
+        """(F (..., 3) [N], inside (...)) of readings B (..., 3) [T], as the C function."""
+        B = np.asarray(B, dtype=float)
+        if self.kind == "features":
+            return _evaluate_features(self, B)
+        b_r = np.hypot(B[..., 0], B[..., 1])
+        F_r, F_z = self.planar(b_r, B[..., 2])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            cx = np.where(b_r > 0, B[..., 0] / np.where(b_r > 0, b_r, 1.0), 0.0)
+            cy = np.where(b_r > 0, B[..., 1] / np.where(b_r > 0, b_r, 1.0), 0.0)
+        return (np.stack([F_r * cx, F_r * cy, F_z], axis=-1),
+                in_polygon(self.polygon, b_r, B[..., 2]))
+
+    def to_json(self) -> dict:
+        return {
+            "format": "magtact-calibration/1", "kind": self.kind, "degree": self.degree,
+            "transform": self.transform, "limits": list(self.limits),
+            "coef_r": self.coef_r.tolist(), "coef_z": self.coef_z.tolist(),
+            "basis": [list(ij) for ij in basis_terms(self.degree)] if self.kind != "table"
+            else None,
+            "polygon_T": self.polygon.tolist(), "max_error_F_r_N": self.err_r,
+            "max_error_F_z_N": self.err_z, "bytes": self.bytes,
+            "multiplies": self.multiplies,
+            "stage": {k: np.asarray(v).tolist() for k, v in self.stage.items()},
+            **self.meta,
+        }
+
+
+def basis_terms(n: int) -> list[tuple[int, int]]:
+    """(i, j) of the basis T_i(ξ) T_j(η), i + j ≤ n, in the order of the coefficients."""
+    return [(i, j) for i in range(n + 1) for j in range(n + 1 - i)]
+
+
+def _basis(xi, eta, n) -> np.ndarray:
+    Tx, Ty = cheb.chebvander(xi, n), cheb.chebvander(eta, n)
+    return np.stack([Tx[..., i] * Ty[..., j] for i, j in basis_terms(n)], axis=-1)
+
+
+def _bilinear(cr, cz, b_r, b_z, limits):
+    lo_r, hi_r, lo_z, hi_z = limits
+    n = cr.shape[0]
+    x = np.clip((b_r - lo_r) / (hi_r - lo_r) * (n - 1), 0.0, n - 1 - 1e-9)
+    y = np.clip((b_z - lo_z) / (hi_z - lo_z) * (n - 1), 0.0, n - 1 - 1e-9)
+    i, j = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = x - i, y - j
+
+    def interp(c):
+        return ((c[i, j] * (1 - fy) + c[i, j + 1] * fy) * (1 - fx)
+                + (c[i + 1, j] * (1 - fy) + c[i + 1, j + 1] * fy) * fx)
+
+    return interp(cr), interp(cz)
+
+
+def in_polygon(poly, x, y) -> np.ndarray:
+    """Crossing-number test of points (x, y) against the closed polygon (k, 2), as in C."""
+    x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
+    inside = np.zeros(x.shape, dtype=bool)
+    for a in range(len(poly)):
+        (x1, y1), (x2, y2) = poly[a], poly[a - 1]
+        if y1 == y2:  # a horizontal edge crosses no horizontal ray
+            continue
+        inside ^= ((y1 > y) != (y2 > y)) & (x < (x2 - x1) * (y - y1) / (y2 - y1) + x1)
+    return inside
+
+
+def region_polygon(smap: SensorMap, n: int = N_EDGE) -> np.ndarray:
+    """(b_r, b_z) [T] around the image of the stable region: θ = θ_m from t = 0 to t_m, then
+    t = t_m back to θ = 0, then θ = 0 back to t = 0 (moved to b_r < 0: readings have b_r ≥ 0,
+    so the axis itself is inside)."""
+    s = np.linspace(0.0, 1.0, n)
+    tm, thm = smap.t_m, smap.theta_m
+    edges = [smap.features(tm * s, thm), smap.features(tm, thm * s[::-1])[1:],
+             smap.features(tm * s[::-1], 0.0)[1:]]
+    B = smap.B_of(np.concatenate(edges))
+    b_r = np.hypot(B[:, 0], B[:, 1])
+    pad = 1e-3 * b_r.max()
+    b_r[-(n - 1):] = -pad
+    b_r[0] = -pad  # the rest point: on the axis
+    # the polygon widened by a hair so that readings on the region's edges count as inside
+    b_z = B[:, 2]
+    return np.stack([b_r, b_z], axis=-1)
+
+
+def _samples(smap: SensorMap, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Readings and forces of n loads over the region, at random azimuths."""
+    L = smap.region_samples(n, seed)
+    return smap.at_load(L[:, 0], L[:, 1], L[:, 2])
+
+
+def _test_set(smap: SensorMap, n: int, seed: int):
+    B, F = _samples(smap, n, seed)
+    s = np.linspace(0.0, 1.0, 200)
+    phi = np.random.default_rng(seed).uniform(-np.pi, np.pi, 200)
+    edges = np.concatenate([smap.features(smap.t_m * s, smap.theta_m, phi),
+                            smap.features(smap.t_m, smap.theta_m * s, phi),
+                            smap.features(smap.t_m * s, 0.0, phi)])
+    return np.concatenate([B, smap.B_of(edges)]), np.concatenate([F, smap.F_of(edges)])
+
+
+def fit_poly(smap: SensorMap, degree: int, transform: str, train, polygon) -> Approximation:
+    """A polynomial candidate fitted by least squares to ``train`` = (B, F)."""
+    B, F = train
+    b_r, v = np.hypot(B[:, 0], B[:, 1]), TRANSFORMS[transform][0](B[:, 2])
+    limits = (float(b_r.min()), float(b_r.max()), float(v.min()), float(v.max()))
+    xi = 2 * (b_r - limits[0]) / (limits[1] - limits[0]) - 1
+    eta = 2 * (v - limits[2]) / (limits[3] - limits[2]) - 1
+    A = _basis(xi, eta, degree)
+    F_r = np.hypot(F[:, 0], F[:, 1]) * np.sign(F[:, 0] * B[:, 0] + F[:, 1] * B[:, 1])
+    c = np.linalg.lstsq(A, np.stack([F_r, F[:, 2]], axis=-1), rcond=None)[0]
+    c_r, c_z = c[:, 0], c[:, 1]
+    return Approximation("poly", degree, transform, limits, c_r, c_z, polygon)
+
+
+def fit_table(smap: SensorMap, n: int, polygon) -> Approximation:
+    """A bilinear table candidate: the map's own F_r, F_z at the nodes of an n × n grid over
+    the region's bounding box (nodes outside the region hold the models' force at the
+    inversion's solution, or the nearest node's value where there is none)."""
+    lo_r, hi_r = 0.0, float(polygon[:, 0].max())
+    lo_z, hi_z = float(polygon[:, 1].min()), float(polygon[:, 1].max())
+    R, Z = np.meshgrid(np.linspace(lo_r, hi_r, n), np.linspace(lo_z, hi_z, n), indexing="ij")
+    B = np.stack([R, np.zeros_like(R), Z], axis=-1)
+    reading = smap.force(B)
+    F = reading.F_model.copy()
+    good = np.isfinite(F).all(axis=-1) & (reading.flag != 2)
+    if not good.all():
+        from scipy.spatial import cKDTree
+
+        _, k = cKDTree(np.argwhere(good)).query(np.argwhere(~good))
+        F[~good] = F[good][k]
+    return Approximation("table", n, "B_z", (lo_r, hi_r, lo_z, hi_z),
+                         F[..., 0], F[..., 2], polygon)
+
+
+def _measured(a: Approximation, test) -> Approximation:
+    """``a`` with its largest errors on the readings ``test`` = (B, F): |ΔF_xy| (the shear
+    force's error, ``err_r``) and |ΔF_z|."""
+    B, F = test
+    approx, _ = a.evaluate(B)
+    return replace(a, err_r=float(np.hypot(*(approx[:, :2] - F[:, :2]).T).max()),
+                   err_z=float(np.abs(approx[:, 2] - F[:, 2]).max()))
+
+
+# ---- the two-stage approximation: the load features, then the force -------------------------
+def _cheb_fit(x, y, degree, targets):
+    lim = (float(x.min()), float(x.max()), float(y.min()), float(y.max()))
+    A = _basis(2 * (x - lim[0]) / (lim[1] - lim[0]) - 1, 2 * (y - lim[2]) / (lim[3] - lim[2]) - 1,
+               degree)
+    c = np.linalg.lstsq(A, np.stack(targets, axis=-1), rcond=None)[0]
+    return lim, [c[:, k] for k in range(len(targets))]
+
+
+def _cheb_eval(lim, coef, x, y, degree):
+    A = _basis(2 * (x - lim[0]) / (lim[1] - lim[0]) - 1, 2 * (y - lim[2]) / (lim[3] - lim[2]) - 1,
+               degree)
+    return [A @ c for c in coef]
+
+
+def fit_features(smap: SensorMap, degree: int, transform: str, seed: int = 0) -> Approximation:
+    """A two-stage candidate, for a design and for a built unit (docs/method.md §13.2).
+
+    A unit's field is its design's field at shifted load features, scaled and offset:
+    B(w) = s B₀(w + δ) + b with δ = (−d_z, d_x, d_y) / a (a chip offset d is a displacement of
+    the magnet the other way; a, §5), and its force is g F₀(w). So: (1) the corrected reading
+    B' = (B − b) / s; (2) the features (p', q') of the design's axisymmetric field from
+    (|B'_xy|, B'_z), a Chebyshev polynomial of degree ``degree`` as in ``poly``, and
+    q' = q' B'_xy / |B'_xy|; (3) w = w' − δ; (4) F = g (f_r(p, |q|) q / |q|, f_z(p, |q|)), the
+    design's force per Chebyshev polynomial of the same degree in (p, |q|). The region test is
+    exact in the features: 0 ≤ p ≤ t_m, |q| ≤ p tan θ_m.
+    """
+    unit = smap.unit
+    base = replace(smap, unit=type(unit)())
+    a, _ = smap._path
+    d = unit.chip_offset
+    delta = np.array([-d[2] / a, d[0] / a, d[1] / a])
+    margin = float(np.abs(delta).max()) + 0.02 * smap.t_m
+    rng = np.random.default_rng(seed + 5)
+    n = N_TRAIN
+    p = rng.uniform(-margin, smap.t_m + margin, n)
+    q = rng.uniform(0.0, 1.0, n) * (np.maximum(p, 0.0) * np.tan(smap.theta_m) + margin)
+    w = np.stack([p, q, np.zeros(n)], axis=-1)
+    B0 = base.B_of(w)
+    b_r, v = B0[:, 0], TRANSFORMS[transform][0](B0[:, 2])
+    lim_b, (c_p, c_q) = _cheb_fit(b_r, v, degree, [p, q])
+    # the force per unit of the unit's g, over the region (with the same margin)
+    pf = rng.uniform(0.0, smap.t_m + margin, n)
+    qf = rng.uniform(0.0, 1.0, n) * (pf * np.tan(smap.theta_m) + margin)
+    F0 = base.F_of(np.stack([pf, qf, np.zeros(n)], axis=-1))
+    lim_f, (c_r, c_z) = _cheb_fit(pf, qf, degree, [F0[:, 0], F0[:, 2]])
+    stage = {"coef_p": c_p, "coef_q": c_q, "limits_pq": np.array(lim_f),
+             "B_scale": unit.B_scale, "field_offset": np.array(unit.field_offset),
+             "G_scale": unit.G_scale, "delta": delta,
+             "region": np.array([smap.t_m, np.tan(smap.theta_m)])}
+    return Approximation("features", degree, transform, lim_b, c_r, c_z, np.zeros((0, 2)),
+                         stage=stage)
+
+
+def _evaluate_features(ap: Approximation, B) -> tuple[np.ndarray, np.ndarray]:
+    st = ap.stage
+    Bc = (B - np.asarray(st["field_offset"])) / st["B_scale"]
+    b_r = np.hypot(Bc[..., 0], Bc[..., 1])
+    v = TRANSFORMS[ap.transform][0](Bc[..., 2])
+    p1, q1 = _cheb_eval(ap.limits, [st["coef_p"], st["coef_q"]], b_r, v, ap.degree)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cx = np.where(b_r > 0, Bc[..., 0] / np.where(b_r > 0, b_r, 1.0), 1.0)
+        cy = np.where(b_r > 0, Bc[..., 1] / np.where(b_r > 0, b_r, 1.0), 0.0)
+    delta = np.asarray(st["delta"])
+    p = p1 - delta[0]
+    qx, qy = q1 * cx - delta[1], q1 * cy - delta[2]
+    q = np.hypot(qx, qy)
+    f_r, f_z = _cheb_eval(tuple(st["limits_pq"]), [ap.coef_r, ap.coef_z], p, q, ap.degree)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ux = np.where(q > 0, qx / np.where(q > 0, q, 1.0), 0.0)
+        uy = np.where(q > 0, qy / np.where(q > 0, q, 1.0), 0.0)
+    g = st["G_scale"]
+    t_m, tan_m = st["region"]
+    inside = (p >= -REGION_SLACK) & (p <= t_m + REGION_SLACK) & (
+        q <= np.maximum(p, 0.0) * tan_m + REGION_SLACK)
+    return np.stack([g * f_r * ux, g * f_r * uy, g * f_z], axis=-1), inside
+
+
+@dataclass(frozen=True)
+class FirmwareChoice:
+    """The chosen approximation, every candidate measured, and the target it was held to.
+
+    ``target_r``, ``target_z`` [N]: σ_F,r and σ_F,z (the worst over the region); ``reached``:
+    whether the chosen one's largest held-out error is within them; ``rule``: how it was chosen.
+    """
+
+    chosen: Approximation
+    candidates: list[Approximation]
+    target_r: float
+    target_z: float
+    reached: bool
+    rule: str
+
+    def frontier(self) -> list[dict]:
+        """Every candidate: kind, degree, transform, bytes, multiplies, errors [mN], whether it
+        is on the size–error frontier (no smaller candidate has a smaller error)."""
+        rows = []
+        for a in self.candidates:
+            score = max(a.err_r / self.target_r, a.err_z / self.target_z)
+            rows.append({"kind": a.kind, "degree_or_n": a.degree, "transform": a.transform,
+                         "bytes": a.bytes, "multiplies": a.multiplies,
+                         "max_error_F_r_mN": from_si(a.err_r, "mN"),
+                         "max_error_F_z_mN": from_si(a.err_z, "mN"),
+                         "error_over_sigma": score})
+        for r in rows:
+            r["on_frontier"] = not any(o["bytes"] <= r["bytes"]
+                                       and o["error_over_sigma"] < r["error_over_sigma"]
+                                       and o is not r for o in rows)
+        return rows
+
+
+def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
+                           degrees=DEGREES, table_sizes=TABLE_SIZES, budget: int = BUDGET,
+                           seed: int = 0, n_test: int = N_TEST) -> FirmwareChoice:
+    """Measure the candidates on held-out readings and choose one (docs/method.md §13.2).
+
+    Rule: the smallest (in bytes, then multiplies) candidate whose largest held-out errors of
+    F_r and F_z are within ``sigma_F`` = (σ_F,r, σ_F,z) [N]; if none is, the candidate with the
+    smallest error relative to σ_F within ``budget`` bytes (the frontier is then the answer).
+    The held-out readings: ``n_test`` loads uniform over the region's features plus 600 on its
+    edges.
+
+    Raises
+    ------
+    MagtactError
+        If σ_F is not positive.
+    """
+    sr, sz = (float(s) for s in sigma_F)
+    if not (sr > 0 and sz > 0):
+        raise MagtactError(f"the target sigma_F must be positive, got {sigma_F} N")
+    polygon = region_polygon(smap)
+    train = _samples(smap, N_TRAIN, seed + 1)
+    test = _test_set(smap, n_test, seed + 2)
+    axisymmetric = not any(smap.unit.chip_offset) and not any(smap.unit.field_offset[:2])
+    cands = [fit_features(smap, n, tr, seed) for tr in TRANSFORMS for n in degrees]
+    if axisymmetric:  # the planar forms need a map that is the same at every azimuth
+        cands += [fit_poly(smap, n, tr, train, polygon) for tr in TRANSFORMS for n in degrees]
+        cands += [fit_table(smap, n, polygon) for n in table_sizes]
+    cands = [_measured(a, test) for a in cands]
+
+    def score(a):
+        return max(a.err_r / sr, a.err_z / sz)
+
+    good = [a for a in cands if score(a) <= 1.0]
+    if good:
+        chosen = min(good, key=lambda a: (a.bytes, score(a)))
+        rule = "the smallest candidate (bytes) within sigma_F, then the most accurate"
+    else:
+        small = [a for a in cands if a.bytes <= budget] or cands
+        chosen = min(small, key=score)
+        rule = (f"no candidate reaches sigma_F: the smallest error within {budget} bytes "
+                "(see the frontier)")
+    return FirmwareChoice(chosen, cands, sr, sz, bool(good), rule)
+
+
+# ---- writers ---------------------------------------------------------------------------------
+def _c_array(name: str, values) -> str:
+    vals = [f"{float(v):.17g}" for v in np.ravel(values)]
+    lines = [", ".join(vals[k:k + 4]) for k in range(0, len(vals), 4)]
+    return (f"static const MAGTACT_REAL {name}[{len(vals)}] = {{\n    "
+            + ",\n    ".join(lines) + "\n};\n")
+
+
+def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = None) -> str:
+    """The C99 header: coefficients and ``int force(bx, by, bz, out)`` (0 inside the stable
+    region, 1 outside), no dependency beyond <math.h>."""
+    d = smap.describe()
+    lo_r, hi_r, lo_v, hi_v = a.limits
+    target = ("" if choice is None else
+              " *   target sigma_F (the design's resolution): "
+              f"F_r {from_si(choice.target_r, 'mN'):.4g} mN, "
+              f"F_z {from_si(choice.target_z, 'mN'):.4g} mN; "
+              f"{'reached' if choice.reached else 'NOT reached'} ({choice.rule})\n")
+    head = (
+        "/* magtact field-to-force calibration (generated; docs/method.md section 12).\n"
+        f" *   design: H = {d['H_mm']:.4g} mm, G = {d['G_kPa']:.4g} kPa, "
+        f"M_z = {d['M_z_A_per_m']:.4g} A/m\n"
+        f" *   units: bx, by, bz in tesla (the Hall chip's axes: x, y in the base plane, z up);"
+        " out[3] in newtons\n"
+        " *   out = (F_x, F_y, F_z): the reaction of the base on the body (F_r <= 0 against the "
+        "shear,\n *   F_z > 0 in compression); the load applied on the top is -out.\n"
+        f" *   region: t <= {d['t_m']:.6g}, theta <= {d['theta_m_rad']:.6g} rad (every azimuth); "
+        f"F_r down to -{d['F_r_range_N']:.4g} N, F_z up to {d['F_z_range_N']:.4g} N\n"
+        f" *   approximation: {a.kind}"
+        + (f" of degree {a.degree} in b_r and {a.transform}" if a.kind == "poly"
+           else f" {a.degree} x {a.degree} bilinear in (b_r, b_z)" if a.kind == "table"
+           else f": load features of degree {a.degree} in b_r and {a.transform}, then the "
+                f"force of degree {a.degree} in the features") + "\n"
+        + _unit_line(smap) +
+        f" *   largest error over the region (held out): F_r {from_si(a.err_r, 'mN'):.4g} mN, "
+        f"F_z {from_si(a.err_z, 'mN'):.4g} mN\n" + target +
+        f" *   size: {a.bytes} bytes of float32 numbers (about twice in double), "
+        f"{a.multiplies} multiplications per call\n"
+        " * force() returns 0 inside the region, 1 outside (out is then not a measurement).\n"
+        " * Arithmetic in double by default; define MAGTACT_REAL as float before including for\n"
+        " * single precision (its rounding adds up to about 2e-4 of the force range). */\n"
+        "#ifndef MAGTACT_CALIBRATION_H\n#define MAGTACT_CALIBRATION_H\n#include <math.h>\n"
+        "#ifndef MAGTACT_REAL\n#define MAGTACT_REAL double\n#endif\n\n")
+    body = _c_array("magtact_coef_r", a.coef_r) + _c_array("magtact_coef_z", a.coef_z)
+    body += _c_array("magtact_poly_r", a.polygon[:, 0]) + _c_array("magtact_poly_z",
+                                                                   a.polygon[:, 1])
+    k = len(a.polygon)
+    region = (
+        f"    int inside = 0, a, b;\n    for (a = 0, b = {k - 1}; a < {k}; b = a++) {{\n"
+        "        MAGTACT_REAL x1 = magtact_poly_r[a], y1 = magtact_poly_z[a];\n"
+        "        MAGTACT_REAL x2 = magtact_poly_r[b], y2 = magtact_poly_z[b];\n"
+        "        if (((y1 > bz) != (y2 > bz)) && (br < (x2 - x1) * (bz - y1) / (y2 - y1) + x1))\n"
+        "            inside = !inside;\n    }\n")
+    if a.kind == "poly":
+        n = a.degree
+        terms = basis_terms(n)
+        ii = ", ".join(str(i) for i, _ in terms)
+        jj = ", ".join(str(j) for _, j in terms)
+        body += f"static const unsigned char magtact_i[{len(terms)}] = {{{ii}}};\n"
+        body += f"static const unsigned char magtact_j[{len(terms)}] = {{{jj}}};\n\n"
+        core = (
+            f"    MAGTACT_REAL v = {TRANSFORMS[a.transform][1]};\n"
+            f"    MAGTACT_REAL xi = 2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1;\n"
+            f"    MAGTACT_REAL eta = 2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1;\n"
+            f"    MAGTACT_REAL tx[{n + 1}], ty[{n + 1}], fr = 0, fz = 0;\n"
+            "    int k;\n"
+            "    tx[0] = 1; ty[0] = 1;\n"
+            + (f"    tx[1] = xi; ty[1] = eta;\n    for (k = 2; k <= {n}; k++) {{\n"
+               "        tx[k] = 2 * xi * tx[k - 1] - tx[k - 2];\n"
+               "        ty[k] = 2 * eta * ty[k - 1] - ty[k - 2];\n    }\n" if n >= 1 else "")
+            + f"    for (k = 0; k < {len(terms)}; k++) {{\n"
+            "        MAGTACT_REAL b = tx[magtact_i[k]] * ty[magtact_j[k]];\n"
+            "        fr += magtact_coef_r[k] * b;\n        fz += magtact_coef_z[k] * b;\n    }\n")
+    else:
+        n = a.degree
+        core = (
+            f"    MAGTACT_REAL x = (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) * {n - 1};\n"
+            f"    MAGTACT_REAL y = (bz - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) * {n - 1};\n"
+            f"    int i, j;\n    MAGTACT_REAL fx, fy, fr, fz;\n"
+            f"    if (x < 0) x = 0;\n    if (x > {n - 1} - 1e-6) x = {n - 1} - 1e-6;\n"
+            f"    if (y < 0) y = 0;\n    if (y > {n - 1} - 1e-6) y = {n - 1} - 1e-6;\n"
+            "    i = (int)x; j = (int)y; fx = x - i; fy = y - j;\n"
+            f"#define MAGTACT_AT(c, a, b) c[(a) * {n} + (b)]\n"
+            "    fr = (MAGTACT_AT(magtact_coef_r, i, j) * (1 - fy) + "
+            "MAGTACT_AT(magtact_coef_r, i, j + 1) * fy) * (1 - fx)\n"
+            "       + (MAGTACT_AT(magtact_coef_r, i + 1, j) * (1 - fy) + "
+            "MAGTACT_AT(magtact_coef_r, i + 1, j + 1) * fy) * fx;\n"
+            "    fz = (MAGTACT_AT(magtact_coef_z, i, j) * (1 - fy) + "
+            "MAGTACT_AT(magtact_coef_z, i, j + 1) * fy) * (1 - fx)\n"
+            "       + (MAGTACT_AT(magtact_coef_z, i + 1, j) * (1 - fy) + "
+            "MAGTACT_AT(magtact_coef_z, i + 1, j + 1) * fy) * fx;\n"
+            "#undef MAGTACT_AT\n")
+    func = (
+        "static int force(MAGTACT_REAL bx, MAGTACT_REAL by, MAGTACT_REAL bz, "
+        "MAGTACT_REAL out[3])\n{\n"
+        "    MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(bx * bx + by * by));\n"
+        + core + region +
+        "    if (br > 0) {\n        out[0] = fr * bx / br;\n        out[1] = fr * by / br;\n"
+        "    } else {\n        out[0] = 0;\n        out[1] = 0;\n    }\n"
+        "    out[2] = fz;\n    return inside ? 0 : 1;\n}\n\n#endif\n")
+    if a.kind == "features":
+        return head + _c_features(a)
+    if a.kind == "poly" and a.transform == "B_z^(-1/3)":
+        func = func.replace("1.0 / cbrt(bz)", "(MAGTACT_REAL)(1.0 / cbrt((double)bz))")
+    if a.kind == "poly" and a.transform == "1/B_z":
+        func = func.replace("= 1.0 / bz;", "= (MAGTACT_REAL)(1.0 / (double)bz);")
+    return head + body + func
+
+
+def _unit_line(smap: SensorMap) -> str:
+    u = smap.unit
+    if u.nominal:
+        return ""
+    d = ", ".join(f"{mm(v):.4g}" for v in u.chip_offset)
+    b = ", ".join(f"{from_si(v, 'mT'):.4g}" for v in u.field_offset)
+    return (f" *   built unit: G x {u.G_scale:.5g}, remanence x {u.B_scale:.5g}, chip offset "
+            f"({d}) mm, field offset ({b}) mT\n")
+
+
+def _c_features(a: Approximation) -> str:
+    """The body of the two-stage C function (see :func:`fit_features`)."""
+    st = a.stage
+    n = a.degree
+    terms = basis_terms(n)
+    lo_r, hi_r, lo_v, hi_v = a.limits
+    lo_p, hi_p, lo_q, hi_q = (float(v) for v in st["limits_pq"])
+    b0 = [float(v) for v in st["field_offset"]]
+    d = [float(v) for v in st["delta"]]
+    t_m, tan_m = (float(v) for v in st["region"])
+    ii = ", ".join(str(i) for i, _ in terms)
+    jj = ", ".join(str(j) for _, j in terms)
+    body = (_c_array("magtact_coef_p", st["coef_p"]) + _c_array("magtact_coef_q", st["coef_q"])
+            + _c_array("magtact_coef_r", a.coef_r) + _c_array("magtact_coef_z", a.coef_z)
+            + f"static const unsigned char magtact_i[{len(terms)}] = {{{ii}}};\n"
+            + f"static const unsigned char magtact_j[{len(terms)}] = {{{jj}}};\n\n")
+    body += (
+        "/* two sums of c[k] T_i(xi) T_j(eta) over the basis (i, j) = (magtact_i[k], "
+        "magtact_j[k]) */\n"
+        "static void magtact_cheb2(const MAGTACT_REAL *c1, const MAGTACT_REAL *c2, "
+        "MAGTACT_REAL xi,\n                          MAGTACT_REAL eta, MAGTACT_REAL *s1, "
+        "MAGTACT_REAL *s2)\n{\n"
+        f"    MAGTACT_REAL tx[{n + 1}], ty[{n + 1}], a = 0, b = 0;\n    int k;\n"
+        "    tx[0] = 1; ty[0] = 1;\n    tx[1] = xi; ty[1] = eta;\n"
+        f"    for (k = 2; k <= {n}; k++) {{\n"
+        "        tx[k] = 2 * xi * tx[k - 1] - tx[k - 2];\n"
+        "        ty[k] = 2 * eta * ty[k - 1] - ty[k - 2];\n    }\n"
+        f"    for (k = 0; k < {len(terms)}; k++) {{\n"
+        "        MAGTACT_REAL t = tx[magtact_i[k]] * ty[magtact_j[k]];\n"
+        "        a += c1[k] * t;\n        b += c2[k] * t;\n    }\n"
+        "    *s1 = a;\n    *s2 = b;\n}\n\n")
+    v = {"B_z": "cz", "1/B_z": "(MAGTACT_REAL)(1.0 / (double)cz)",
+         "B_z^(-1/3)": "(MAGTACT_REAL)(1.0 / cbrt((double)cz))"}[a.transform]
+    body += (
+        "static int force(MAGTACT_REAL bx, MAGTACT_REAL by, MAGTACT_REAL bz, "
+        "MAGTACT_REAL out[3])\n{\n"
+        f"    const MAGTACT_REAL s = {float(st['B_scale']):.17g}, g = "
+        f"{float(st['G_scale']):.17g};\n"
+        f"    MAGTACT_REAL cx = (bx - ({b0[0]:.17g})) / s;\n"
+        f"    MAGTACT_REAL cy = (by - ({b0[1]:.17g})) / s;\n"
+        f"    MAGTACT_REAL cz = (bz - ({b0[2]:.17g})) / s;\n"
+        "    MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(cx * cx + cy * cy));\n"
+        f"    MAGTACT_REAL v = {v};\n"
+        "    MAGTACT_REAL p, q1, qx, qy, q, fr, fz, ux = 1, uy = 0;\n"
+        f"    magtact_cheb2(magtact_coef_p, magtact_coef_q,\n"
+        f"                  2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1,\n"
+        f"                  2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1, &p, &q1);\n"
+        "    if (br > 0) {\n        ux = cx / br;\n        uy = cy / br;\n    }\n"
+        f"    p -= ({d[0]:.17g});\n"
+        f"    qx = q1 * ux - ({d[1]:.17g});\n    qy = q1 * uy - ({d[2]:.17g});\n"
+        "    q = (MAGTACT_REAL)sqrt((double)(qx * qx + qy * qy));\n"
+        f"    magtact_cheb2(magtact_coef_r, magtact_coef_z,\n"
+        f"                  2 * (p - ({lo_p:.17g})) / ({hi_p - lo_p:.17g}) - 1,\n"
+        f"                  2 * (q - ({lo_q:.17g})) / ({hi_q - lo_q:.17g}) - 1, &fr, &fz);\n"
+        "    if (q > 0) {\n        out[0] = g * fr * qx / q;\n        out[1] = g * fr * qy / q;\n"
+        "    } else {\n        out[0] = 0;\n        out[1] = 0;\n    }\n"
+        "    out[2] = g * fz;\n"
+        f"    return (p >= -{REGION_SLACK!r} && p <= {t_m:.17g} + {REGION_SLACK!r}\n"
+        f"            && q <= (p > 0 ? p : 0) * {tan_m:.17g} + {REGION_SLACK!r}) ? 0 : 1;\n"
+        "}\n\n#endif\n")
+    return body
+
+
+def write_table_csv(smap: SensorMap, path: Path, n: int = 64) -> Path:
+    """The exact map on an n × n grid of (b_r, b_z) over the region's bounding box: columns
+    ``B_r_mT, B_z_mT, F_r_N, F_z_N, inside`` (forces empty outside the region)."""
+    polygon = region_polygon(smap)
+    R, Z = np.meshgrid(np.linspace(0.0, polygon[:, 0].max(), n),
+                       np.linspace(polygon[:, 1].min(), polygon[:, 1].max(), n), indexing="ij")
+    r = smap.force(np.stack([R, np.zeros_like(R), Z], axis=-1))
+    path = Path(path)
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["B_r_mT", "B_z_mT", "F_r_N", "F_z_N", "inside"])
+        for k in np.ndindex(R.shape):
+            ok = r.flag[k] == OK
+            w.writerow([f"{from_si(R[k], 'mT'):.6g}", f"{from_si(Z[k], 'mT'):.6g}",
+                        f"{r.F[k][0]:.9g}" if ok else "", f"{r.F[k][2]:.9g}" if ok else "",
+                        int(ok)])
+    return path
+
+
+def approximation_json(choice: FirmwareChoice, smap: SensorMap) -> dict:
+    """The design, the chosen approximation and the frontier (JSON for Python/MicroPython)."""
+    a = choice.chosen
+    return {"design": smap.describe(), "approximation": a.to_json(),
+            "target_sigma_F_r_mN": from_si(choice.target_r, "mN"),
+            "target_sigma_F_z_mN": from_si(choice.target_z, "mN"),
+            "reached": choice.reached, "rule": choice.rule, "frontier": choice.frontier(),
+            "evaluation": ("b_r = sqrt(bx^2 + by^2); poly: xi = 2 (b_r - limits[0]) / "
+                           "(limits[1] - limits[0]) - 1, eta likewise of transform(bz) with "
+                           "limits[2:4]; F_r = sum coef_r[k] T_i(xi) T_j(eta) over basis[k] = "
+                           "(i, j), F_z likewise; table: bilinear in (b_r, bz) on an n x n grid "
+                           "over limits, coef[i][j]; out = (F_r bx / b_r, F_r by / b_r, F_z); "
+                           "inside: crossing-number test of (b_r, bz) against polygon_T"),
+            "units": "B in T, F in N", "H_mm": mm(smap.H)}
+
+
+def load_approximation(data: dict) -> Approximation:
+    """An approximation back from its JSON (the ``approximation`` entry)."""
+    return Approximation(data["kind"], int(data["degree"]), data["transform"],
+                         tuple(data["limits"]), np.asarray(data["coef_r"], float),
+                         np.asarray(data["coef_z"], float),
+                         np.asarray(data["polygon_T"], float).reshape(-1, 2),
+                         data["max_error_F_r_N"], data["max_error_F_z_N"],
+                         stage={k: np.asarray(v, float) if isinstance(v, list) else v
+                                for k, v in (data.get("stage") or {}).items()})
+
+
+def write_json(obj: dict, path: Path) -> Path:
+    path = Path(path)
+    path.write_text(json.dumps(obj, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,185 @@
+"""The calibration of a design (and optionally of a built unit), and its files
+(docs/method.md §13)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import MagtactError
+from ..metamodel import ModelSet
+from ..study import HallChip, Study, from_si, hall_chip
+from ._firmware import (
+    DEGREES,
+    TABLE_SIZES,
+    FirmwareChoice,
+    approximation_json,
+    c_header,
+    firmware_approximation,
+    write_json,
+    write_table_csv,
+)
+from ._map import OK, SensorMap, sensor_map
+from ._unit import DEFAULT_FIT, Presses, UnitCalibration, calibrate_unit
+
+#: Points per side of the (t, θ) grid of the error maps.
+N_GRID = 41
+#: Loads of the round-trip check.
+N_ROUND_TRIP = 2000
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Everything ``magtact calibrate`` delivers for one design.
+
+    Attributes
+    ----------
+    map : SensorMap
+        The design's map (or the built unit's corrected map when ``unit`` is given).
+    noise : tuple of float
+        σ_B (x, z) [T] of the Hall chip the resolution is computed with, and ``noise_source``
+        where it comes from (the study's ``[hall]`` or given).
+    sigma_F : tuple of float
+        (σ_F,r, σ_F,z) [N]: the design's worst force resolution over the stable region
+        (:func:`magtact.designer.resolution`), the firmware's target.
+    round_trip : float
+        Largest |F → B → F − F| over the region, relative to the force range.
+    firmware : FirmwareChoice
+    unit : UnitCalibration or None
+    grid : dict
+        ``t``, ``theta`` (n, n) and the chosen approximation's error ``err_r``, ``err_z`` [N]
+        over the region, the maps of the report's figure.
+    """
+
+    map: SensorMap
+    noise: tuple[float, float]
+    noise_source: str
+    sigma_F: tuple[float, float]
+    round_trip: float
+    firmware: FirmwareChoice
+    unit: UnitCalibration | None
+    grid: dict
+
+    def to_json(self) -> dict:
+        fw = approximation_json(self.firmware, self.map)
+        return {
+            "format": "magtact-calibration-summary/1",
+            "design": self.map.describe(),
+            "noise_B_uT": [from_si(v, "uT") for v in self.noise],
+            "noise_source": self.noise_source,
+            "sigma_F_r_mN": from_si(self.sigma_F[0], "mN"),
+            "sigma_F_z_mN": from_si(self.sigma_F[1], "mN"),
+            "round_trip_rel": self.round_trip,
+            "firmware": {k: fw[k] for k in ("reached", "rule", "frontier")}
+            | {"kind": self.firmware.chosen.kind, "degree_or_n": self.firmware.chosen.degree,
+               "transform": self.firmware.chosen.transform,
+               "bytes": self.firmware.chosen.bytes,
+               "multiplies": self.firmware.chosen.multiplies,
+               "max_error_F_r_mN": from_si(self.firmware.chosen.err_r, "mN"),
+               "max_error_F_z_mN": from_si(self.firmware.chosen.err_z, "mN")},
+            "unit": None if self.unit is None else self.unit.to_json(),
+            "files": {"c_header": "force.h", "json": "force_map.json",
+                      "csv_table": "force_table.csv"},
+            "usage": ("C: #include \"force.h\"; float F[3]; int outside = force(bx, by, bz, F); "
+                      "bx, by, bz in T, F in N. Python: magtact.calibration.load_approximation"
+                      "(json.load(open('force_map.json'))['approximation']).evaluate(B)"),
+        }
+
+
+def round_trip_error(smap: SensorMap, n: int = N_ROUND_TRIP, seed: int = 0) -> float:
+    """Largest |F(B(F)) − F| over n loads of the region, relative to the force range
+    (docs/method.md §13.1): forward through :meth:`SensorMap.field`, back through
+    :meth:`SensorMap.force`."""
+    L = smap.region_samples(n, seed)
+    _, F = smap.at_load(L[:, 0], L[:, 1], L[:, 2])
+    B, flag = smap.field(F)
+    back = smap.force(np.where((flag == OK)[:, None], B, smap.at_load(0, 0)[0]))
+    rng = np.array([smap.ranges[0], smap.ranges[0], smap.ranges[1]])
+    err = np.abs(back.F - F) / rng
+    if not ((flag == OK) & (back.flag == OK)).all():
+        return float("inf")
+    return float(err.max())
+
+
+def error_grid(smap: SensorMap, choice: FirmwareChoice, n: int = N_GRID) -> dict:
+    """The chosen approximation's error of F_r, F_z [N] on an n × n grid of (t, θ) over the
+    region (φ = 0)."""
+    T, TH = np.meshgrid(np.linspace(0.0, smap.t_m, n), np.linspace(0.0, smap.theta_m, n),
+                        indexing="ij")
+    B, F = smap.at_load(T, TH, 0.0)
+    approx, _ = choice.chosen.evaluate(B)
+    return {"t": T, "theta": TH, "err_r": np.abs(approx[..., 0] - F[..., 0]),
+            "err_z": np.abs(approx[..., 2] - F[..., 2])}
+
+
+def _chip(study: Study, noise: tuple[float, float] | None) -> tuple[HallChip, str]:
+    chip = hall_chip(study)
+    if noise is not None:
+        sx, sz = (float(v) for v in noise)
+        if not (sx > 0 and sz > 0):
+            raise MagtactError(f"the field noise must be positive, got {noise} T")
+        return HallChip(chip.name, sx, sz, chip.range_x, chip.range_z, "given",
+                        "given to magtact calibrate"), "given"
+    if chip.noise is None:
+        raise MagtactError(f"the Hall chip's noise is not known ({', '.join(chip.missing)}): "
+                           "give it in the study's [hall] or as --noise-uT")
+    return chip, f"the study's [hall] ({chip.name})"
+
+
+def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
+              noise: tuple[float, float] | None = None, presses: Presses | None = None,
+              fit=DEFAULT_FIT, degrees=DEGREES, table_sizes=TABLE_SIZES,
+              model_error: tuple[float, float] | None = None) -> Calibration:
+    """The calibration of design (H [m], G [Pa]) (docs/method.md §13): its map, the round-trip
+    check, the resolution σ_F with the chip's noise (``noise`` = (σ_x, σ_z) [T], else the
+    study's ``[hall]``), the firmware approximation held to σ_F, and, with ``presses``, the
+    built unit's parameters and corrected map (whose approximation is then exported;
+    ``model_error`` as in :func:`calibrate_unit`).
+
+    Raises
+    ------
+    MagtactError
+        Without a known noise, for a design without stable region, or presses that do not
+        identify the parameters of ``fit``.
+    """
+    from ..designer import resolution
+    from ..optimise import per_design
+
+    chip, source = _chip(study, noise)
+    design = per_design(models, H, G, study, M_z)
+    smap = sensor_map(models, study, H, G, M_z, design=design)
+    res = resolution(models, study, design, chip)
+    sigma = (res.sigma_r_worst, res.sigma_z_worst)
+    trip = round_trip_error(smap)
+    unit = None
+    target = smap
+    if presses is not None:
+        unit = calibrate_unit(smap, presses, fit=fit, model_error=model_error)
+        target = unit.corrected
+    choice = firmware_approximation(target, sigma, degrees=degrees, table_sizes=table_sizes)
+    return Calibration(target, chip.noise, source, sigma, trip, choice, unit,
+                       error_grid(target, choice))
+
+
+def write_calibration_outputs(cal: Calibration, out_dir, figures=None) -> dict[str, Path]:
+    """Write ``force.h`` (C99), ``force_map.json``, ``force_table.csv``, ``calibration.json``
+    (the summary the report reads) and, with ``figures`` (e.g.
+    :func:`magtact.report.calibration_figures`), the error figure. Returns the files by name."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    files = {
+        "c_header": out / "force.h",
+        "json": write_json(approximation_json(cal.firmware, cal.map), out / "force_map.json"),
+        "csv_table": write_table_csv(cal.map, out / "force_table.csv"),
+        "summary": write_json(cal.to_json(), out / "calibration.json"),
+    }
+    files["c_header"].write_text(c_header(cal.firmware.chosen, cal.map, cal.firmware),
+                                 encoding="utf-8")
+    if cal.unit is not None:
+        files["unit"] = write_json(cal.unit.to_json(), out / "unit.json")
+    if figures is not None:
+        for k, p in enumerate(figures(cal, out)):
+            files[f"figure_{k}"] = Path(p)
+    return files

@@ -1,0 +1,424 @@
+"""A built unit calibrated from a few presses (docs/method.md §13.3).
+
+A unit differs from its design by a few physical parameters (:class:`UnitParameters`): the
+stiffness of its body (G scale, multiplies every force), the remanence of its magnet (B scale,
+multiplies the magnet's field), where its chip sits (chip offset d, moves the Hall point) and a
+constant field offset b. Each press i is a measured pair (B_i, F_i) at an unknown load, the
+features w_i = (p, q_x, q_y) of the magnet's displacement. The fit minimises
+
+    Σ_i |B(w_i; θ) − B_i|² / σ_B² + |F(w_i; θ) − F_i|² / σ_F²
+
+over the parameters θ and every w_i jointly (the field model is the exact field of the magnet at
+the shifted Hall point, :func:`magtact.magnetics.cylinder_field`). The fit's own conditioning
+says what the presses identify: the parameters' standard deviations are the square roots of the
+diagonal of (JᵀJ)⁻¹ restricted to θ, J the Jacobian of the whitened residuals at the solution.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .._errors import MagtactError, MissingFileError
+from ..study import from_si, mm, to_si
+from ..validation import DataError
+from ._map import SensorMap, UnitParameters, _check_readings
+
+#: Parameter names in the order of :meth:`UnitParameters.vector`, with the unit they are shown in.
+PARAMETERS = ("G_scale", "B_scale", "chip_offset_x", "chip_offset_y", "chip_offset_z",
+              "field_offset_x", "field_offset_y", "field_offset_z")
+SHOW = {"G_scale": ("", 1.0), "B_scale": ("", 1.0), "chip_offset_x": ("mm", 1e3),
+        "chip_offset_y": ("mm", 1e3), "chip_offset_z": ("mm", 1e3),
+        "field_offset_x": ("mT", 1e3), "field_offset_y": ("mT", 1e3),
+        "field_offset_z": ("mT", 1e3)}
+#: The parameters fitted by default: the field offset is left out, because with a few presses
+#: it trades off against the remanence and the chip's height (docs/method.md §13.3).
+DEFAULT_FIT = PARAMETERS[:5]
+#: The largest standard deviation a fitted parameter may have (SI): 1 % of a scale, 10 µm of
+#: an offset of the chip, 50 µT of a field offset.
+TOLERANCE = {"G_scale": 1e-2, "B_scale": 1e-2, "chip_offset_x": 1e-5, "chip_offset_y": 1e-5,
+             "chip_offset_z": 1e-5, "field_offset_x": 5e-5, "field_offset_y": 5e-5,
+             "field_offset_z": 5e-5}
+#: Default noise of one press (1 σ per axis; a press is the mean of repeated readings):
+#: field [T], force [N]. Assumed figures, not a datasheet's: give the rig's own.
+SIGMA_B, SIGMA_F = 5e-6, 2e-3
+#: Parameter scales of the solver (SI per unit of its variables).
+_SCALE = np.array([1.0, 1.0, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4])
+
+#: Columns of a press file, with their units.
+PRESS_COLUMNS = ("B_x_T", "B_y_T", "B_z_T", "F_x_N", "F_y_N", "F_z_N")
+
+
+@dataclass(frozen=True)
+class Presses:
+    """Measured (B, F) pairs of one unit: ``B`` (n, 3) [T], ``F`` (n, 3) [N]; ``source``: the
+    file; ``sigma_B``, ``sigma_F``: the noise of one press (1 σ per axis)."""
+
+    B: np.ndarray
+    F: np.ndarray
+    source: str = ""
+    sigma_B: float = SIGMA_B
+    sigma_F: float = SIGMA_F
+
+    def __post_init__(self):
+        B = _check_readings(self.B, "presses B")
+        F = _check_readings(self.F, "presses F")
+        if B.ndim != 2 or B.shape != F.shape:
+            raise MagtactError(f"presses: B and F must both be (n, 3), got {B.shape} and "
+                               f"{F.shape}")
+        if not (self.sigma_B > 0 and self.sigma_F > 0):
+            raise MagtactError(f"presses: the noise sigma_B, sigma_F must be positive, got "
+                               f"{self.sigma_B} T, {self.sigma_F} N")
+
+    def __len__(self) -> int:
+        return len(self.B)
+
+
+def read_presses(path) -> Presses:
+    """Presses from a CSV file: ``#`` metadata lines (``key = value``; ``sigma_B_uT``,
+    ``sigma_F_mN`` set the noise), a header with the columns ``B_x_T, B_y_T, B_z_T, F_x_N,
+    F_y_N, F_z_N`` (any order, others ignored), one row per press. The conventions of
+    :func:`magtact.validation.read_experiment`.
+
+    Raises
+    ------
+    DataError
+        Naming the file, line and column of a missing column, an empty or non-numeric cell,
+        a NaN, a ragged row or an empty file.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise MissingFileError(f"{path}: no such press file")
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: not a UTF-8 text file ({exc.reason} at byte "
+                        f"{exc.start})") from None
+    lines = text.splitlines()
+    meta, meta_line, i = {}, {}, 0
+    while i < len(lines) and (lines[i].lstrip().startswith("#") or not lines[i].strip()):
+        body = lines[i].lstrip().lstrip("#").strip()
+        if body:
+            sep = "=" if "=" in body else (":" if ":" in body else None)
+            if sep is None:
+                raise DataError(f"{path}: line {i + 1}: metadata must read 'key = value', "
+                                f"got {body!r}")
+            k, v = (s.strip() for s in body.split(sep, 1))
+            meta[k.lower()], meta_line[k.lower()] = v, i + 1
+        i += 1
+    if i >= len(lines):
+        raise DataError(f"{path}: empty file (no header row of column names)")
+    header_no = i + 1
+    header = [h.strip() for h in next(csv.reader([lines[i]]), [])]
+    for c in PRESS_COLUMNS:
+        if c not in header:
+            raise DataError(f"{path}: line {header_no}: missing column {c!r} (the header has "
+                            f"{', '.join(header)})")
+        if header.count(c) > 1:
+            raise DataError(f"{path}: line {header_no}, column {c!r}: column name appears "
+                            "twice")
+    rows = []
+    for j in range(i + 1, len(lines)):
+        if not lines[j].strip() or lines[j].lstrip().startswith("#"):
+            continue
+        cells = [c.strip() for c in next(csv.reader([lines[j]]), [])]
+        if len(cells) != len(header):
+            raise DataError(f"{path}: line {j + 1}: {len(cells)} cells, the header on line "
+                            f"{header_no} has {len(header)} columns")
+        values = []
+        for c in PRESS_COLUMNS:
+            cell = cells[header.index(c)]
+            try:
+                v = float(cell)
+            except ValueError:
+                what = "empty cell" if not cell else f"not a number: {cell!r}"
+                raise DataError(f"{path}: line {j + 1}, column {c!r}: {what}") from None
+            if not math.isfinite(v):
+                raise DataError(f"{path}: line {j + 1}, column {c!r}: {cell!r} is not a "
+                                "finite number")
+            values.append(v)
+        rows.append(values)
+    if not rows:
+        raise DataError(f"{path}: line {header_no}: header but no presses")
+    data = np.asarray(rows)
+
+    def noise(key, unit, default):
+        if key not in meta:
+            return default
+        try:
+            v = to_si(float(meta[key]), unit)
+        except ValueError:
+            raise DataError(f"{path}: line {meta_line[key]}: {key} = {meta[key]!r} is not a "
+                            "number") from None
+        if not (math.isfinite(v) and v > 0):
+            raise DataError(f"{path}: line {meta_line[key]}: {key} must be positive")
+        return v
+
+    return Presses(data[:, :3], data[:, 3:], str(path), noise("sigma_b_ut", "uT", SIGMA_B),
+                   noise("sigma_f_mn", "mN", SIGMA_F))
+
+
+def write_presses(presses: Presses, path) -> Path:
+    """Presses as the CSV that :func:`read_presses` reads."""
+    path = Path(path)
+    with path.open("w", newline="") as fh:
+        fh.write(f"# sigma_B_uT = {from_si(presses.sigma_B, 'uT'):.6g}\n"
+                 f"# sigma_F_mN = {from_si(presses.sigma_F, 'mN'):.6g}\n")
+        w = csv.writer(fh)
+        w.writerow(PRESS_COLUMNS)
+        for b, f in zip(presses.B, presses.F, strict=True):
+            w.writerow([f"{v:.12g}" for v in (*b, *f)])
+    return path
+
+
+@dataclass(frozen=True)
+class UnitCalibration:
+    """The fitted unit: ``unit`` (the parameters), ``std`` (their standard deviations from the
+    fit's conditioning, SI, by name), ``corrected`` (the unit's map), the residuals [T], [N]
+    of the presses at the solution, and the presses' loads (t, θ, φ) (n, 3)."""
+
+    unit: UnitParameters
+    std: dict[str, float]
+    corrected: SensorMap
+    residual_B: np.ndarray
+    residual_F: np.ndarray
+    loads: np.ndarray
+    presses: Presses
+
+    def to_json(self) -> dict:
+        out = {"n_presses": len(self.presses), "parameters": self.unit.to_json(),
+               "std": {k: v * SHOW[k][1] for k, v in self.std.items()},
+               "std_units": {k: SHOW[k][0] for k in self.std},
+               "rms_residual_B_uT": from_si(float(np.sqrt(np.mean(self.residual_B**2))), "uT"),
+               "rms_residual_F_mN": from_si(float(np.sqrt(np.mean(self.residual_F**2))), "mN"),
+               "sigma_B_uT": from_si(self.presses.sigma_B, "uT"),
+               "sigma_F_mN": from_si(self.presses.sigma_F, "mN"),
+               "source": self.presses.source}
+        return out
+
+
+def _model(smap: SensorMap, theta, w):
+    """(B, F) of parameter vectors theta (..., 8) at features w (..., n, 3): the exact field at
+    the shifted Hall point (as :meth:`SensorMap.B_of` with ``field_source = "exact"``), batched
+    over parameter sets."""
+    from ..magnetics import cylinder_field
+
+    theta = np.asarray(theta, dtype=float)
+    w = np.asarray(w, dtype=float)
+    th = theta[..., None, :]
+    a, z0 = smap._path
+    mag = smap.study.magnet
+    x = a * w[..., 1] + th[..., 2]
+    y = a * w[..., 2] + th[..., 3]
+    z = z0 - a * w[..., 0] + th[..., 4]
+    rho = np.hypot(x, y)
+    b_rho, b_z = cylinder_field(rho, z, mag.R_m, mag.H_m, mag.M_z)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ex = np.where(rho > 0, x / np.where(rho > 0, rho, 1.0), 0.0)
+        ey = np.where(rho > 0, y / np.where(rho > 0, rho, 1.0), 0.0)
+    scale = smap.field_scale * th[..., 1]
+    B = np.stack([b_rho * ex * scale + th[..., 5], b_rho * ey * scale + th[..., 6],
+                  b_z * scale + th[..., 7]], axis=-1)
+    F = smap.F_of(w) * th[..., 0][..., None]
+    return B, F
+
+
+class _Problem:
+    """The whitened residuals of the joint fit, and their Jacobian by central differences with
+    every column in one batched evaluation."""
+
+    def __init__(self, smap, presses, free, theta0, model_error=None):
+        self.smap, self.presses, self.free, self.theta0 = smap, presses, free, theta0
+        self.n, self.k = len(presses), int(free.sum())
+        # the force's weight per press and axis: its noise and the force model's own error
+        eps = (0.0, 0.0) if model_error is None else model_error
+        F = np.asarray(presses.F, dtype=float)
+        rel = np.stack([eps[0] * np.hypot(F[:, 0], F[:, 1])] * 2 + [eps[1] * np.abs(F[:, 2])],
+                       axis=-1)
+        self.sigma_F = np.sqrt(presses.sigma_F**2 + rel**2)
+
+    def unpack(self, x):
+        x = np.asarray(x, dtype=float)
+        theta = np.broadcast_to(self.theta0, x.shape[:-1] + (8,)).copy()
+        theta[..., self.free] = x[..., :self.k] * _SCALE[self.free]
+        return theta, x[..., self.k:].reshape(x.shape[:-1] + (self.n, 3))
+
+    def __call__(self, x):
+        x = np.asarray(x, dtype=float)
+        theta, w = self.unpack(x)
+        B, F = _model(self.smap, theta, w)
+        p = self.presses
+        lead = x.shape[:-1]
+        return np.concatenate([((B - p.B) / p.sigma_B).reshape(lead + (-1,)),
+                               ((F - p.F) / self.sigma_F).reshape(lead + (-1,))], axis=-1)
+
+    def jac(self, x):
+        x = np.asarray(x, dtype=float)
+        h = 1e-6 * np.maximum(1.0, np.abs(x))
+        E = np.diag(h)
+        r = self(np.concatenate([x + E, x - E]))
+        return ((r[:x.size] - r[x.size:]) / (2 * h[:, None])).T
+
+
+def _std(J: np.ndarray, k: int) -> np.ndarray:
+    """Standard deviations of the first k variables from the whitened Jacobian J: the square
+    roots of the diagonal of (JᵀJ)⁻¹; infinite along directions the presses do not see."""
+    info = J.T @ J
+    s, U = np.linalg.eigh(info)
+    null = s <= 1e-12 * max(s.max(), 1e-300)
+    inv = np.where(null, 0.0, 1.0 / np.where(null, 1.0, s))
+    d = (U[:k] ** 2) @ inv
+    if null.any():
+        d = d + np.where((np.abs(U[:k, null]) > 1e-6).any(axis=1), np.inf, 0.0)
+    return np.sqrt(np.maximum(d, 0.0))
+
+
+def _candidate_kinds(smap: SensorMap) -> dict[str, np.ndarray]:
+    """The kinds of press the advice may ask for, as loads (t, θ, φ) at 3/4 of the region."""
+    t, th = 0.75 * smap.t_m, smap.theta_m
+    return {"normal presses (no shear) at other depths": np.array([[t, 0.0, 0.0],
+                                                                    [t / 3, 0.0, 0.0]]),
+            "presses sheared along x": np.array([[t, th, 0.0], [t / 3, th, np.pi]]),
+            "presses sheared along y": np.array([[t, th, np.pi / 2], [t / 3, th, -np.pi / 2]])}
+
+
+def _advice(smap, presses, theta, free, w, bad, model_error=None) -> dict[str, str]:
+    """For each of the ``bad`` parameters, the kind of press whose addition lowers its deviation
+    most (from the same conditioning, with the added presses' Jacobian at the fitted unit)."""
+    names = [p for p, f in zip(PARAMETERS, free, strict=True) if f]
+    std = {}
+    for label, load in _candidate_kinds(smap).items():
+        wk = smap.features(load[:, 0], load[:, 1], load[:, 2])
+        Bk, Fk = _model(smap, theta, wk)
+        extra = Presses(np.concatenate([presses.B, Bk]), np.concatenate([presses.F, Fk]),
+                        sigma_B=presses.sigma_B, sigma_F=presses.sigma_F)
+        x = np.concatenate([theta[free] / _SCALE[free], np.concatenate([w, wk]).ravel()])
+        prob = _Problem(smap, extra, free, theta, model_error)
+        std[label] = _std(prob.jac(x), prob.k) * _SCALE[free]
+    return {b: min(std, key=lambda lab, b=b: std[lab][names.index(b)]) for b in bad}
+
+
+def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
+                   tolerance: dict | None = None,
+                   model_error: tuple[float, float] | None = None) -> UnitCalibration:
+    """Fit a built unit's parameters to its presses (docs/method.md §13.3).
+
+    Parameters
+    ----------
+    smap : SensorMap
+        The design's map (:func:`sensor_map`); the unit's map uses the exact field.
+    presses : Presses
+        At least 2 presses (6 readings each, 3 unknown load features each).
+    fit : sequence of str
+        The parameters to fit (names of :data:`PARAMETERS`; default :data:`DEFAULT_FIT`); the
+        others stay nominal.
+    tolerance : dict, optional
+        The largest standard deviation of each parameter [SI] (default :data:`TOLERANCE`).
+    model_error : (float, float), optional
+        Relative error (ε_xy, ε_z) of the force models: each press's force noise becomes
+        sqrt(σ_F² + (ε |F|)²) per axis, so that the fit and its conditioning count the models'
+        own error (e.g. the max relative error of their fit report). Default: none.
+
+    Raises
+    ------
+    MagtactError
+        For too few presses, an unknown parameter name, or presses that do not identify a
+        parameter: the message names it, its deviation from the fit's conditioning, and the
+        kind of press that would identify it best.
+    """
+    unknown = [f for f in fit if f not in PARAMETERS]
+    if unknown:
+        raise MagtactError(f"unknown unit parameters {unknown}; choose among {PARAMETERS}")
+    tol = {**TOLERANCE, **(tolerance or {})}
+    free = np.array([p in fit for p in PARAMETERS])
+    n, k = len(presses), int(free.sum())
+    if 3 * n < k or n < 2:
+        raise MagtactError(f"{n} presses cannot identify {k} parameters: each press adds 3 "
+                           f"unknown load features and 6 readings, so at least "
+                           f"{max(2, -(-k // 3))} presses are needed")
+    exact = replace(smap, field_source="exact", unit=UnitParameters())
+    start = exact.force(presses.B)
+    w0 = exact.features(np.nan_to_num(start.t), np.nan_to_num(start.theta),
+                        np.nan_to_num(start.phi))
+    theta0 = UnitParameters().vector()
+    if model_error is not None and not all(e >= 0 for e in model_error):
+        raise MagtactError(f"model_error must be two relative errors >= 0, got {model_error}")
+    prob = _Problem(exact, presses, free, theta0, model_error)
+    x0 = np.concatenate([theta0[free] / _SCALE[free], w0.ravel()])
+    sol = least_squares(prob, x0, jac=prob.jac, method="lm", x_scale="jac", xtol=1e-12,
+                        ftol=1e-12, gtol=1e-12, max_nfev=200)
+    theta, w = prob.unpack(sol.x)
+    s = _std(prob.jac(sol.x), k) * _SCALE[free]
+    names = [p for p, f in zip(PARAMETERS, free, strict=True) if f]
+    std = dict(zip(names, s.tolist(), strict=True))
+    bad = [p for p in names if not std[p] <= tol[p]]
+    if bad:
+        kinds = _advice(exact, presses, theta, free, w, bad, model_error)
+
+        def show(p, v):
+            unit, f = SHOW[p]
+            return f"{v * f:.3g}" + (f" {unit}" if unit else "")
+
+        what = ", ".join(f"{p} (±{show(p, std[p])} from the fit's conditioning, tolerance "
+                         f"{show(p, tol[p])})" for p in bad)
+        add = {}
+        for p in bad:
+            add.setdefault(kinds[p], []).append(p)
+        advice = "; ".join(f"{k} (for {', '.join(v)})" for k, v in add.items())
+        raise MagtactError(f"these {n} presses do not identify {what}. Add {advice}, or leave "
+                           "the parameter out of the fit")
+    unit = UnitParameters.from_vector(theta)
+    corrected = exact.with_unit(unit)
+    B, F = _model(exact, theta, w)
+    p, q = w[:, 0], np.hypot(w[:, 1], w[:, 2])
+    loads = np.stack([p, np.arctan2(q, p), np.arctan2(w[:, 2], w[:, 1])], axis=-1)
+    return UnitCalibration(unit, std, corrected, B - presses.B, F - presses.F, loads, presses)
+
+
+def fe_readings(dataset, smap: SensorMap, unit: UnitParameters, azimuth=None, seed: int = 0
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Readings of a synthetic unit made from the finite-element paths of a DOE data set at the
+    map's height (docs/method.md §13.3): the force of every FE point (scaled from its G level
+    to the unit's G_scale · G), the exact field of the unit's magnet (B_scale) at the FE
+    displacement, read at the unit's shifted Hall point, plus its field offset; each point
+    turned to an azimuth (given, or uniform at random).
+
+    Returns
+    -------
+    B, F : numpy.ndarray
+        (n, 3) [T], [N], n = the number of (t, θ) points of the path grid.
+    loads : numpy.ndarray
+        (n, 3): t, θ [rad], φ [rad].
+
+    Raises
+    ------
+    MagtactError
+        If the data set has no height level at the map's H.
+    """
+    H = dataset["H"].values
+    j = np.flatnonzero(np.isclose(H, smap.H, rtol=0, atol=1e-9))
+    if not j.size:
+        raise MagtactError(f"the data set has no height level at H = {mm(smap.H):.4g} mm "
+                           f"(levels {', '.join(f'{mm(h):.4g}' for h in H)} mm)")
+    d = dataset.isel(H=int(j[0]))
+    G_level = float(d["G"].values[0])
+    T, TH = np.meshgrid(d["t"].values, d["theta"].values, indexing="ij")
+    F_r = d["F_r"].values[..., 0] / G_level * smap.G * unit.G_scale
+    F_z = d["F_z"].values[..., 0] / G_level * smap.G * unit.G_scale
+    u_r, u_z = d["u_r"].values, d["u_z"].values
+    rng = np.random.default_rng(seed)
+    phi = rng.uniform(-np.pi, np.pi, T.shape) if azimuth is None else np.broadcast_to(
+        np.asarray(azimuth, float), T.shape)
+    a, _ = smap._path
+    # the features of the FE displacement (u_z = a p, u_r = -a q), so that the field is the
+    # unit model's exact field at the FE displacement
+    w = np.stack([u_z / a, -u_r / a * np.cos(phi), -u_r / a * np.sin(phi)], axis=-1)
+    B, _ = _model(replace(smap, field_source="exact"), unit.vector(), w.reshape(1, -1, 3))
+    F = np.stack([F_r * np.cos(phi), F_r * np.sin(phi), F_z], axis=-1)
+    loads = np.stack([T, TH, phi], axis=-1)
+    return B.reshape(-1, 3), F.reshape(-1, 3), loads.reshape(-1, 3)

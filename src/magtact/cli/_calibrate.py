@@ -1,0 +1,98 @@
+"""`magtact calibrate`: the sensor's field-to-force map for firmware, and a built unit's
+calibration from presses (docs/method.md §13)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .._errors import MagtactError
+from ..study import checked_si, from_si
+from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+from ._optimise import ModelsOpt, study_models
+
+#: Range of a Hall chip's field noise [T]: 1 nT to 10 mT.
+NOISE_BOUNDS = (1e-9, 1e-2)
+
+
+def chosen_design(models, study) -> tuple[float, float, float | None]:
+    """(H, G, M_z) of the study's chosen design: the decision rule on the exact front
+    (docs/method.md §7.2), the cross-check of NSGA-II's choice."""
+    from ..optimise import choose, exact_reduction, force_constraints
+
+    c = choose(models, study, exact_reduction(models, study, force_constraints(models, study)))
+    return c.design.H, c.design.G, c.design.M_z
+
+
+@app.command("calibrate")
+def calibrate_command(
+    out: OutOpt,
+    study: StudyArg = None,
+    H: Annotated[float | None, typer.Option(
+        "--H", help="Body height H (mm); default: the study's chosen design.")] = None,
+    G: Annotated[float | None, typer.Option(
+        "--G", help="Shear modulus G (kPa); default: the study's chosen design.")] = None,
+    noise: Annotated[float | None, typer.Option(
+        "--noise-uT", help="Field noise of the Hall chip, 1 sigma per axis (µT), for the "
+                           "resolution sigma_F the firmware map is held to; default: the "
+                           "study's hall.noise_x_uT, noise_z_uT.")] = None,
+    presses: Annotated[Path | None, typer.Option(
+        "--presses", help="CSV of a built unit's presses (columns B_x_T, B_y_T, B_z_T, F_x_N, "
+                          "F_y_N, F_z_N): fit the unit's parameters and export its map.")] = None,
+    fit: Annotated[str | None, typer.Option(
+        "--fit", help="Comma-separated unit parameters to fit (G_scale, B_scale, "
+                      "chip_offset_x/y/z, field_offset_x/y/z); default: G_scale, B_scale and "
+                      "the chip offsets.")] = None,
+    model_error: Annotated[float | None, typer.Option(
+        "--model-error", help="Relative error of the force models (e.g. 0.01), counted in "
+                              "the unit fit's weights and conditioning.")] = None,
+    models: ModelsOpt = None,
+) -> None:
+    """The field-to-force map of a design for firmware: force.h (C99), force_map.json,
+    force_table.csv, calibration.json and calibration.png in OUT."""
+    from ..calibration import DEFAULT_FIT, calibrate, read_presses, write_calibration_outputs
+    from ..report import calibration_figures
+
+    s = get_study(study)
+    if (H is None) != (G is None):
+        raise MagtactError("give both --H and --G, or neither (the chosen design)")
+    if model_error is not None and not 0 <= model_error <= 1:
+        raise MagtactError(f"--model-error must be a fraction between 0 and 1, got "
+                           f"{model_error}")
+    sigma = None if noise is None else (
+        checked_si(noise, "uT", "--noise-uT", bounds=NOISE_BOUNDS),) * 2
+    units = None if fit is None else tuple(p.strip() for p in fit.split(",") if p.strip())
+    data = None if presses is None else read_presses(presses)
+    ms = study_models(s, models)
+    if H is None:
+        H_si, G_si, M_z = chosen_design(ms, s)
+        label = "the chosen design"
+    else:
+        H_si, G_si, M_z = checked_si(H, "mm", "--H"), checked_si(G, "kPa", "--G"), None
+        label = "the given design"
+    console.print(f"calibrating {label}: H = {from_si(H_si, 'mm'):.4g} mm, "
+                  f"G = {from_si(G_si, 'kPa'):.4g} kPa", highlight=False)
+    eps = None if model_error is None else (model_error, model_error)
+    cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
+                    fit=DEFAULT_FIT if units is None else units, model_error=eps)
+    folder = out_dir(out)
+    write_calibration_outputs(cal, folder, figures=calibration_figures)
+    a = cal.firmware.chosen
+    console.print(
+        f"map: round trip F -> B -> F within {cal.round_trip:.2g} of the force range; "
+        f"firmware: {a.kind} ({a.bytes} bytes, {a.multiplies} multiplications), largest "
+        f"error F_r {from_si(a.err_r, 'mN'):.3g} mN, F_z {from_si(a.err_z, 'mN'):.3g} mN "
+        f"against sigma_F {from_si(cal.sigma_F[0], 'mN'):.3g} / "
+        f"{from_si(cal.sigma_F[1], 'mN'):.3g} mN "
+        f"({'reached' if cal.firmware.reached else 'NOT reached: see the frontier'})",
+        highlight=False)
+    if cal.unit is not None:
+        u = cal.unit.unit
+        chip = ", ".join(f"{from_si(v, 'mm'):.4f}" for v in u.chip_offset)
+        field = ", ".join(f"{from_si(v, 'mT'):.4f}" for v in u.field_offset)
+        console.print(f"unit: G x {u.G_scale:.4f}, remanence x {u.B_scale:.4f}, chip offset "
+                      f"({chip}) mm, field offset ({field}) mT", highlight=False)
+    console.print(f"wrote {folder}/force.h, force_map.json, force_table.csv, calibration.json",
+                  highlight=False)

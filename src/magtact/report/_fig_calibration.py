@@ -1,0 +1,72 @@
+"""Figure of the calibration: the firmware approximation's error over the stable region and the
+size–error frontier of the candidates (docs/method.md §13)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..study import from_si
+from ._style import CMAP_SEQ, save, style, subplots
+
+
+def draw_calibration(fig, cal) -> list:
+    """Draw the three panels of :func:`fig_calibration` on ``fig``; returns the axes.
+
+    Panels: the chosen approximation's |error| of F_r and of F_z [mN] over (t, θ) with the
+    target σ_F in the title; the candidates' largest held-out error over σ_F against their
+    size in bytes (1 = the target, filled marks: on the frontier).
+    """
+    axes = fig.subplots(1, 3)
+    g = cal.grid
+    a = cal.firmware.chosen
+    for ax, key, sigma, name in ((axes[0], "err_r", cal.sigma_F[0], "F_r"),
+                                 (axes[1], "err_z", cal.sigma_F[1], "F_z")):
+        mesh = ax.pcolormesh(g["t"], g["theta"], from_si(g[key], "mN"), cmap=CMAP_SEQ,
+                             shading="auto")
+        fig.colorbar(mesh, ax=ax, label=f"|error of ${name[0]}_{name[2]}$| (mN)")
+        ax.set_xlabel("load t")
+        ax.set_ylabel("shear angle θ (rad)")
+        ax.set_title(f"${name[0]}_{name[2]}$: max {from_si(g[key].max(), 'mN'):.3g} mN, "
+                     f"σ_F {from_si(sigma, 'mN'):.3g} mN", fontsize=8)
+    ax = axes[2]
+    rows = cal.firmware.frontier()
+    colours = {"features": "C2", "poly": "C0", "table": "C1"}
+    for kind, marker in (("features", "^"), ("poly", "o"), ("table", "s")):
+        sel = [r for r in rows if r["kind"] == kind]
+        for filled in (True, False):
+            pts = [r for r in sel if r["on_frontier"] == filled]
+            if pts:
+                ax.plot([r["bytes"] for r in pts], [r["error_over_sigma"] for r in pts],
+                        marker, color=colours[kind],
+                        mfc=None if filled else "none", ls="none",
+                        label=f"{kind}{' (frontier)' if filled else ''}")
+    ax.plot([a.bytes], [max(a.err_r / cal.sigma_F[0], a.err_z / cal.sigma_F[1])], "*",
+            color="C3", ms=10, label="chosen")
+    ax.axhline(1.0, color="0.4", lw=0.8, ls="--")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("size (bytes)")
+    ax.set_ylabel("largest error / σ_F")
+    reached = "target reached" if cal.firmware.reached else "target NOT reached"
+    ax.set_title(f"firmware candidates ({reached})", fontsize=8)
+    ax.legend(frameon=False, fontsize=6)
+    d = cal.map.describe()
+    noise = ", ".join(f"{from_si(v, 'uT'):.3g}" for v in cal.noise)
+    fig.suptitle(f"calibration of H = {d['H_mm']:.3g} mm, G = {d['G_kPa']:.4g} kPa: "
+                 f"{a.kind} ({a.bytes} bytes); σ_F for σ_B = ({noise}) µT", fontsize=8)
+    return list(axes)
+
+
+def fig_calibration(cal, path: str | Path) -> list[Path]:
+    """The calibration figure (``calibration.png``/``.svg``) of a
+    :class:`magtact.calibration.Calibration`."""
+    with style():
+        fig, _ = subplots(1, 1, figsize=(10.0, 3.4))
+        fig.clear()
+        draw_calibration(fig, cal)
+        return save(fig, path)
+
+
+def calibration_figures(cal, folder: str | Path) -> list[Path]:
+    """The figures of the calibration stage: ``folder/calibration.{png,svg}``."""
+    return fig_calibration(cal, Path(folder) / "calibration")
