@@ -183,3 +183,15 @@ def test_the_result_budgets_its_designs(magone):
     assert b.label == "original" and [r.name for r in b.rows] == [r.name for r in ref.rows]
     np.testing.assert_allclose([r.worst for r in b.rows], [r.worst for r in ref.rows],
                                rtol=1e-12)
+
+
+def test_the_result_carries_the_chosen_designs_sensor_map(magone):
+    """``result.sensor`` maps the chosen design's field readings to forces and back; the
+    calibration uses the chip at the chosen design's setting."""
+    _, result = magone
+    F = np.array([[0.1, 0.0, 2.0], [0.0, -0.05, 1.0], [0.0, 0.0, 0.5]])
+    B, flags = result.sensor.field(F)
+    assert not flags.any()
+    back = result.sensor.force(B)
+    np.testing.assert_allclose(back.F, F, atol=1e-9 * np.abs(F).max())
+    assert (result.sensor.H, result.sensor.G) == (result.chosen.H, result.chosen.G)

@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from .budget import Budget
+    from .calibration import Calibration, SensorMap
     from .designer import DesignAnswer
     from .metamodel import ModelSet
     from .optimise import ForceConstraints, GeometryOptimisation, Optimisation
@@ -226,6 +227,41 @@ class Result:
         return error_budget(self.models, self.study, a.H, a.G, a.design.M_z, label=a.label,
                             design=a.design, noise=noise, dataset=dataset, seeds=seeds,
                             chip=a.chip)
+
+    @cached_property
+    def sensor(self) -> SensorMap:
+        """The chosen design's field-to-force map (docs/method.md §13): ``sensor.force(B)``
+        for readings B (..., 3) [T], ``sensor.field(F)`` the forward map."""
+        from .calibration import sensor_map
+
+        geometry = {k: self.variables[k] for k in self.study.geometric_variables}
+        models, study = ((self.models.at(**geometry), self.study.at(**geometry)) if geometry
+                         else (self.models, self.study))
+        a = self.chosen
+        return sensor_map(models, study, a.H, a.G, a.design.M_z, design=a.design)
+
+    def calibrate(self, answer: DesignAnswer | None = None, *, presses=None,
+                  noise: tuple[float, float] | None = None, **options) -> Calibration:
+        """The calibration of a design for firmware and, with ``presses`` (a built unit's
+        measured (B, F), :func:`magtact.calibration.read_presses`), of one unit
+        (docs/method.md §13), with the chip at the design's setting; ``options`` as
+        :func:`magtact.calibration.calibrate` (``fit``, ``degrees``, ``table_sizes``,
+        ``model_error``).
+
+        Raises
+        ------
+        MagtactError
+            For a study with geometric design variables, an unknown noise, presses that do not
+            identify the parameters.
+        """
+        from .calibration import calibrate
+
+        if self.study.geometric_variables:
+            raise MagtactError("a calibration belongs to one geometry: fix the geometric "
+                               "design variables (study.at(...)) with models fitted to it")
+        a = self.chosen if answer is None else answer
+        return calibrate(self.models, self.study, a.H, a.G, a.design.M_z, noise=noise,
+                         presses=presses, chip=a.chip, **options)
 
     def figures(self) -> dict[str, Figure]:
         """The optimisation's figures as matplotlib figures, by name."""

@@ -323,6 +323,32 @@ def _stage_budget(ctx: _Context, rec: StageRecord) -> str:
             f"{1e3 * top.worst:.3g} mN worst")
 
 
+#: The firmware candidates a run measures (``magtact calibrate`` measures the full sweep of
+#: :func:`magtact.calibration.firmware_approximation`): the sweep's higher orders and largest
+#: table cost most of its time and are chosen only where these do not reach σ_F.
+RUN_CALIBRATION = {"degrees": (4, 6, 8, 10, 12), "table_sizes": (16, 32, 64, 128)}
+
+
+def _stage_calibration(ctx: _Context, rec: StageRecord) -> str:
+    if ctx.result is None:
+        raise StageSkipped("needs the chosen design, which is missing")
+    if ctx.study.geometric_variables:
+        raise StageSkipped("a calibration belongs to one geometry: calibrate the chosen "
+                           "geometry with its own study (fixed R_m, H_m, R)")
+    from .calibration import write_calibration_outputs
+    from .report import calibration_figures
+
+    cal = ctx.result.calibrate(**RUN_CALIBRATION)
+    write_calibration_outputs(cal, ctx.folder / "calibration", figures=calibration_figures)
+    a = cal.firmware.chosen
+    if not cal.firmware.reached:
+        rec.notes.append("no firmware candidate of the run's sweep reaches σ_F: `magtact "
+                         "calibrate` measures the full sweep")
+    return (f"chosen design's map for firmware: {a.kind}, {a.bytes} bytes, largest error "
+            f"{1e3 * a.err_r:.3g} / {1e3 * a.err_z:.3g} mN (F_r / F_z) against σ_F "
+            f"{1e3 * cal.sigma_F[0]:.3g} / {1e3 * cal.sigma_F[1]:.3g} mN")
+
+
 def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
@@ -355,6 +381,7 @@ STAGES: tuple[tuple[str, str, Callable], ...] = (
     ("metamodel", "Metamodels", _stage_metamodel),
     ("optimise", "Optimisation", _stage_optimise),
     ("budget", "Error budget", _stage_budget),
+    ("calibration", "Calibration", _stage_calibration),
     ("validation", "Validation against experiments", _stage_validation),
 )
 

@@ -114,8 +114,10 @@ def error_grid(smap: SensorMap, choice: FirmwareChoice, n: int = N_GRID) -> dict
             "err_z": np.abs(approx[..., 2] - F[..., 2])}
 
 
-def _chip(study: Study, noise: tuple[float, float] | None) -> tuple[HallChip, str]:
-    chip = hall_chip(study)
+def _chip(study: Study, noise: tuple[float, float] | None,
+          chip: HallChip | None = None) -> tuple[HallChip, str]:
+    own = chip is None
+    chip = hall_chip(study) if own else chip
     if noise is not None:
         sx, sz = (float(v) for v in noise)
         if not (sx > 0 and sz > 0):
@@ -125,18 +127,21 @@ def _chip(study: Study, noise: tuple[float, float] | None) -> tuple[HallChip, st
     if chip.noise is None:
         raise MagtactError(f"the Hall chip's noise is not known ({', '.join(chip.missing)}): "
                            "give it in the study's [hall] or as --noise-uT")
-    return chip, f"the study's [hall] ({chip.name})"
+    return chip, (f"the study's [hall] ({chip.name})" if own
+                  else f"{chip.name} at {chip.setting}")
 
 
 def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
               noise: tuple[float, float] | None = None, presses: Presses | None = None,
               fit=DEFAULT_FIT, degrees=DEGREES, table_sizes=TABLE_SIZES,
-              model_error: tuple[float, float] | None = None) -> Calibration:
+              model_error: tuple[float, float] | None = None,
+              chip: HallChip | None = None) -> Calibration:
     """The calibration of design (H [m], G [Pa]) (docs/method.md §13): its map, the round-trip
     check, the resolution σ_F with the chip's noise (``noise`` = (σ_x, σ_z) [T], else the
     study's ``[hall]``), the firmware approximation held to σ_F, and, with ``presses``, the
     built unit's parameters and corrected map (whose approximation is then exported;
-    ``model_error`` as in :func:`calibrate_unit`).
+    ``model_error`` as in :func:`calibrate_unit`). ``chip``: the chip at the setting the
+    design's answer uses (:attr:`magtact.designer.DesignAnswer.chip`), default the study's.
 
     Raises
     ------
@@ -147,7 +152,7 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
     from ..designer import resolution
     from ..optimise import per_design
 
-    chip, source = _chip(study, noise)
+    chip, source = _chip(study, noise, chip)
     design = per_design(models, H, G, study, M_z)
     smap = sensor_map(models, study, H, G, M_z, design=design)
     res = resolution(models, study, design, chip)

@@ -17,15 +17,6 @@ from ._optimise import ModelsOpt, study_models
 NOISE_BOUNDS = (1e-9, 1e-2)
 
 
-def chosen_design(models, study) -> tuple[float, float, float | None]:
-    """(H, G, M_z) of the study's chosen design: the decision rule on the exact front
-    (docs/method.md §7.2), the cross-check of NSGA-II's choice."""
-    from ..optimise import choose, exact_reduction, force_constraints
-
-    c = choose(models, study, exact_reduction(models, study, force_constraints(models, study)))
-    return c.design.H, c.design.G, c.design.M_z
-
-
 @app.command("calibrate")
 def calibrate_command(
     out: OutOpt,
@@ -65,18 +56,25 @@ def calibrate_command(
         checked_si(noise, "uT", "--noise-uT", bounds=NOISE_BOUNDS),) * 2
     units = None if fit is None else tuple(p.strip() for p in fit.split(",") if p.strip())
     data = None if presses is None else read_presses(presses)
-    ms = study_models(s, models)
+    ms, _ = study_models(s, models)
     if H is None:
-        H_si, G_si, M_z = chosen_design(ms, s)
+        from .. import solve
+
+        with console.status("optimising"):
+            a = solve(ms, s).chosen
         label = "the chosen design"
     else:
-        H_si, G_si, M_z = checked_si(H, "mm", "--H"), checked_si(G, "kPa", "--G"), None
+        from ..designer import answer
+
+        a = answer(ms, s, checked_si(H, "mm", "--H"), checked_si(G, "kPa", "--G"))
         label = "the given design"
+    H_si, G_si, M_z = a.H, a.G, a.design.M_z
     console.print(f"calibrating {label}: H = {from_si(H_si, 'mm'):.4g} mm, "
                   f"G = {from_si(G_si, 'kPa'):.4g} kPa", highlight=False)
     eps = None if model_error is None else (model_error, model_error)
     cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
-                    fit=DEFAULT_FIT if units is None else units, model_error=eps)
+                    fit=DEFAULT_FIT if units is None else units, model_error=eps,
+                    chip=a.chip)  # the chip at this design's setting
     folder = out_dir(out)
     write_calibration_outputs(cal, folder, figures=calibration_figures)
     a = cal.firmware.chosen

@@ -41,6 +41,8 @@ STAGES: tuple[tuple[str, str, str], ...] = (
      "and the chosen design."),
     ("budget", "Error budget",
      "Everything besides the force that moves the field, as a false force in mN."),
+    ("calibration", "Calibration: the field-to-force map",
+     "The force from the three field readings, for firmware (C, JSON, CSV)."),
     ("validation", "Validation against experiments",
      "Mean ± standard deviation of repeat indentation tests against the model; c_v and ε."),
 )
@@ -129,12 +131,12 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     for key, title, what in STAGES:
         if key == "budget":  # a section of its own, from budget.json
             parts.append(_budget_section(folder / "budget", run_id))
+        elif key == "calibration" and (folder / key).is_dir() and _of_run(folder / key, run_id):
+            parts.append(_calibration(folder / key))
         elif _of_run(folder / key, run_id):
             parts.append(_stage(folder / key, key, title, what, stages.get(key)))
         else:
             parts.append(_other_run(folder / key, key, title, what))
-    if (folder / "calibration").is_dir() and _of_run(folder / "calibration", run_id):
-        parts.append(_calibration(folder / "calibration"))
     parts.append(publication_section(folder / "publication", _definition(folder)))
     parts.append(_evidence([folder / "evidence"] + ([Path(evidence)] if evidence else [])))
     parts.append(_settings(folder / "study.toml"))
