@@ -106,7 +106,7 @@ def print_budget(doc: dict, stdout: Console | None = None) -> None:
                         f"({doc['chip']}; noise: {doc['noise_source']})")
     for h, j in (("row", "left"), ("force", "left"), ("at rest [mN]", "right"),
                  ("worst [mN]", "right")):
-        table.add_column(h, justify=j)
+        table.add_column(escape(h), justify=j)
     for r in doc["rows"]:
         table.add_row(escape(r["name"]), r["component"], _fmt(r["at_rest_mN"]),
                       _fmt(r["worst_mN"]))
