@@ -2,17 +2,60 @@
 
 from __future__ import annotations
 
+import select
+import sys
 import tempfile
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
+from typer.core import TyperGroup
 
 from .._errors import MagtactError
 from ..study import Study, load_study
 
+
+class BrokenPipeFault(RuntimeError):
+    """A pipe to another process (not the terminal's output) broke, e.g. to a worker process
+    that failed to start."""
+
+
+def standard_stream_closed() -> bool:
+    """True if the reader of this process's stdout or stderr has gone (``magtact ... | head``).
+
+    A pipe whose reader closed polls as an error on its write end (Linux, macOS); a stream that
+    is no file (a test's capture) is never closed.
+    """
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            fd = stream.fileno()
+            poll = select.poll()
+            poll.register(fd, select.POLLOUT)
+            if any(ev & (select.POLLERR | select.POLLHUP) for _, ev in poll.poll(0)):
+                return True
+        except (AttributeError, OSError, ValueError):
+            continue
+    return False
+
+
+class _Group(TyperGroup):
+    """The command group: a broken pipe is click's quiet exit only when it is the terminal's
+    output that closed; any other broken pipe is raised as :class:`BrokenPipeFault`, so that
+    the exit says why."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError as exc:
+            if standard_stream_closed():
+                raise
+            raise BrokenPipeFault(f"a pipe to another process broke ({exc}): e.g. a worker "
+                                  "process failed to start or died") from exc
+
+
 app = typer.Typer(
+    cls=_Group,
     name="magtact",
     help="Design magnetic soft tactile sensors: field, mechanics, DOE, metamodels, optimisation.",
     no_args_is_help=True,
