@@ -101,8 +101,8 @@ class RunLock:
         The results folder (must exist).
     command : str
         What holds the lock (recorded for the message of a refused run).
-    patience_s : float
-        Seconds to keep trying before refusing.
+    patience_s : float, optional
+        Seconds to keep trying before refusing (default :data:`LOCK_PATIENCE_S`).
 
     Raises
     ------
@@ -111,10 +111,10 @@ class RunLock:
     """
 
     def __init__(self, folder: str | os.PathLike, command: str = "",
-                 patience_s: float = LOCK_PATIENCE_S):
+                 patience_s: float | None = None):
         self.path = Path(folder) / LOCK
         self.command = command
-        self.patience_s = patience_s
+        self.patience_s = LOCK_PATIENCE_S if patience_s is None else patience_s
         self.fd: int | None = None
 
     def __enter__(self) -> RunLock:
@@ -314,17 +314,22 @@ def swap(folder: Path, stage: Path, run_id: str) -> None:
 
 @contextlib.contextmanager
 def _signals_held():
-    """Hold SIGINT and SIGTERM (delivered after the block) where the platform can."""
-    held = {signal.SIGINT, signal.SIGTERM}
+    """Defer SIGINT and SIGTERM to the end of the block (when called in the main thread): the
+    signal is recorded, and raised again once the previous handlers are back."""
+    held: list[int] = []
     try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, held)
-    except (AttributeError, ValueError, OSError):
+        old = {sig: signal.signal(sig, lambda signum, frame: held.append(signum))
+               for sig in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:  # not the main thread: signals cannot be handled here anyway
         yield
         return
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(held):
+            signal.raise_signal(sig)
 
 
 def _roll_forward(folder: Path, journal: dict) -> None:
