@@ -37,7 +37,9 @@ def fit(
         s = replace(s, metamodel=replace(s.metamodel, generations=generations))
     H = checked_si(H_mm, "mm", "--H-mm") if H_mm is not None else None
     G = checked_si(G_kpa, "kPa", "--G-kpa") if G_kpa is not None else None
-    ds = load_dataset(data) if data is not None else bundled_for(s)
+    ds = load_dataset(data) if data is not None else bundled_for(
+        s, "compute its own (magtact doe STUDY --out DOE) and give it with --data DOE/doe.nc")
+    check_holdout(s, ds, data, study)
     result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
                                       log=lambda msg: console.print(msg, highlight=False),
                                       gamma_check=compare_with_data, figures=fit_figures)
@@ -50,3 +52,18 @@ def fit(
                     if te else ("–",) * 3, f"{r.fit_time_s:.1f}")
     console.print(tab)
     console.print(f"wrote {len(files)} files (models, metamodels.md, figures) to {out}")
+
+
+def check_holdout(s, ds, data, study_source) -> None:
+    """Refuse, before any fitting, more held-out paths than the data set's (θ, H) paths allow,
+    naming the study's setting and the data file."""
+    from .._errors import MagtactError
+    from ..study._model import holdout_limit
+
+    n_theta, n_H = ds.sizes.get("theta", 0), ds.sizes.get("H", 0)
+    most = holdout_limit(n_theta, n_H)
+    if s.metamodel.holdout_paths > most:
+        where = f"{study_source}: " if study_source else ""
+        raise MagtactError(f"{where}[metamodel] holdout_paths = {s.metamodel.holdout_paths}, but "
+                           f"the data set {data or '(bundled)'} has {n_theta} × {n_H} (θ, H) "
+                           f"paths, which allow at most {most} held-out paths")

@@ -13,7 +13,8 @@ from pathlib import Path
 import tomli_w
 
 from .._errors import MagtactError
-from ._model import GEOMETRY, SECTIONS, Study, key_of
+from .._files import file_problem
+from ._model import GEOMETRY, SECTIONS, Study, holdout_limit, key_of
 from ._units import LABEL, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
@@ -78,10 +79,13 @@ MAX_FILE_BYTES = 1_000_000
 
 def _read_text(path: Path) -> str:
     """The text of a study file (UTF-8, with or without a byte-order mark), or a StudyError."""
-    if not path.exists():
-        raise StudyError("file", f"study file not found: {path}")
-    if not path.is_file():
-        raise StudyError("file", "is not a file (a study is one TOML file)", str(path))
+    problem = file_problem(path)
+    if problem == "not found":
+        raise StudyError("file", f"study file not found: {path}, and no preset has that name "
+                                 f"(presets: {', '.join(PRESETS)})")
+    if problem is not None:
+        raise StudyError("file", f"is not a file: it is {problem} (a study is one TOML file)",
+                         str(path))
     try:
         size = path.stat().st_size
         if size > MAX_FILE_BYTES:
@@ -292,6 +296,7 @@ def _check_consistency(s: Study, source) -> None:
                          f"be smaller than its radius and height (min(R_m, H_m) = "
                          f"{_mm(min(mg.R_m, mg.H_m))} mm)", source)
     _check_work(s, source)
+    _check_order(s, source)
     for name in ("H_original", "G_original"):
         value, (lo, hi) = getattr(s.design, name), getattr(s.design, name[0])
         if not lo <= value <= hi:
@@ -371,6 +376,27 @@ def _check_work(s: Study, source) -> None:
     if not fm.growth_near < fm.growth:
         raise StudyError("magnetics.growth_near", f"must be below magnetics.growth = "
                                                   f"{fm.growth:g}, got {fm.growth_near:g}", source)
+
+
+def _check_order(s: Study, source) -> None:
+    """Settings that must keep an order among themselves, and settings bounded by the data the
+    study's DOE produces."""
+    m = s.mechanics
+    if m.dt_min > m.dt_max:
+        raise StudyError("mechanics.dt_min", f"the smallest load step ({m.dt_min:g}) must not "
+                                             f"exceed the largest, mechanics.dt_max = "
+                                             f"{m.dt_max:g}", source)
+    if not m.dt_min <= m.dt_initial <= m.dt_max:
+        raise StudyError("mechanics.dt_initial", f"the first load step ({m.dt_initial:g}) must "
+                                                 f"lie in [mechanics.dt_min, mechanics.dt_max] "
+                                                 f"= [{m.dt_min:g}, {m.dt_max:g}]", source)
+    n, most = s.metamodel.holdout_paths, holdout_limit(s.doe.n_theta, s.doe.n_H)
+    if n > most:
+        raise StudyError("metamodel.holdout_paths", f"{n} held-out paths, but the DOE's "
+                                                    f"{s.doe.n_theta} × {s.doe.n_H} (doe.n_theta "
+                                                    f"× doe.n_H) (θ, H) paths allow at most "
+                                                    f"{most} (interior paths, leaving some to "
+                                                    "fit)", source)
 
 
 def _mm(x: float) -> str:
