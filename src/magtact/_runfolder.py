@@ -1,6 +1,6 @@
 """The results folder of ``magtact run``: nothing of the user's lost, no two runs mixed.
 
-Three rules, each with its mechanism (docs/method.md §"The results folder"):
+Three rules, each with its mechanism (docs/method.md §12):
 
 * **One run at a time.** A run holds an exclusive lock on ``<folder>/.magtact-lock`` (an
   advisory ``flock``, which the system releases when the process ends in any way, so a crashed

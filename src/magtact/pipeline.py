@@ -8,7 +8,7 @@ why. A failed stage does not stop the run; the stages that need its output are m
 
 The stages write into a staging folder inside the results folder; the complete results replace
 the previous run's only at the end, one run at a time, and never over a file magtact did not
-write (:mod:`magtact._runfolder`, docs/method.md §"The results folder").
+write (:mod:`magtact._runfolder`, docs/method.md §12).
 """
 
 from __future__ import annotations
