@@ -18,7 +18,6 @@ import textwrap
 
 import numpy as np
 import pytest
-import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -86,21 +85,25 @@ def test_every_ordered_pair_of_settings_is_checked(pair, low, ratio):
     assert any(f"[{k}]" in str(err.value) for k in pair), str(err.value)
 
 
-def test_holdout_larger_than_the_study_doe_is_refused_at_load():
+def test_holdout_larger_than_the_study_doe_is_refused_before_any_work(tmp_path):
+    from magtact import pipeline
+
+    s = study_from_dict({"doe": {"n_theta": 3, "n_H": 4}, "metamodel": {"holdout_paths": 3}})
     with pytest.raises(StudyError, match=r"\[metamodel.holdout_paths\] 3 held-out paths, but "
                                          r"the DOE's 3 × 4 .* allow at most 2"):
-        study_from_dict({"doe": {"n_theta": 3, "n_H": 4}, "metamodel": {"holdout_paths": 3}})
-    study_from_dict({"doe": {"n_theta": 3, "n_H": 4}, "metamodel": {"holdout_paths": 2}})
+        pipeline.run_study(s, tmp_path / "R", log=lambda m: None)
+    assert not (tmp_path / "R").exists()  # refused before the folder was made
 
 
-def test_holdout_larger_than_the_data_file_names_file_and_setting(tmp_path):
-    from magtact.cli._fit import check_holdout
+def test_holdout_larger_than_the_data_file_names_file_and_setting(refused, tmp_path):
+    import magtact.doe
+    from conftest import synthetic_doe
 
-    s = load_study(None)  # 4 held out, 5 × 5 paths in the study
-    ds = xr.Dataset(coords={"theta": [0.0, 0.1, 0.2], "H": [3e-3, 5e-3, 7e-3]})
-    with pytest.raises(MagtactError, match=r"s.toml: \[metamodel\] holdout_paths = 4, but the "
-                                           r"data set small.nc has 3 × 3 .* at most 1"):
-        check_holdout(s, ds, "small.nc", "s.toml")
+    ds = synthetic_doe(study_from_dict({"doe": {"n_theta": 3, "n_H": 3}}), n_t=4)
+    magtact.doe.save_dataset(ds, tmp_path / "small.nc")
+    refused(["fit", "--data", str(tmp_path / "small.nc"), "--out", str(tmp_path / "f")],
+            "[metamodel.holdout_paths] 4 held-out paths, but the data set",
+            "small.nc has 3 × 3 (θ, H) paths allow at most 1")
 
 
 # ---- validation tables sharing too little displacement ---------------------------------------

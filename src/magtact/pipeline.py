@@ -39,6 +39,7 @@ from ._runfolder import (
 )
 from ._versions import RUN, package_versions
 from .study import Study
+from .study._load import check_holdout
 
 #: File in each stage folder naming the run (``run.json``'s ``run_id``) that wrote the folder.
 RUN_STAMP = ".magtact-run"
@@ -153,12 +154,15 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
         If ``evidence`` is given but is not a folder (checked before any stage runs).
     magtact._runfolder.FolderInUse
         If another run is writing ``out`` (the message names its process).
+    magtact.study.StudyError
+        If ``[metamodel] holdout_paths`` exceeds what the study's DOE allows.
     magtact._runfolder.NotMagtactsFile
         If a file or folder where the run writes (``study.toml``, a stage folder, ...) was not
         written by an earlier run or was changed since (checked before any stage runs).
     """
     if evidence is not None and not Path(evidence).is_dir():
         raise MissingFileError(f"{evidence}: no such folder of benchmark results")
+    check_holdout(study)  # before the DOE, which may take hours
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()

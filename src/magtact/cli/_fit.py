@@ -31,6 +31,7 @@ def fit(
     from ..report import fit_figures
     from ..sensitivity import compare_with_data
     from ..study import checked_si
+    from ..study._load import check_holdout
 
     s = get_study(study)
     if generations is not None:
@@ -39,7 +40,8 @@ def fit(
     G = checked_si(G_kpa, "kPa", "--G-kpa") if G_kpa is not None else None
     ds = load_dataset(data) if data is not None else bundled_for(
         s, "compute its own (magtact doe STUDY --out DOE) and give it with --data DOE/doe.nc")
-    check_holdout(s, ds, data, study)
+    check_holdout(s, ds.sizes.get("theta", 0), ds.sizes.get("H", 0),
+                  str(data) if data is not None else "bundled with magtact", study)
     result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
                                       log=lambda msg: console.print(msg, highlight=False),
                                       gamma_check=compare_with_data, figures=fit_figures)
@@ -53,17 +55,3 @@ def fit(
     console.print(tab)
     console.print(f"wrote {len(files)} files (models, metamodels.md, figures) to {out}")
 
-
-def check_holdout(s, ds, data, study_source) -> None:
-    """Refuse, before any fitting, more held-out paths than the data set's (θ, H) paths allow,
-    naming the study's setting and the data file."""
-    from .._errors import MagtactError
-    from ..study._model import holdout_limit
-
-    n_theta, n_H = ds.sizes.get("theta", 0), ds.sizes.get("H", 0)
-    most = holdout_limit(n_theta, n_H)
-    if s.metamodel.holdout_paths > most:
-        where = f"{study_source}: " if study_source else ""
-        raise MagtactError(f"{where}[metamodel] holdout_paths = {s.metamodel.holdout_paths}, but "
-                           f"the data set {data or '(bundled)'} has {n_theta} × {n_H} (θ, H) "
-                           f"paths, which allow at most {most} held-out paths")

@@ -390,13 +390,31 @@ def _check_order(s: Study, source) -> None:
         raise StudyError("mechanics.dt_initial", f"the first load step ({m.dt_initial:g}) must "
                                                  f"lie in [mechanics.dt_min, mechanics.dt_max] "
                                                  f"= [{m.dt_min:g}, {m.dt_max:g}]", source)
-    n, most = s.metamodel.holdout_paths, holdout_limit(s.doe.n_theta, s.doe.n_H)
+
+
+def check_holdout(s: Study, n_theta: int | None = None, n_H: int | None = None,
+                  data: str | None = None, source: str | None = None) -> None:
+    """Refuse, before any work, more held-out paths (``[metamodel] holdout_paths``) than a fit
+    can hold out of the DOE's (θ, H) paths: those of the data set ``data`` (``n_theta × n_H``
+    levels) when given, else those the study's ``[doe]`` asks for. A study used for a DOE only
+    is not refused (the check is made by the commands that fit). ``source``: the study file
+    (default: the study's name).
+
+    Raises
+    ------
+    StudyError
+        Naming the setting, the number of paths and where they come from.
+    """
+    n_theta = s.doe.n_theta if n_theta is None else n_theta
+    n_H = s.doe.n_H if n_H is None else n_H
+    n, most = s.metamodel.holdout_paths, holdout_limit(n_theta, n_H)
     if n > most:
-        raise StudyError("metamodel.holdout_paths", f"{n} held-out paths, but the DOE's "
-                                                    f"{s.doe.n_theta} × {s.doe.n_H} (doe.n_theta "
-                                                    f"× doe.n_H) (θ, H) paths allow at most "
-                                                    f"{most} (interior paths, leaving some to "
-                                                    "fit)", source)
+        of = (f"the data set {data} has {n_theta} × {n_H}" if data is not None else
+              f"the DOE's {n_theta} × {n_H} (doe.n_theta × doe.n_H)")
+        raise StudyError("metamodel.holdout_paths", f"{n} held-out paths, but {of} (θ, H) "
+                                                    f"paths allow at most {most} (interior "
+                                                    "paths, leaving some to fit)",
+                         source or f"study {s.name!r}")
 
 
 def _mm(x: float) -> str:
