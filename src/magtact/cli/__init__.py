@@ -33,7 +33,7 @@ class Terminated(BaseException):
 
 
 def _on_sigterm(signum, frame) -> None:
-    raise Terminated
+    raise Terminated("by SIGTERM")
 
 
 def main() -> None:
