@@ -95,6 +95,17 @@ def test_holdout_larger_than_the_study_doe_is_refused_before_any_work(tmp_path):
     assert not (tmp_path / "R").exists()  # refused before the folder was made
 
 
+def test_holdout_larger_than_the_data_set_names_file_and_setting():
+    from magtact.study._load import check_holdout
+
+    check_holdout(load_study(None), 2, 6, "ok.nc", "s.toml")  # 8 interior paths: 4 can go
+    with pytest.raises(StudyError, match=r"s.toml: \[metamodel.holdout_paths\] 4 held-out "
+                                         r"paths, but the data set small.nc has 3 × 3 \(θ, H\) "
+                                         r"paths allow at most 1"):
+        check_holdout(load_study(None), 3, 3, "small.nc", "s.toml")
+
+
+@pytest.mark.long
 def test_holdout_larger_than_the_data_file_names_file_and_setting(refused, tmp_path):
     import magtact.doe
     from conftest import synthetic_doe
@@ -250,6 +261,38 @@ def _cli(script: str, **popen):
                             stderr=subprocess.PIPE, **popen)
 
 
+def test_a_broken_pipe_in_a_command_is_a_fault_with_its_reason(monkeypatch, tmp_path):
+    """In process: the command layer turns the broken pipe into a fault the interpreter prints
+    (the next test runs the entry point in a process of its own)."""
+    import magtact.cli._app as cli_app
+    from magtact.cli import main
+    from magtact.cli._app import BrokenPipeFault
+
+    def broken(source=None):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(cli_app, "load_study", broken)
+    monkeypatch.setattr(sys, "argv", ["magtact", "optimise", "--out", str(tmp_path / "o")])
+    handler = signal.getsignal(signal.SIGTERM)
+    try:
+        with pytest.raises(BrokenPipeFault, match="a pipe to another process broke"):
+            main()
+    finally:
+        signal.signal(signal.SIGTERM, handler)
+
+
+def test_a_closed_reader_is_told_from_another_pipe(monkeypatch):
+    from magtact.cli._app import standard_stream_closed
+
+    read, write = os.pipe()
+    with os.fdopen(write, "w") as out, os.fdopen(read) as inp:
+        monkeypatch.setattr(sys, "stdout", out)
+        assert not standard_stream_closed()
+        inp.close()
+        assert standard_stream_closed()
+
+
+@pytest.mark.long
 def test_a_broken_pipe_to_a_worker_exits_with_its_reason():
     """A pipe other than the terminal's output breaking (here: while the study is read, as a
     worker's would) is a fault with its traceback, not a silent exit 1."""
@@ -270,6 +313,7 @@ def test_a_broken_pipe_to_a_worker_exits_with_its_reason():
         err.decode()
 
 
+@pytest.mark.long
 def test_closed_terminal_output_stays_a_quiet_exit():
     proc = _cli("""
         import sys
@@ -293,3 +337,21 @@ def test_atomic_writes_follow_the_umask(tmp_path, umask):
         os.umask(old)
     assert {stat.S_IMODE(p.stat().st_mode) for p in paths} == {0o666 & ~umask}
     assert np.all([not p.name.endswith(".tmp") for p in tmp_path.iterdir()])
+
+
+def test_sigterm_reaches_python_after_gmsh_started():
+    """gmsh replaces the SIGTERM handler at the C level; magtact puts Python's back, so that a
+    run stopped after meshing still says so and releases its folder."""
+    import gmsh
+
+    from magtact.geometry._gmsh import initialize
+
+    got = []
+    old = signal.signal(signal.SIGTERM, lambda signum, frame: got.append(signum))
+    try:
+        initialize()
+        gmsh.finalize()
+        os.kill(os.getpid(), signal.SIGTERM)
+        assert got == [signal.SIGTERM]
+    finally:
+        signal.signal(signal.SIGTERM, old)
