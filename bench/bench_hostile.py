@@ -125,6 +125,12 @@ MESSAGE_CASES = [
     (["study", "magone_printed"], "presets: magone, magone-printed"),
     (["study", "MagOne"], "presets: magone, magone-printed"),
     (["fit", "--out", "x", "--generations", "0"], "'--generations'"),
+    (["validate", "--mesh", "huge"], "--mesh must be one of"),
+    (["validate", "--solver", "fem"], "--solver must be 'exact' or 'fe'"),
+    (["doe", "--workers", "-3", "--out", "x"], "'--workers'"),
+    (["run", "--workers", "-1", "--out", "x"], "'--workers'"),
+    (["reproduce", "--workers", "0", "--out", "x"], "'--workers'"),
+    (["doe", "--scheduler", "nohost", "--out", "{tmp}"], "(--scheduler)"),
 ]
 
 
@@ -450,6 +456,7 @@ def _option_numbers(tmp: Path, case) -> tuple[str, str]:
 
 def _option_messages(tmp: Path, case) -> tuple[str, str]:
     args, fragment = case
+    args = [str(tmp / "o") if a == "{tmp}" else a for a in args]
     code, text = _main(args + (["--out", str(tmp / "v")] if args[0] == "validate" else []))
     assert code != 0, f"{args} accepted"
     if code != 2 or "Traceback" in text:

@@ -214,6 +214,8 @@ def test_study_the_bundled_data_do_not_describe_names_the_settings():
     (["validate", "--floor", "-0.5"], "--floor must be in [0, 1), got -0.5"),
     (["validate", "--floor", "2"], "--floor must be in [0, 1), got 2.0"),
     (["study", "magone-printd"], "no preset has that name (presets: magone, magone-printed)"),
+    (["validate", "--mesh", "huge"], "--mesh must be one of coarse, default, accurate, fine"),
+    (["doe", "--workers", "-3", "--out", "unused"], "Invalid value for '--workers'"),
 ])
 def test_option_messages_name_the_option_in_its_units(refused, tmp_path, args, fragment):
     text = refused([*args, *(["--out", str(tmp_path / "v")] if args[0] == "validate" else [])],

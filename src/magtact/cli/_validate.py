@@ -113,6 +113,8 @@ def validate_command(
     G_pa = None if G is None else checked_si(G, "kPa", "--G")
     if solver not in ("exact", "fe"):
         raise MagtactError(f"--solver must be 'exact' or 'fe', got {solver!r}")
+    if mesh is not None and mesh not in MESH_DENSITIES:
+        raise MagtactError(f"--mesh must be one of {', '.join(MESH_DENSITIES)}, got {mesh!r}")
     for name, value in (("--f-lo", f_lo), ("--f-hi", f_hi)):
         if not (math.isfinite(value) and 0.0 <= value <= MAX_CYCLES_PER_MM):
             raise MagtactError(f"{name} must be between 0 and {MAX_CYCLES_PER_MM:g} cycles per mm "
