@@ -138,7 +138,8 @@ class RunLock:
         info = {"pid": os.getpid(), "host": platform.node(), "started": _now(),
                 "command": self.command}
         os.ftruncate(fd, 0)
-        os.pwrite(fd, (json.dumps(info) + "\n").encode(), 0)
+        os.lseek(fd, 0, os.SEEK_SET)
+        os.write(fd, (json.dumps(info) + "\n").encode())
         return self
 
     def __exit__(self, *exc) -> None:
