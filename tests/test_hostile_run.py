@@ -63,34 +63,33 @@ def test_second_study_into_the_same_folder_shows_only_its_results(tmp_path, monk
     assert (tmp_path / "R" / "field" / pipeline.RUN_STAMP).read_text() == manifest["run_id"]
 
 
-def test_interrupted_run_leaves_no_report_of_the_previous_run(tmp_path, monkeypatch):
+def test_interrupted_run_keeps_the_previous_results_and_is_named(tmp_path, monkeypatch):
     run(tmp_path, "FirstStudy", monkeypatch)
+    folder = tmp_path / "R"
+    before = (folder / "report.html").read_text()
     with pytest.raises(KeyboardInterrupt):
         run(tmp_path, "SecondStudy", monkeypatch, interrupt_at="metamodel")
-    folder = tmp_path / "R"
-    assert not (folder / "report.html").exists()
-    manifest = json.loads((folder / "run.json").read_text())
-    assert manifest["study"] == "SecondStudy"
+    assert (folder / "report.html").read_text() == before  # the finished run's report stays
+    assert json.loads((folder / "run.json").read_text())["study"] == "FirstStudy"
     html = build_report(folder).read_text()
-    assert "FirstStudy" not in html
-    assert html.count("<td>SecondStudy</td>") == 2  # field and doe of this run
+    assert html.count("<td>FirstStudy</td>") == 6 and "SecondStudy" not in html
     assert "partial.csv" not in html and "half,done" not in html
-    assert "The files in <code>metamodel/</code> are not of this run" in html
+    assert "<b>Interrupted run.</b>" in html
+    assert "interrupted during the stage <i>Metamodels</i> (KeyboardInterrupt)" in html
+    assert "finished stages: Magnetic field (ok), Design of experiments (ok)" in html
+    run(tmp_path, "ThirdStudy", monkeypatch)  # a complete run replaces both
+    html = (folder / "report.html").read_text()
+    assert html.count("<td>ThirdStudy</td>") == 6 and "Interrupted run" not in html
+    assert not list(folder.glob(".magtact-*-*"))  # no staging folder left
 
 
-@pytest.mark.parametrize("skip_from", ["validation", None])
-def test_unstamped_folder_is_marked_not_of_this_run(tmp_path, monkeypatch, skip_from):
-    """A stage folder that was there before the run (not stamped by magtact) is not shown, even
-    when this run's stage wrote into it (its old files cannot be told from the new)."""
-    folder = tmp_path / "R" / "validation"
-    folder.mkdir(parents=True)
-    (folder / "old.csv").write_text("study,value\nOldStudy,1\n")
-    run(tmp_path, "SecondStudy", monkeypatch, skip_from=skip_from)
-    html = (tmp_path / "R" / "report.html").read_text()
-    assert "OldStudy" not in html
-    assert ("The files in <code>validation/</code> are not of this run (the folder was written by "
-            "a run that did not stamp it, or by hand)") in html
-    assert (folder / "old.csv").is_file()  # not magtact's to delete
+def test_first_run_interrupted_says_there_is_no_complete_run(tmp_path, monkeypatch):
+    with pytest.raises(KeyboardInterrupt):
+        run(tmp_path, "OnlyStudy", monkeypatch, interrupt_at="field")
+    html = build_report(tmp_path / "R").read_text()
+    assert "interrupted during the stage <i>Magnetic field</i>" in html
+    assert "This folder holds no complete run." in html
+    assert "OnlyStudy" not in html
 
 
 @pytest.mark.parametrize("text", [

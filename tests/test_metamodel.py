@@ -246,7 +246,7 @@ def test_holdout_paths_interior_and_checked():
     hold = holdout_paths(th, H, 4, 0)
     assert len(set(hold)) == 4 and hold == holdout_paths(th, H, 4, 0)
     assert all(th[0] < a < th[-1] and H[0] < b < H[-1] for a, b in hold)
-    with pytest.raises(ValueError, match="exceeds the 9 interior"):
+    with pytest.raises(ValueError, match="allow at most 9 held-out paths"):
         holdout_paths(th, H, 10, 0)
 
 

@@ -8,10 +8,12 @@ that a later run or reader would take for a finished one.
 from __future__ import annotations
 
 import csv
+import errno
 import io
 import json
 import os
-import tempfile
+import secrets
+import stat
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -27,8 +29,7 @@ def atomic_path(path: str | os.PathLike, fsync: bool = False) -> Iterator[Path]:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    tmp = _new_file(path)
     try:
         yield Path(tmp)
         if fsync:
@@ -38,6 +39,22 @@ def atomic_path(path: str | os.PathLike, fsync: bool = False) -> Iterator[Path]:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _new_file(path: Path) -> str:
+    """Create an empty, unique temporary sibling of ``path`` and return its name.
+
+    Unlike :func:`tempfile.mkstemp` (always mode 0600), the file is created with mode 0666 less
+    the process's umask, as :func:`open` would create ``path`` itself, so that the renamed file
+    has the permissions the user's umask asks for.
+    """
+    while True:
+        tmp = path.parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
+        try:
+            os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+        except FileExistsError:
+            continue
+        return str(tmp)
 
 
 def write_bytes(path: str | os.PathLike, data: bytes, fsync: bool = False) -> Path:
@@ -75,3 +92,28 @@ def significant(digits: int) -> Callable[[object], object]:
     def cell(v):
         return f"{v:.{digits}g}" if isinstance(v, float | np.floating) else v
     return cell
+
+
+def file_problem(path: str | os.PathLike, want: str = "file") -> str | None:
+    """What ``path`` is when it is not a ``want`` (``"file"`` or ``"folder"``); None if it is one.
+
+    ``"not found"``, or a phrase that reads after "it is": a broken symbolic link, a symbolic
+    link loop, a folder, a file, a FIFO, a socket, a device, or unreadable with the system's
+    reason (e.g. permission denied).
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return ("a broken symbolic link (its target does not exist)" if os.path.islink(path)
+                else "not found")
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a symbolic link loop (the link points, through links, back to itself)"
+        return f"unreadable ({exc.strerror or exc})"
+    if stat.S_ISDIR(mode):
+        return None if want == "folder" else "a folder"
+    if stat.S_ISREG(mode):
+        return None if want == "file" else "a file"
+    return ("a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode)
+            else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+            else "a special file")

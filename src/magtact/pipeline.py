@@ -5,6 +5,10 @@ Each stage writes its files into its own folder of the results folder and is rec
 folder alone by :func:`magtact.report.build_report` — always says what ran, what failed and
 why. A failed stage does not stop the run; the stages that need its output are marked
 ``skipped`` with the reason. Nothing is ever shown in place of a missing result.
+
+The stages write into a staging folder inside the results folder; the complete results replace
+the previous run's only at the end, one run at a time, and never over a file magtact did not
+write (:mod:`magtact._runfolder`, docs/method.md §14).
 """
 
 from __future__ import annotations
@@ -23,10 +27,19 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from ._errors import MissingFileError
-from ._files import write_json
+from ._files import write_json, write_text
 from ._front import solve
+from ._runfolder import (
+    RunLock,
+    check_replaceable,
+    recover,
+    remove_dead,
+    staging,
+    swap,
+    write_stamp,
+)
 from ._versions import RUN, package_versions
-from .study import Study
+from .study import Study, check_holdout
 
 #: File in each stage folder naming the run (``run.json``'s ``run_id``) that wrote the folder.
 RUN_STAMP = ".magtact-run"
@@ -139,30 +152,65 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
     ------
     MissingFileError
         If ``evidence`` is given but is not a folder (checked before any stage runs).
+    magtact._runfolder.FolderInUse
+        If another run is writing ``out`` (the message names its process).
+    magtact.study.StudyError
+        If ``[metamodel] holdout_paths`` exceeds what the study's DOE allows.
+    magtact._runfolder.NotMagtactsFile
+        If a file or folder where the run writes (``study.toml``, a stage folder, ...) was not
+        written by an earlier run or was changed since (checked before any stage runs).
     """
     if evidence is not None and not Path(evidence).is_dir():
         raise MissingFileError(f"{evidence}: no such folder of benchmark results")
+    check_holdout(study)  # before the DOE, which may take hours
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    ctx = _Context(study=study, folder=folder, recompute=recompute, refit=refit,
-                   data=[Path(p) for p in data] if data else None,
-                   cache=Path(cache) if cache is not None else None, workers=workers, log=log)
     run_id = uuid.uuid4().hex
-    _forget_previous_run(folder)
-    (folder / "study.toml").write_text(study.to_toml(), encoding="utf-8")
-    manifest = {
-        "run_id": run_id, "study": study.name, "command": command or "run_study(...)",
-        "started": datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
-        "recompute": recompute, "refit": refit, "versions": versions(), "stages": [],
-    }
-    _write_json(folder / "run.json", manifest)  # an interrupted run is never taken for the last
+    command = command or "run_study(...)"
+    with RunLock(folder, command):
+        _forget_previous_run(folder)
+        stage = staging(folder, run_id)
+        ctx = _Context(study=study, folder=stage, recompute=recompute, refit=refit,
+                       data=[Path(p) for p in data] if data else None,
+                       cache=Path(cache) if cache is not None else None, workers=workers,
+                       log=log)
+        manifest = {
+            "run_id": run_id, "study": study.name, "command": command,
+            "started": datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
+            "recompute": recompute, "refit": refit, "versions": versions(), "stages": [],
+        }
+        try:
+            records = _run_stages(ctx, run_id, manifest, start)
+        except BaseException as exc:  # stopped: the staging folder says how and where
+            manifest["interrupted"] = f"{type(exc).__name__} {exc}".strip()
+            _write_json(stage / "run.json", manifest)
+            raise
+        if evidence is not None:
+            _copy_evidence(Path(evidence), stage)
+        manifest["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+        manifest["wall_time_s"] = time.perf_counter() - start
+        _write_json(stage / "run.json", manifest)
+        from .report import report_document
+
+        write_text(stage / "report.html", report_document(stage, shown=folder))
+        write_stamp(stage, run_id)
+        swap(folder, stage, run_id)
+        remove_dead(folder)
+    return RunResult(folder=folder, report=folder / "report.html", stages=tuple(records),
+                     wall_time_s=time.perf_counter() - start)
+
+
+def _run_stages(ctx: _Context, run_id: str, manifest: dict, start: float) -> list[StageRecord]:
+    """Run the stages into ``ctx.folder``, recording each in its ``run.json`` as it ends."""
+    folder, log = ctx.folder, ctx.log
+    (folder / "study.toml").write_text(ctx.study.to_toml(), encoding="utf-8")
+    _write_json(folder / "run.json", manifest)
     records = []
     for n, (key, title, fn) in enumerate(STAGES, start=1):
         rec = StageRecord(key=key, title=title)
         log(f"[{n}/{len(STAGES)}] {title} ...")
         t0 = time.perf_counter()
-        fresh = not (folder / key).exists()  # a folder there before holds files of another run
         try:
             rec.message = fn(ctx, rec) or ""
             rec.status = "ok"
@@ -174,7 +222,7 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
             logs.mkdir(exist_ok=True)
             (logs / f"{key}.traceback.txt").write_text(traceback.format_exc(), encoding="utf-8")
         rec.wall_time_s = time.perf_counter() - t0
-        if fresh and (folder / key).is_dir():  # what the stage wrote belongs to this run
+        if (folder / key).is_dir():  # what the stage wrote belongs to this run
             (folder / key / RUN_STAMP).write_text(run_id, encoding="utf-8")
         log(f"      {rec.status} ({rec.wall_time_s:.1f} s) {rec.message}")
         records.append(rec)
@@ -182,16 +230,7 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
         manifest["doe_source"] = ctx.doe_source
         manifest["wall_time_s"] = time.perf_counter() - start
         _write_json(folder / "run.json", manifest)
-    if evidence is not None:
-        _copy_evidence(Path(evidence), folder)
-    manifest["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
-    manifest["wall_time_s"] = time.perf_counter() - start
-    _write_json(folder / "run.json", manifest)
-    from .report import build_report
-
-    report = build_report(folder)
-    return RunResult(folder=folder, report=report, stages=tuple(records),
-                     wall_time_s=time.perf_counter() - start)
+    return records
 
 
 def versions() -> dict[str, str]:
@@ -388,13 +427,16 @@ STAGES: tuple[tuple[str, str, Callable], ...] = (
 
 # ---- helpers ---------------------------------------------------------------------------------
 def _forget_previous_run(folder: Path) -> None:
-    """Remove what an earlier run left in ``folder``: its report and the stage folders it
-    stamped (folders without a stamp are not magtact's to delete; the report shows them as not
-    of this run)."""
-    (folder / "report.html").unlink(missing_ok=True)
-    for key, _, _ in STAGES:
-        if (folder / key / RUN_STAMP).is_file():
-            shutil.rmtree(folder / key)
+    """Before a run (its lock held): finish the swap of a run killed while putting its results
+    in place, and refuse if a file or folder where this run will write is not magtact's."""
+    recover(folder)
+    check_replaceable(folder, outputs())
+
+
+def outputs() -> tuple[str, ...]:
+    """The names a run writes at the top of its results folder."""
+    return ("study.toml", "run.json", "report.html", "logs", "evidence",
+            *(key for key, _, _ in STAGES))
 
 
 def _copy_evidence(source: Path, folder: Path) -> None:

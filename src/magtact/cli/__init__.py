@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 
 from rich.markup import escape
@@ -28,10 +29,30 @@ from ._app import app, console
 USER_ERRORS: tuple[type[Exception], ...] = (MagtactError,)
 
 
+class Terminated(BaseException):
+    """The process was asked to stop (SIGTERM); raised in the main thread so that what is
+    being written is left as it was (atomic writes remove their temporary file)."""
+
+
+def _on_sigterm(signum, frame) -> None:
+    raise Terminated("by SIGTERM")
+
+
 def main() -> None:
-    """Entry point of the ``magtact`` console script."""
+    """Entry point of the ``magtact`` console script.
+
+    Every non-zero exit says why: a user's error in one line (exit 2), a fault with its
+    traceback (exit 1), SIGTERM in one line (exit 143). A broken pipe is quiet only when it is
+    the terminal's own output that was closed (``magtact ... | head``); any other, e.g. to a
+    worker process that failed to start, is a fault with its traceback.
+    """
+    signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         app()  # standalone: usage errors are printed by typer and exit 2
+    except Terminated:
+        console.print("[bold red]stopped:[/] terminated by a signal (SIGTERM); a run's earlier "
+                      "results are left as they were", highlight=False, soft_wrap=True)
+        sys.exit(128 + signal.SIGTERM)
     except USER_ERRORS as exc:
         console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
         sys.exit(2)

@@ -2,17 +2,91 @@
 
 from __future__ import annotations
 
+import select
+import sys
 import tempfile
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
+from typer.core import TyperGroup
 
 from .._errors import MagtactError
+from .._numbers import parse_float, parse_int
 from ..study import Study, load_study
 
+
+class BrokenPipeFault(RuntimeError):
+    """A pipe to another process (not the terminal's output) broke, e.g. to a worker process
+    that failed to start."""
+
+
+def standard_stream_closed() -> bool:
+    """True if the reader of this process's stdout or stderr has gone (``magtact ... | head``).
+
+    A pipe whose reader closed polls as an error on its write end (Linux, macOS); a stream that
+    is no file (a test's capture) is never closed.
+    """
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            fd = stream.fileno()
+            poll = select.poll()
+            poll.register(fd, select.POLLOUT)
+            if any(ev & (select.POLLERR | select.POLLHUP) for _, ev in poll.poll(0)):
+                return True
+        except (AttributeError, OSError, ValueError):
+            continue
+    return False
+
+
+def strict_numbers(command) -> None:
+    """Make the number options and arguments of ``command`` follow the usual grammar
+    (:mod:`magtact._numbers`): ``--f-lo 1_0`` is refused, not read as 10."""
+    for param in getattr(command, "params", []):
+        kind = getattr(getattr(param, "type_descriptor", None), "annotation", None)
+        if kind not in (float, int):
+            continue
+        parse = parse_float if kind is float else parse_int
+        hint = ("digits, an optional sign, '.' and exponent, e.g. 2.5 or -1e-3" if kind is float
+                else "digits and an optional sign, e.g. 40")
+
+        def process_value(ctx, value, _original=param.process_value, _parse=parse,
+                          _param=param, _hint=hint):
+            for item in value if isinstance(value, list | tuple) else [value]:
+                if isinstance(item, str):
+                    try:
+                        _parse(item)
+                    except ValueError as exc:
+                        raise typer.BadParameter(f"{exc} ({_hint})", ctx=ctx,
+                                                 param=_param) from None
+            return _original(ctx, value)
+
+        param.process_value = process_value
+
+
+class _Group(TyperGroup):
+    """The command group: number options follow the usual grammar (:func:`strict_numbers`);
+    a broken pipe is click's quiet exit only when it is the terminal's output that closed; any
+    other broken pipe is raised as :class:`BrokenPipeFault`, so that the exit says why."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        for command in self.commands.values():
+            strict_numbers(command)
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError as exc:
+            if standard_stream_closed():
+                raise
+            raise BrokenPipeFault(f"a pipe to another process broke ({exc}): e.g. a worker "
+                                  "process failed to start or died") from exc
+
+
 app = typer.Typer(
+    cls=_Group,
     name="magtact",
     help="Design magnetic soft tactile sensors: field, mechanics, DOE, metamodels, optimisation.",
     no_args_is_help=True,

@@ -18,8 +18,9 @@ def doe_command(
     out: OutOpt,
     study: StudyArg = None,
     workers: Annotated[int | None, typer.Option(
-        "--workers", "-j", help="Local worker processes (default: the number of cores; 0: run "
-                                "in this process).")] = None,
+        "--workers", "-j", min=0,
+        help="Local worker processes (default: the number of cores; 0: run in this "
+             "process).")] = None,
     scheduler: Annotated[str | None, typer.Option(
         "--scheduler", help="Address of a dask.distributed scheduler (tcp://host:8786); the "
                             "jobs run on its workers instead of local processes.")] = None,

@@ -30,14 +30,17 @@ def fit(
     from ..metamodel import write_fit_outputs
     from ..report import fit_figures
     from ..sensitivity import compare_with_data
-    from ..study import checked_si
+    from ..study import check_holdout, checked_si
 
     s = get_study(study)
     if generations is not None:
         s = replace(s, metamodel=replace(s.metamodel, generations=generations))
     H = checked_si(H_mm, "mm", "--H-mm") if H_mm is not None else None
     G = checked_si(G_kpa, "kPa", "--G-kpa") if G_kpa is not None else None
-    ds = load_dataset(data) if data is not None else bundled_for(s)
+    ds = load_dataset(data) if data is not None else bundled_for(
+        s, "compute its own (magtact doe STUDY --out DOE) and give it with --data DOE/doe.nc")
+    check_holdout(s, ds.sizes.get("theta", 0), ds.sizes.get("H", 0),
+                  str(data) if data is not None else "bundled with magtact", study)
     result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
                                       log=lambda msg: console.print(msg, highlight=False),
                                       gamma_check=compare_with_data, figures=fit_figures)
@@ -50,3 +53,4 @@ def fit(
                     if te else ("–",) * 3, f"{r.fit_time_s:.1f}")
     console.print(tab)
     console.print(f"wrote {len(files)} files (models, metamodels.md, figures) to {out}")
+

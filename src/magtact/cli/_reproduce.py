@@ -22,7 +22,7 @@ def reproduce_command(
     seeds: Annotated[int, typer.Option(
         "--seeds", help="GP seeds per sensitivity definition (at least 1).")] = 8,
     workers: Annotated[int | None, typer.Option(
-        "--workers", "-j", help="Worker processes (default: the number of cores).")] = None,
+        "--workers", "-j", min=1, help="Worker processes (default: the number of cores).")] = None,
     data: Annotated[Path | None, typer.Option(
         "--data", help="DOE data set (.nc); default: the bundled MagOne data set.")] = None,
     generations: Annotated[int, typer.Option(

@@ -29,7 +29,8 @@ def run_command(
     cache: Annotated[Path, typer.Option("--cache", help="DOE job cache folder (--recompute).")]
     = Path(".magtact-cache"),
     workers: Annotated[int | None, typer.Option(
-        "--workers", "-j", help="DOE worker processes (default: the number of cores).")] = None,
+        "--workers", "-j", min=0,
+        help="DOE worker processes (default: the number of cores).")] = None,
     evidence: Annotated[Path | None, typer.Option(
         "--evidence", help="Folder of benchmark results (*.json, e.g. bench/results of a source "
                            "checkout) to include in the report.")] = None,

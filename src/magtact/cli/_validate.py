@@ -14,6 +14,7 @@ from .._errors import MagtactError
 from .._floor import RELATIVE_FLOOR
 from ..study import MESH_DENSITIES, PRESETS, Study, checked_si, to_si
 from ..validation import N_GRID
+from ..validation._stats import MAX_GRID
 from ._app import app, check_out, console, get_study, out_dir
 
 #: Highest filter cut-off accepted (cycles per mm of u_z; the samples are far coarser).
@@ -87,7 +88,8 @@ def validate_command(
     = 0.0,
     f_hi: Annotated[float, typer.Option("--f-hi", help="High cut-off (cycles per mm of u_z); 0: no "
                                         "low-pass.")] = 2.0,
-    n_grid: Annotated[int, typer.Option("--n-grid", help="Points of the common grid.")] = N_GRID,
+    n_grid: Annotated[int, typer.Option("--n-grid", min=2, max=MAX_GRID,
+                                        help="Points of the common grid.")] = N_GRID,
     floor: Annotated[float, typer.Option(help="Ratios are evaluated where |denominator| > floor "
                                          "× its largest value.")] = RELATIVE_FLOOR,
 ) -> None:
@@ -111,10 +113,17 @@ def validate_command(
     G_pa = None if G is None else checked_si(G, "kPa", "--G")
     if solver not in ("exact", "fe"):
         raise MagtactError(f"--solver must be 'exact' or 'fe', got {solver!r}")
+    if mesh is not None and mesh not in MESH_DENSITIES:
+        raise MagtactError(f"--mesh must be one of {', '.join(MESH_DENSITIES)}, got {mesh!r}")
     for name, value in (("--f-lo", f_lo), ("--f-hi", f_hi)):
         if not (math.isfinite(value) and 0.0 <= value <= MAX_CYCLES_PER_MM):
             raise MagtactError(f"{name} must be between 0 and {MAX_CYCLES_PER_MM:g} cycles per mm "
                                f"(--f-hi 0: no low-pass), got {value!r}")
+    if not 0.0 <= floor < 1.0:
+        raise MagtactError(f"--floor must be in [0, 1), got {floor!r}")
+    if f_hi > 0 and not f_hi > f_lo:
+        raise MagtactError(f"--f-hi ({f_hi:g} cycles per mm) must be above --f-lo ({f_lo:g} "
+                           "cycles per mm), or 0 for no low-pass")
     filt = FilterSettings(f_lo=to_si(f_lo, "per_mm"),
                           f_hi=to_si(f_hi, "per_mm") if f_hi > 0 else None)
     experiment = read_experiment(data)

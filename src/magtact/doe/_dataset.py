@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from .._errors import MagtactError, MissingFileError
-from .._files import atomic_path
+from .._files import atomic_path, file_problem
 from .._files import write_csv as _write_csv
 from .._versions import DOE
 from ..study import Study, from_si
@@ -141,8 +141,11 @@ def load_dataset(path: str | os.PathLike) -> xr.Dataset:
     dimension or variable of the layout.
     """
     path = Path(path)
-    if not path.is_file():
+    problem = file_problem(path)
+    if problem == "not found":
         raise MissingFileError(f"DOE data set not found: {path}")
+    if problem is not None:
+        raise MagtactError(f"{path}: not a DOE data set: it is {problem}")
     with xr.open_dataset(path, engine="h5netcdf") as ds:
         ds = ds.load()
     for dim in DIMS:
@@ -211,21 +214,38 @@ DOE_SECTIONS = ("body", "magnet", "loading", "material", "design", "doe", "magne
 def matches_study(ds, study) -> bool:
     """True if the data set was computed for a study that agrees with ``study`` in every
     section a DOE depends on (:data:`DOE_SECTIONS`), read from its ``study_toml`` attribute."""
+    return not differences(ds, study)
+
+
+def differences(ds, study) -> list[str]:
+    """The settings (``[section] key``) in which ``study`` differs from the study the data set
+    was computed for, in the sections a DOE depends on; ``["its study"]`` if the data set
+    records no study that loads today."""
     import tomllib
 
     from ..study import study_from_dict
 
     text = ds.attrs.get("study_toml")
     if text is None:
-        return False
+        return ["its study (the data set records none)"]
     try:
         # only the sections a DOE depends on: settings added since the data set was written
         # (sensitivity, optimisation, ...) take their defaults
         data = {k: v for k, v in tomllib.loads(text).items() if k in DOE_SECTIONS}
         other = study_from_dict(data | {"base": "magone"})
     except Exception:  # a data set whose study no longer loads belongs to no study of today
-        return False
-    return all(_doe_part(other, name) == _doe_part(study, name) for name in DOE_SECTIONS)
+        return ["its study (the data set's study no longer loads)"]
+    mine, theirs = tomllib.loads(study.to_toml()), tomllib.loads(other.to_toml())
+    out = []
+    for name in DOE_SECTIONS:
+        if _doe_part(other, name) == _doe_part(study, name):
+            continue
+        for key, value in mine[name].items():
+            if value != theirs[name].get(key) and not (name == "design" and key.startswith(
+                    "M_z")):
+                out.append(f"[{name}] {key} = {value!r} (the data set's: "
+                           f"{theirs[name].get(key)!r})")
+    return out
 
 
 def _doe_part(study, name: str):
@@ -237,20 +257,27 @@ def _doe_part(study, name: str):
     return replace(section, M_z=(0.0, 0.0)) if name == "design" else section
 
 
-def bundled_for(study):
+def bundled_for(study, advice: str | None = None):
     """The bundled MagOne data set, if it describes ``study`` (:func:`matches_study`).
+
+    ``advice`` ends the error message: what to run instead, in terms of the caller's options
+    (default: compute the study's own DOE and models, and give the models with ``--models``).
 
     Raises
     ------
     MagtactError
-        Naming what to run instead: the study's own DOE.
+        Naming the settings that differ and what to run instead.
     """
     from .._errors import MagtactError
 
     ds = load_bundled()
-    if not matches_study(ds, study):
-        raise MagtactError(f"study {study.name!r} differs from the built-in MagOne study in its "
-                           "geometry, material, levels or solver settings, so the data set "
-                           "bundled with magtact does not describe it: compute its own "
-                           "(magtact doe STUDY --out DOE) and pass DOE/doe.nc as its data")
+    diff = differences(ds, study)
+    if diff:
+        shown = "; ".join(diff[:6]) + (f"; and {len(diff) - 6} more" if len(diff) > 6 else "")
+        raise MagtactError(
+            f"study {study.name!r} differs from the built-in MagOne study in {shown}, so the "
+            "data set bundled with magtact does not describe it: "
+            + (advice or "compute its own DOE and models (magtact run STUDY --recompute; or "
+                         "magtact doe STUDY --out DOE, then magtact fit STUDY --data DOE/doe.nc "
+                         "--out MODELS, and give --models MODELS)"))
     return ds

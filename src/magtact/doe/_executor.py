@@ -18,6 +18,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from multiprocessing import get_context
 
+from .._errors import MagtactError
 from ._jobs import Outcome
 
 #: Environment variables that bound the threads of BLAS / MKL (PARDISO) in each worker.
@@ -139,7 +140,8 @@ def _dask(tasks: list[Task], scheduler: str) -> Iterator[tuple[object, Outcome]]
     try:
         client = Client(scheduler, timeout=CONNECT_TIMEOUT)
     except (OSError, ValueError, TypeError) as exc:
-        raise ValueError(f"cannot use the dask scheduler {scheduler!r}: {exc}") from None
+        raise MagtactError(f"cannot use the dask scheduler {scheduler!r} (--scheduler): "
+                           f"{exc}") from None
     with client:
         futures = {}
         for task in tasks:

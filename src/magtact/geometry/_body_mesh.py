@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..study import Study
+from ._gmsh import initialize as initialize_gmsh
 from ._path import magnet_span
 
 #: Named mesh densities. ``m``: cells along a quarter of the half circle (the half circle has
@@ -295,7 +296,7 @@ def _half_disc(radii: list[float], n_radial: list[int],
     n_arc = (m, 2 * m, m)
     initialised = gmsh.isInitialized()
     if not initialised:
-        gmsh.initialize(interruptible=False)
+        initialize_gmsh()
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.model.add("half_disc")
     try:

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._gmsh import initialize as initialize_gmsh
+
 
 @dataclass(frozen=True)
 class FieldMesh:
@@ -96,7 +98,7 @@ def field_mesh(R_m: float, H_m: float, *, h_magnet: float, growth_near: float, n
     rf, zf, hz = far_r, far_z * H_m / s, 0.5 * H_m / s
     own = not gmsh.isInitialized()
     if own:
-        gmsh.initialize(interruptible=False)
+        initialize_gmsh()
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("magtact_field")

@@ -131,6 +131,11 @@ class Stepping:
     tol: float = 1e-6
     line_search: int = 4
 
+    def __post_init__(self):
+        if not 0 < self.dt_min <= self.dt_initial <= self.dt_max:
+            raise ValueError(f"load steps must satisfy 0 < dt_min <= dt_initial <= dt_max, got "
+                             f"{self.dt_min:g}, {self.dt_initial:g}, {self.dt_max:g}")
+
 
 class _Timed:
     """Wrap a callable and accumulate its wall time into ``timings[key]``."""

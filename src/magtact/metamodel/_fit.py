@@ -45,6 +45,7 @@ from .._errors import MagtactError
 from .._floor import above_floor
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..study import Study, mm, mt
+from ..study._model import holdout_limit
 from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._regressor import SymbolicRegressor
@@ -221,11 +222,11 @@ def holdout_paths(theta_levels, H_levels, n: int, seed: int = 0) -> list[tuple[f
     ti = range(1, len(theta_levels) - 1) if len(theta_levels) > 2 else range(len(theta_levels))
     hi = range(1, len(H_levels) - 1) if len(H_levels) > 2 else range(len(H_levels))
     pairs = [(i, j) for i in ti for j in hi]
-    if n >= len(theta_levels) * len(H_levels):
-        raise MagtactError(f"holdout_paths = {n} leaves no training path")
-    if n > len(pairs):
-        raise MagtactError(f"holdout_paths = {n} exceeds the {len(pairs)} interior "
-                           "(theta, H) paths")
+    most = holdout_limit(len(theta_levels), len(H_levels))
+    if n > most:
+        raise MagtactError(f"[metamodel] holdout_paths = {n}: the data's "
+                           f"{len(theta_levels)} × {len(H_levels)} (θ, H) paths allow at most "
+                           f"{most} held-out paths (interior paths, leaving some to fit)")
     pick = np.random.default_rng(seed).choice(len(pairs), size=n, replace=False)
     return [(float(theta_levels[pairs[k][0]]), float(H_levels[pairs[k][1]])) for k in sorted(pick)]
 

@@ -22,6 +22,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import MagtactError, MissingFileError
+from .._files import file_problem
 from ._field_force import FIELD_SYMBOLS, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
@@ -174,8 +175,11 @@ MAX_FILE_BYTES = 1_000_000
 
 def _read_json(path: Path):
     """The JSON content of a model file; every way it can fail is one ValueError naming it."""
-    if not path.exists():
+    problem = file_problem(path)
+    if problem == "not found":
         raise MissingFileError(f"metamodel file not found: {path}")
+    if problem is not None:
+        raise MagtactError(f"{path}: not a model file: it is {problem}")
     try:
         if path.stat().st_size > MAX_FILE_BYTES:
             raise MagtactError(f"{path}: {path.stat().st_size:,} bytes; a model file has at most "
@@ -188,6 +192,9 @@ def _read_json(path: Path):
         raise MagtactError(f"{path}: not UTF-8 text (byte offset {exc.start})") from None
     except json.JSONDecodeError as exc:
         raise MagtactError(f"{path}: not valid JSON ({exc})") from None
+    except ValueError as exc:  # e.g. an integer of more digits than Python converts
+        raise MagtactError(f"{path}: not a model file (a number it holds cannot be read: "
+                           f"{str(exc).split(':')[0]})") from None
     except (RecursionError, MemoryError):
         raise MagtactError(f"{path}: not a model file (JSON nested too deeply)") from None
 
@@ -226,7 +233,7 @@ def _load_any(path: Path, name: str):
 
         try:
             study = study_from_dict(tomllib.loads(data["study_toml"]), str(path))
-        except (KeyError, TypeError, tomllib.TOMLDecodeError, RecursionError) as exc:
+        except (KeyError, TypeError, ValueError, RecursionError) as exc:
             raise MagtactError(f"{path}: exact-field file without a valid study ({exc})") from None
         return ExactField(study, name)
     if isinstance(data, dict) and data.get("format") == FIELD_FORCE_FORMAT:
@@ -237,8 +244,6 @@ def _load_any(path: Path, name: str):
 def _read_response(folder: Path, k: str):
     """The model of response ``k`` from ``folder/<k>.json``, checked to hold that response."""
     path = folder / f"{k}.json"
-    if not path.is_file():
-        raise MissingFileError(f"metamodel file not found: {path}")
     m = _load_any(path, k)
     if m.name != k or m.units != RESPONSES[k]:
         raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "

@@ -129,7 +129,9 @@ def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
     if generations is not None:
         study = replace(study, metamodel=replace(study.metamodel, generations=int(generations)))
     t0 = time.perf_counter()
-    ds = load_dataset(data) if data is not None else bundled_for(study)
+    ds = load_dataset(data) if data is not None else bundled_for(
+        study, "compute its own (magtact doe STUDY --out DOE) and give it with --data "
+               "DOE/doe.nc")
     if models is None:
         if data is None and study.metamodel.b_model == "fit":
             models = prefitted_dir()  # fitted to this very data set

@@ -15,7 +15,7 @@ from ._fig_mechanics import fig_deformed_body
 from ._fig_metamodel import fig_force_map, fig_gamma, fig_parity
 from ._fig_optimise import draw_maps, draw_pareto, fig_maps, fig_pareto
 from ._fig_validation import fig_validation
-from ._html import build_report
+from ._html import build_report, report_document
 from ._publication import publication_figures
 from ._stages import (
     field_figures,
@@ -27,11 +27,10 @@ from ._stages import (
 from ._style import CMAP_DIV, CMAP_SEQ, save, style
 
 __all__ = [
-    "budget_figures", "budget_labels", "draw_budget", "fig_budget",
+    "budget_figures", "budget_labels", "draw_budget", "fig_budget", "calibration_figures",
+    "draw_calibration", "fig_calibration", "report_document",
     "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "draw_geometry_pareto", "draw_maps",
     "draw_pareto", "optimise_figure_objects",
-    "CMAP_DIV", "CMAP_SEQ", "build_report", "calibration_figures", "draw_calibration",
-    "fig_calibration", "card_rows", "draw_geometry_pareto",
     "field_figures", "fig_deformed_body", "fig_doe", "fig_field", "fig_force_map", "fig_gamma",
     "fig_geometry_pareto", "fig_maps", "fig_pareto", "fig_parity", "fig_validation",
     "fit_figures", "optimise_figures", "publication_figures", "read_card", "save", "style",

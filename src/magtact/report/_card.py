@@ -197,18 +197,19 @@ def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None
     return write_json(Path(folder) / "card.json", doc, indent=1, ensure_ascii=False)
 
 
-def read_card(folder) -> dict | None:
+def read_card(folder, publication=None) -> dict | None:
     """The card written by :func:`write_card`, or None.
 
-    Its rows end with the seed spread of the answer: from ``../publication/publication.json``
-    (written by ``magtact reproduce`` into the same results folder) when that holds the same
-    study, else a row saying how to measure it.
+    Its rows end with the seed spread of the answer: from ``publication/publication.json``
+    (default ``../publication``, written by ``magtact reproduce`` into the same results folder)
+    when that holds the same study, else a row saying how to measure it.
     """
     folder = Path(folder)
     card = _load(folder / "card.json")
     if not isinstance(card, dict) or not isinstance(card.get("rows"), list):
         return None
-    pub = _load(folder.parent / "publication" / "publication.json")
+    publication = folder.parent / "publication" if publication is None else Path(publication)
+    pub = _load(publication / "publication.json")
     card["rows"] = card["rows"] + spread_rows(pub, card, len(card.get("header", [])))
     return card
 

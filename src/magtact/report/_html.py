@@ -76,6 +76,11 @@ details{margin:.5em 0}summary{cursor:pointer}
 def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> Path:
     """Write ``report.html`` for a results folder and return its path.
 
+    The folder's lock is taken while the report is built (a run writing the folder makes this
+    refuse, naming it), a swap that a killed run left half done is finished first, and a run
+    that stopped before its results were put in place is named as interrupted. An existing
+    ``report.html`` that magtact did not write is not replaced.
+
     Parameters
     ----------
     folder : path
@@ -93,10 +98,33 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     ------
     MissingFileError
         If ``folder`` does not exist.
+    magtact._runfolder.FolderInUse
+        If a run is writing the folder.
+    magtact._runfolder.NotMagtactsFile
+        If ``folder/report.html`` exists and is not a report magtact wrote.
     """
+    from .._runfolder import RunLock, claim, interrupted_runs, recover
+
     folder = Path(folder)
     if not folder.is_dir():
         raise MissingFileError(f"{folder}: no such results folder")
+    with RunLock(folder, "magtact report"):
+        recover(folder)
+        doc = report_document(folder, evidence=evidence,
+                              interrupted=interrupted_runs(folder, held=True))
+        return claim(folder, "report.html", doc)
+
+
+def report_document(folder: Path, *, shown: Path | None = None,
+                    evidence: str | Path | None = None,
+                    interrupted: list[dict] | None = None) -> str:
+    """The HTML of the report of ``folder`` (see :func:`build_report`).
+
+    ``shown`` is the results folder the report describes when ``folder`` is the staging folder
+    of a run (its name is printed, and ``shown/publication`` read); ``interrupted`` are the
+    runs of :func:`magtact._runfolder.interrupted_runs`.
+    """
+    shown = folder if shown is None else Path(shown)
     manifest = _load_json(folder / "run.json")
     manifest = manifest if isinstance(manifest, dict) else {}  # a forged run.json: none
     listed = manifest.get("stages")
@@ -104,11 +132,12 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
               if isinstance(s, dict)}
     study_name = manifest.get("study", "unknown study")
     parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
-             f"<p>Results folder <code>{_e(folder.resolve())}</code>; report built "
+             f"<p>Results folder <code>{_e(shown.resolve())}</code>; report built "
              f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}. The method behind every number, with "
              'its equations and defaults: <a href="#method">the method</a> (appendix, '
              "<code>docs/method.md</code> of the magtact repository); the benchmarks' "
              "evidence: <code>docs/verification.md</code>.</p>"]
+    parts.extend(_interrupted(r, manifest) for r in interrupted or [])
     if not manifest:
         parts.append('<div class="missing">No <code>run.json</code> in this folder: the stages '
                      "below are reported from the files present only; statuses and timings are "
@@ -119,7 +148,7 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
                      "section compares the model with a generated example data set (model plus "
                      "noise, drift and scatter), not with measurements.</div>")
     if _of_run(folder / "optimise", manifest.get("run_id")):
-        parts.append(_card(folder / "optimise"))
+        parts.append(_card(folder / "optimise", shown / "publication"))
     toc = " · ".join(f'<a href="#{k}">{_e(t)}</a>' for k, t, _ in STAGES)
     parts.append(f'<p><a href="#summary">Summary</a> · <a href="#chosen">Chosen design</a> · '
                  f'{toc} · <a href="#publication">The publication</a> · '
@@ -137,7 +166,7 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
             parts.append(_stage(folder / key, key, title, what, stages.get(key)))
         else:
             parts.append(_other_run(folder / key, key, title, what))
-    parts.append(publication_section(folder / "publication", _definition(folder)))
+    parts.append(publication_section(shown / "publication", _definition(folder)))
     parts.append(_evidence([folder / "evidence"] + ([Path(evidence)] if evidence else [])))
     parts.append(_settings(folder / "study.toml"))
     parts.append(_method())
@@ -145,17 +174,45 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     doc = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
            f"<title>magtact report — {_e(study_name)}</title><style>{CSS}</style></head>"
            "<body>\n" + "\n".join(p for p in parts if p) + "\n</body></html>\n")
-    path = folder / "report.html"
-    path.write_text(doc, encoding="utf-8")
-    return path
+    return doc
 
 
 # ---- sections ------------------------------------------------------------------------------
 
 
-def _card(folder: Path) -> str:
+def _interrupted(run: dict, manifest: dict) -> str:
+    """The banner of a run that stopped before its results were put in place."""
+    m = run.get("manifest") or {}
+    listed = m.get("stages") if isinstance(m.get("stages"), list) else []
+    done = [s for s in listed if isinstance(s, dict)]
+    titles = {k: t for k, t, _ in STAGES}
+    keys = [s.get("key") for s in done]
+    at = next((t for k, t in titles.items() if k not in keys), None)
+    if m.get("finished"):
+        where = "after its last stage, before its results were put in place"
+    elif at is not None:
+        where = f"during the stage <i>{_e(at)}</i>"
+    else:
+        where = "before it completed"
+    finished = ("; finished stages: " + ", ".join(
+        f"{_e(titles.get(s.get('key'), s.get('key')))} ({_e(s.get('status'))})" for s in done)
+        if done else "")
+    why = f" ({_e(m['interrupted'])})" if isinstance(m.get("interrupted"), str) else ""
+    command = _e(m.get("command", "an unknown command"))
+    last = (f"The results shown are those of the last complete run (run "
+            f"{_e(str(manifest.get('run_id', '?'))[:12])}, started "
+            f"{_e(manifest.get('started', '?'))})." if manifest.get("finished")
+            else "This folder holds no complete run.")
+    return ('<div class="missing"><b>Interrupted run.</b> The run <code>'
+            f"{command}</code> started {_e(m.get('started', 'at an unknown time'))} (run "
+            f"{_e(str(m.get('run_id', '?'))[:12])}) was interrupted {where}{why}{finished}. "
+            f"Its partial results, in <code>{_e(run.get('staging'))}/</code>, are not shown; "
+            f"the next run into this folder removes them. {last}</div>")
+
+
+def _card(folder: Path, publication: Path | None = None) -> str:
     """The design card (written by the optimisation stage), or nothing."""
-    card = read_card(folder)
+    card = read_card(folder, publication)
     if not card or not isinstance(card.get("rows"), list):
         return ""
     head = "".join(f'<th class="l">{_e(h)}</th>' for h in card.get("header", []))

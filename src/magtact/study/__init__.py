@@ -1,7 +1,15 @@
 """Study settings: typed, immutable, loaded from TOML in user units, SI inside."""
 
 from ._hall import HALL_PRESETS, HallChip, HallPreset, hall_chip
-from ._load import PRESETS, StudyError, load_study, magone, magone_printed, study_from_dict
+from ._load import (
+    PRESETS,
+    StudyError,
+    check_holdout,
+    load_study,
+    magone,
+    magone_printed,
+    study_from_dict,
+)
 from ._model import (
     ARRAY_LAYOUTS,
     DOE,
@@ -23,6 +31,7 @@ from ._model import (
 from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
+    "check_holdout",
     "ARRAY_LAYOUTS", "Array", "Environment", "Tolerances",
     "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
     "Design", "HallChip", "HallPreset", "Loading", "Magnet", "Magnetics", "Material", "Mechanics",

@@ -13,7 +13,8 @@ from pathlib import Path
 import tomli_w
 
 from .._errors import MagtactError
-from ._model import GEOMETRY, SECTIONS, Study, key_of
+from .._files import file_problem
+from ._model import GEOMETRY, SECTIONS, Study, holdout_limit, key_of
 from ._units import LABEL, MU0, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
@@ -78,10 +79,13 @@ MAX_FILE_BYTES = 1_000_000
 
 def _read_text(path: Path) -> str:
     """The text of a study file (UTF-8, with or without a byte-order mark), or a StudyError."""
-    if not path.exists():
-        raise StudyError("file", f"study file not found: {path}")
-    if not path.is_file():
-        raise StudyError("file", "is not a file (a study is one TOML file)", str(path))
+    problem = file_problem(path)
+    if problem == "not found":
+        raise StudyError("file", f"study file not found: {path}, and no preset has that name "
+                                 f"(presets: {', '.join(PRESETS)})")
+    if problem is not None:
+        raise StudyError("file", f"is not a file: it is {problem} (a study is one TOML file)",
+                         str(path))
     try:
         size = path.stat().st_size
         if size > MAX_FILE_BYTES:
@@ -332,6 +336,7 @@ def _check_consistency(s: Study, source) -> None:
                                            f"the body (diameter 2 body.R_mm = {_mm(2 * b.R)} "
                                            "mm): neighbouring bodies would overlap", source)
     _check_work(s, source)
+    _check_order(s, source)
     for name in ("H_original", "G_original"):
         value, (lo, hi) = getattr(s.design, name), getattr(s.design, name[0])
         if not lo <= value <= hi:
@@ -411,6 +416,45 @@ def _check_work(s: Study, source) -> None:
     if not fm.growth_near < fm.growth:
         raise StudyError("magnetics.growth_near", f"must be below magnetics.growth = "
                                                   f"{fm.growth:g}, got {fm.growth_near:g}", source)
+
+
+def _check_order(s: Study, source) -> None:
+    """Settings that must keep an order among themselves, and settings bounded by the data the
+    study's DOE produces."""
+    m = s.mechanics
+    if m.dt_min > m.dt_max:
+        raise StudyError("mechanics.dt_min", f"the smallest load step ({m.dt_min:g}) must not "
+                                             f"exceed the largest, mechanics.dt_max = "
+                                             f"{m.dt_max:g}", source)
+    if not m.dt_min <= m.dt_initial <= m.dt_max:
+        raise StudyError("mechanics.dt_initial", f"the first load step ({m.dt_initial:g}) must "
+                                                 f"lie in [mechanics.dt_min, mechanics.dt_max] "
+                                                 f"= [{m.dt_min:g}, {m.dt_max:g}]", source)
+
+
+def check_holdout(s: Study, n_theta: int | None = None, n_H: int | None = None,
+                  data: str | None = None, source: str | None = None) -> None:
+    """Refuse, before any work, more held-out paths (``[metamodel] holdout_paths``) than a fit
+    can hold out of the DOE's (θ, H) paths: those of the data set ``data`` (``n_theta × n_H``
+    levels) when given, else those the study's ``[doe]`` asks for. A study used for a DOE only
+    is not refused (the check is made by the commands that fit). ``source``: the study file
+    (default: the study's name).
+
+    Raises
+    ------
+    StudyError
+        Naming the setting, the number of paths and where they come from.
+    """
+    n_theta = s.doe.n_theta if n_theta is None else n_theta
+    n_H = s.doe.n_H if n_H is None else n_H
+    n, most = s.metamodel.holdout_paths, holdout_limit(n_theta, n_H)
+    if n > most:
+        of = (f"the data set {data} has {n_theta} × {n_H}" if data is not None else
+              f"the DOE's {n_theta} × {n_H} (doe.n_theta × doe.n_H)")
+        raise StudyError("metamodel.holdout_paths", f"{n} held-out paths, but {of} (θ, H) "
+                                                    f"paths allow at most {most} (interior "
+                                                    "paths, leaving some to fit)",
+                         source or f"study {s.name!r}")
 
 
 def _mm(x: float) -> str:

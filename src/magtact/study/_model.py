@@ -409,6 +409,13 @@ class Tolerances:
                         doc="seed of the Monte Carlo")
 
 
+def holdout_limit(n_theta: int, n_H: int) -> int:
+    """Most (θ, H) paths a fit may hold out of ``n_theta × n_H``: the interior ones (all of a
+    direction with at most two levels), and never every path (docs/method.md §4)."""
+    inner = (n_theta - 2 if n_theta > 2 else n_theta) * (n_H - 2 if n_H > 2 else n_H)
+    return min(inner, n_theta * n_H - 1)
+
+
 @dataclass(frozen=True)
 class Study:
     """A complete sensor study. All quantities in SI (m, Pa, N, T, rad, A/m)."""

@@ -34,6 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError, MissingFileError
+from .._files import file_problem
+from .._numbers import parse_float
 from ..study import check_si, mm, to_si
 
 #: The measured responses and the unit suffix of their columns.
@@ -146,7 +148,7 @@ class Experiment:
                              f"'{key}'")
         text = self.metadata[key]
         try:
-            value = float(text)
+            value = parse_float(text)
         except ValueError:
             raise MagtactError(f"{where}: metadata '{key}' is not a number: "
                              f"{_clip(text)!r}") from None
@@ -218,10 +220,11 @@ def read_experiment(paths) -> Experiment:
 
 def _read_file(path: Path):
     """Parse one file → (curves, theta, where theta was read, metadata)."""
-    if not path.exists():
+    problem = file_problem(path)
+    if problem == "not found":
         raise MissingFileError(f"{path}: no such data file")
-    if not path.is_file():
-        raise DataError(f"{path}: not a file (give CSV files)")
+    if problem is not None:
+        raise DataError(f"{path}: not a file: it is {problem} (give CSV files)")
     try:
         if path.stat().st_size > MAX_FILE_BYTES:
             raise DataError(f"{path}: {path.stat().st_size:,} bytes; a data file has at most "
@@ -350,7 +353,7 @@ def _numbers(path: Path, rows, header: list[str], column: str) -> np.ndarray:
     for n, (line, cells) in enumerate(rows):
         cell = cells[k]
         try:
-            value = float(cell)
+            value = parse_float(cell)
         except ValueError:
             what = "empty cell" if not cell else f"not a number: {cell!r}"
             raise DataError(f"{path}: line {line}, column {column!r}: {what}") from None
@@ -371,7 +374,7 @@ def _theta(path, rows, header, columns, numeric, meta, meta_line):
         key = f"theta_{unit}"
         if key in meta:
             try:
-                from_meta = to_si(float(meta[key]), unit)
+                from_meta = to_si(parse_float(meta[key]), unit)
             except ValueError:
                 raise DataError(f"{path}: line {meta_line[key]}, metadata {key!r}: not a number: "
                                 f"{meta[key]!r}") from None

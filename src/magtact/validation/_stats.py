@@ -20,6 +20,11 @@ from ._model import PathModel
 N_GRID = 201
 #: Most points of the common grid (a bound on the work of one validation).
 MAX_GRID = 100_001
+#: Smallest displacement range [m] the tests (and the model) must share: below it the
+#: statistics compare sensor noise, not curves.
+MIN_SHARED_RANGE = 1e-6
+#: ... and at least this fraction of the shortest test's own displacement range.
+MIN_SHARED_FRACTION = 0.05
 #: Default guard: a ratio is evaluated only where |denominator| > FLOOR × max |denominator|.
 FLOOR = RELATIVE_FLOOR
 
@@ -185,10 +190,19 @@ def validate(experiment: Experiment, model: PathModel, *,
                          f"{mm(m_hi):.4g}] mm (data common range [{mm(lo):.4g}, "
                          f"{mm(hi):.4g}] mm)")
         lo, hi = max(lo, m_lo), min(hi, m_hi)
-    if not hi > lo:
-        raise DataError("the tests share no displacement range (u_z): "
+    shortest = min(float(np.ptp(c.u_z)) for c in curves)
+    least = max(MIN_SHARED_RANGE, MIN_SHARED_FRACTION * shortest)
+    if not hi - lo >= least:
+        share = (f"share only {mm(hi - lo):.3g} mm of displacement (u_z), less than "
+                 f"{mm(least):.3g} mm (the larger of {mm(MIN_SHARED_RANGE) * 1e3:g} µm and "
+                 f"{100 * MIN_SHARED_FRACTION:g} % of the shortest test's range)"
+                 if hi > lo else "share no displacement range (u_z)")
+        raise DataError(f"the tests {share}: "
                         + "; ".join(f"{c.source}, line {c.line}: [{mm(c.u_z.min()):.4g}, "
-                                    f"{mm(c.u_z.max()):.4g}] mm" for c in curves))
+                                    f"{mm(c.u_z.max()):.4g}] mm" for c in curves)
+                        + ("; the model's range: "
+                           f"[{mm(model.u_z_range[0]):.4g}, {mm(model.u_z_range[1]):.4g}] mm"
+                           if model.u_z_range is not None else ""))
     grid = np.linspace(hi, lo, n_grid)  # loading order: from the top downwards
 
     resampled = {r: np.empty((len(curves), n_grid)) for r in (*RESPONSES, "u_r")}
