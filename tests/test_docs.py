@@ -93,3 +93,11 @@ def test_verification_numbers_follow_the_results(tmp_path):
 @pytest.mark.parametrize("name", ["method.md", "verification.md", "usage.md"])
 def test_documents_cite_no_outside_specification(name):
     assert "SP" + "EC" not in (DOCS / name).read_text("utf-8")
+
+
+@pytest.mark.parametrize("name", ["method.md", "sensor.svg"])
+def test_the_package_ships_the_documents_of_docs_not_a_copy(name):
+    """docs/ is the one home of the method and its figure; the package's files are links to
+    them (a wheel stores their content), so the two cannot differ."""
+    shipped = ROOT / "src" / "magtact" / "report" / name
+    assert shipped.is_symlink() and shipped.resolve() == (DOCS / name).resolve()
