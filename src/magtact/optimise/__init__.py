@@ -24,6 +24,7 @@ from ._geometry import (
     DesignSet,
     GeometricChoice,
     GeometryOptimisation,
+    describe,
     geometry_json,
     optimise_geometry,
     write_geometry_outputs,
@@ -47,10 +48,11 @@ from ._pareto import (
     pareto_nsga2,
     sweep,
 )
-from ._run import Optimisation, Timings, optimise, write_optimise_outputs
+from ._run import FrontGapWarning, Optimisation, Timings, optimise, write_optimise_outputs
 
 __all__ = [
-    "DesignSet", "GeometricChoice", "GeometryOptimisation", "geometry_json",
+    "DesignSet", "FrontGapWarning", "GeometricChoice", "GeometryOptimisation", "describe",
+    "geometry_json",
     "optimise_geometry", "write_geometry_outputs",
     "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignResult",
     "ForceConstraints", "HeightResult", "HeightTable", "InfeasibleError", "Optimisation",

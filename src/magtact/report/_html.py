@@ -14,15 +14,16 @@ The report is built from the files a run leaves in its folder, never from memory
 
 from __future__ import annotations
 
-import base64
 import csv
-import html
 import json
 from datetime import UTC, datetime
 from pathlib import Path
 
 from .._errors import MissingFileError
 from ._card import read_card
+from ._fragments import escape as _e
+from ._fragments import figure as _figure
+from ._fragments import load_json as _load_json
 from ._markdown import render_markdown
 from ._publication import publication_section
 
@@ -350,13 +351,6 @@ def _versions(manifest: dict) -> str:
 
 
 # ---- pieces --------------------------------------------------------------------------------
-def _figure(path: Path, caption: str | None) -> str:
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    cap = caption or path.stem.replace("_", " ")
-    return (f'<figure><img src="data:image/png;base64,{data}" alt="{_e(cap)}">'
-            f"<figcaption>{_e(cap)} <small>({_e(path.name)})</small></figcaption></figure>")
-
-
 def _csv_table(path: Path, caption: str | None) -> str:
     try:
         with path.open(newline="", encoding="utf-8") as f:
@@ -445,17 +439,6 @@ def _is_synthetic(folder: Path) -> bool:
     if any("synthetic" in p.name.lower() for p in folder.iterdir()):
         return True
     return any((_load_json(p) or {}).get("synthetic") is True for p in folder.glob("*.json"))
-
-
-def _load_json(path: Path):
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
-        return None
-
-
-def _e(x) -> str:
-    return html.escape(str(x), quote=True)
 
 
 def _plain(v) -> str:

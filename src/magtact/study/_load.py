@@ -10,8 +10,6 @@ from dataclasses import fields, replace
 from importlib import resources
 from pathlib import Path
 
-import tomli_w
-
 from .._errors import MagtactError
 from ._model import GEOMETRY, SECTIONS, Study, key_of
 from ._units import LABEL, bounds_text, from_si, to_si
@@ -375,29 +373,3 @@ def _check_work(s: Study, source) -> None:
 
 def _mm(x: float) -> str:
     return f"{from_si(x, 'mm'):.6g}"
-
-
-def study_to_toml(s: Study) -> str:
-    """The complete study as TOML in user units (``base = "none"``: nothing implicit)."""
-    out: dict = {"base": "none", "name": s.name, "description": s.description}
-    for name in SECTIONS:
-        sec = getattr(s, name)
-        table = {}
-        for f in fields(sec):
-            value, unit = getattr(sec, f.name), f.metadata["unit"]
-            if isinstance(value, tuple):
-                value = [_tidy(v, unit) for v in value]
-            elif isinstance(value, float):
-                value = _tidy(value, unit)
-            table[key_of(f)] = value
-        out[name] = table
-    return tomli_w.dumps(out)
-
-
-def _tidy(si: float, unit: str) -> float:
-    """The shortest user-unit number that converts back to exactly ``si``."""
-    for digits in range(12, 18):
-        user = float(f"{from_si(si, unit):.{digits}g}")
-        if to_si(user, unit) == si:
-            return user
-    return float(from_si(si, unit))
