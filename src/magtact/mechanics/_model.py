@@ -76,7 +76,7 @@ class _SuperLU:
 
 @functools.cache
 def pardiso_available() -> bool:
-    """Whether pypardiso and its MKL library can be loaded (``pip install magtact[mkl]``;
+    """Whether pypardiso and its MKL library can be loaded (installed with magtact on x86-64;
     MKL exists for x86-64 only)."""
     try:
         from pypardiso import PyPardisoSolver
@@ -105,7 +105,7 @@ def _linear_solver(name: str, threads: int):
         if pardiso_available():
             return _Pardiso(threads)
         warnings.warn("pypardiso (MKL) is not installed: the Newton systems are solved by "
-                      "SciPy's SuperLU (slower; pip install 'magtact[mkl]' on x86-64)",
+                      "SciPy's SuperLU (slower; pip install pypardiso, x86-64 only)",
                       RuntimeWarning, stacklevel=3)
         return _SuperLU(threads)
     if name == "superlu":

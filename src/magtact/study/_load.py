@@ -11,6 +11,7 @@ from importlib import resources
 from pathlib import Path
 
 from .._errors import MagtactError
+from .._files import UnreadableFile, read_text_capped
 from ._model import GEOMETRY, SECTIONS, Study, key_of
 from ._units import LABEL, bounds_text, from_si, to_si
 
@@ -78,21 +79,10 @@ def _read_text(path: Path) -> str:
     """The text of a study file (UTF-8, with or without a byte-order mark), or a StudyError."""
     if not path.exists():
         raise StudyError("file", f"study file not found: {path}")
-    if not path.is_file():
-        raise StudyError("file", "is not a file (a study is one TOML file)", str(path))
     try:
-        size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise StudyError("file", f"has {size:,} bytes; a study file has at most "
-                                     f"{MAX_FILE_BYTES:,}", str(path))
-        data = path.read_bytes()
-    except OSError as exc:
-        raise StudyError("file", f"cannot be read: {exc.strerror or exc}", str(path)) from None
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise StudyError("file", f"is not UTF-8 text (byte {data[exc.start]:#04x} at offset "
-                                 f"{exc.start}); save it as UTF-8", str(path)) from None
+        return read_text_capped(path, MAX_FILE_BYTES)
+    except UnreadableFile as exc:
+        raise StudyError("file", str(exc), str(path)) from None
 
 
 def _clip(text: str, n: int = 60) -> str:

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError, MissingFileError
+from .._files import UnreadableFile, read_text_capped
 from ..study import check_si, mm, to_si
 
 #: The measured responses and the unit suffix of their columns.
@@ -220,18 +221,10 @@ def _read_file(path: Path):
     """Parse one file → (curves, theta, where theta was read, metadata)."""
     if not path.exists():
         raise MissingFileError(f"{path}: no such data file")
-    if not path.is_file():
-        raise DataError(f"{path}: not a file (give CSV files)")
     try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise DataError(f"{path}: {path.stat().st_size:,} bytes; a data file has at most "
-                            f"{MAX_FILE_BYTES:,}")
-        text = path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise DataError(f"{path}: not a UTF-8 text file ({exc.reason} at byte "
-                        f"{exc.start})") from None
-    except OSError as exc:
-        raise DataError(f"{path}: cannot be read: {exc.strerror or exc}") from None
+        text = read_text_capped(path, MAX_FILE_BYTES)
+    except UnreadableFile as exc:
+        raise DataError(f"{path}: {exc}") from None
     lines = text.splitlines()
     meta: dict[str, str] = {}
     meta_line: dict[str, int] = {}
