@@ -88,7 +88,7 @@ def test_folder_and_unreadable_files(tmp_path, monkeypatch):
     def deny(self, *args, **kwargs):
         raise PermissionError(13, "Permission denied", str(self))
 
-    monkeypatch.setattr(Path, "read_text", deny)
+    monkeypatch.setattr(Path, "read_bytes", deny)
     refused([locked], "locked.csv: cannot be read: Permission denied")
 
 

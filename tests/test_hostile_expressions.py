@@ -139,7 +139,7 @@ def test_model_file_read_errors_name_the_file(tmp_path):
         load_model(path)
     path.unlink()
     path.mkdir()
-    with pytest.raises(ValueError, match="B_r.json: cannot be read"):
+    with pytest.raises(ValueError, match="B_r.json: is not a file"):
         load_model(path)
 
 
