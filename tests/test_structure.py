@@ -8,6 +8,7 @@ functions, which a run-time check would miss until the function runs.
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -144,6 +145,7 @@ def _module_imports(path: Path, modules) -> list[tuple[str, int]]:
     return out
 
 
+@functools.cache
 def module_graph() -> dict[str, dict[str, list[int]]]:
     """module → imported module → line numbers, over every module of the package (imports
     inside functions included)."""
