@@ -32,6 +32,8 @@ class _Pardiso:
     """PARDISO (MKL, via pypardiso's public ``PyPardisoSolver``): ``factorize`` runs the
     analysis and the numerical factorisation of each Jacobian (PARDISO phase 12), ``solve``
     reuses that factorisation (phase 33: pypardiso recognises the factorised matrix).
+    pypardiso's public API has no numerical-only factorisation (phase 22), so the analysis is
+    repeated for every Jacobian although the pattern does not change during a path.
     """
 
     def __init__(self, threads: int):
