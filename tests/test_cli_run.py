@@ -48,8 +48,10 @@ def check_run(tmp_path, study_file):
     html = (out / "report.html").read_text(encoding="utf-8")
     srcs = re.findall(r'<img src="([^"]+)"', html)
     pngs = sorted(out.glob("*/*.png"))
-    assert len(srcs) == len(pngs) >= 5
-    assert all(s.startswith("data:image/png;base64,") for s in srcs)
+    # every figure of the folder, and the method's drawing of the sensor (SVG)
+    assert len(srcs) == len(pngs) + 1 and len(pngs) >= 5
+    assert sum(s.startswith("data:image/png;base64,") for s in srcs) == len(pngs)
+    assert sum(s.startswith("data:image/svg+xml;base64,") for s in srcs) == 1
     assert "No chosen design" not in html and "SYNTHETIC" in html
     assert (out / "validation" / "validation_synthetic.csv").is_file()
     assert (out / "optimise" / "chosen.json").is_file()
@@ -68,7 +70,7 @@ def check_run(tmp_path, study_file):
     # the report is rebuilt from the folder alone
     (out / "report.html").unlink()
     assert CliRunner().invoke(app, ["report", str(out)]).exit_code == 0
-    assert len(re.findall(r"<img ", (out / "report.html").read_text())) == len(pngs)
+    assert len(re.findall(r"<img ", (out / "report.html").read_text())) == len(pngs) + 1
 
 
 def test_run_end_to_end_on_bundled_data(tmp_path):

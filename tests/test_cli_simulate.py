@@ -1,5 +1,6 @@
 """`magtact simulate`: files written, forces.csv against the loading path, bad input."""
 
+import re
 import subprocess
 import sys
 
@@ -37,15 +38,48 @@ def test_forces_csv(run):
     assert np.all(np.abs(F_r) <= 1e-6 * F_z[-1])
 
 
-def test_vtu_and_figure(run):
+def test_vtu_holds_the_deformed_half_body(run):
+    """The VTU: the deformed coarse half body with its displacement; undeformed, it is the body
+    of the study (y ≥ 0, radius 6 mm, height H + H_g); the clamped base does not move and the
+    nodes of the magnet's cavity moved rigidly with the magnet by (0, 0, −H) = (0, 0, −4 mm)."""
     mesh = meshio.read(run / "deformed_t1.vtu")
+    assert [c.type for c in mesh.cells] == ["hexahedron"] and len(mesh.cells[0].data) > 100
     u = mesh.point_data["displacement"]
     np.testing.assert_allclose(mesh.point_data["displacement_magnitude"],
                                np.linalg.norm(u, axis=1))
-    # the magnet (and with it the largest displacement) moved by |u| = H = 4 mm
-    assert mesh.point_data["displacement_magnitude"].max() == pytest.approx(4e-3, rel=0.05)
-    for suffix in ("png", "svg"):
-        assert (run / f"deformed_body.{suffix}").stat().st_size > 10_000
+    x0 = mesh.points - u  # undeformed
+    assert x0[:, 1].min() >= -1e-12  # the half body y ≥ 0
+    # radius 6 mm (the coarse mesh's outer nodes within 1 % of it)
+    assert np.hypot(x0[:, 0], x0[:, 1]).max() == pytest.approx(6e-3, rel=0.01)
+    assert x0[:, 2].min() == pytest.approx(0.0, abs=1e-12)
+    assert x0[:, 2].max() == pytest.approx(4e-3 + 4.97e-3, rel=1e-9)
+    base = x0[:, 2] < 1e-9
+    assert base.sum() > 10 and np.abs(u[base]).max() == 0.0
+    magnet = np.all(np.abs(u - [0.0, 0.0, -4e-3]) < 1e-12, axis=1)
+    assert magnet.sum() > 10
+    # the cavity: within the magnet (R_m = 2.5 mm, centre at H + H_g − H_m = 6.97 mm, H_m = 2 mm)
+    assert np.hypot(x0[magnet, 0], x0[magnet, 1]).max() <= 1.01 * 2.5e-3
+    assert x0[magnet, 2].min() >= 5.97e-3 - 1e-9 and x0[magnet, 2].max() <= 7.97e-3 + 1e-9
+
+
+def test_figure_shows_the_runs_body_and_numbers(run):
+    """The figure's text (matplotlib writes each text of an SVG as a comment): the panels and
+    their axes, the colour scale up to the largest displacement, the run's forces."""
+    svg = (run / "deformed_body.svg").read_text("utf-8")
+    texts = re.findall(r"<!-- (.*?) -->", svg)
+    for label in ("half body y ≥ 0, deformed", "section y = 0 (undeformed dashed)", "x [mm]",
+                  "y [mm]", "z [mm]", "|u| [mm]"):
+        assert label in texts, label
+    title = next(t for t in texts if t.startswith("H = 4 mm, θ = 0.000 rad, t = 1"))
+    F_z = np.loadtxt(run / "forces.csv", delimiter=",", skiprows=1)[-1, 4]
+    assert f"F_z = {F_z:.3g} N (G = 20 kPa)" in title
+    # colour scale: the ticks between the section's title and "|u| [mm]" reach max |u| = 4 mm
+    ticks = texts[texts.index("section y = 0 (undeformed dashed)") + 1:texts.index("|u| [mm]")]
+    ticks = [float(t.replace("−", "-")) for t in ticks]
+    u_max = 1e3 * meshio.read(run / "deformed_t1.vtu").point_data["displacement_magnitude"].max()
+    step = ticks[1] - ticks[0]
+    assert ticks[0] == 0 and 0 <= u_max - ticks[-1] < step and u_max == pytest.approx(4, rel=0.01)
+    assert (run / "deformed_body.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_bad_height_is_a_clean_error(tmp_path):

@@ -93,3 +93,120 @@ def test_verification_numbers_follow_the_results(tmp_path):
 @pytest.mark.parametrize("name", ["method.md", "verification.md", "usage.md"])
 def test_documents_cite_no_outside_specification(name):
     assert "SP" + "EC" not in (DOCS / name).read_text("utf-8")
+
+
+@pytest.mark.parametrize("name", ["method.md", "sensor.svg"])
+def test_the_package_ships_the_documents_of_docs_not_a_copy(name):
+    """docs/ is the one home of the method and its figure; the package's files are links to
+    them (a wheel stores their content), so the two cannot differ."""
+    shipped = ROOT / "src" / "magtact" / "report" / name
+    assert shipped.is_symlink() and shipped.resolve() == (DOCS / name).resolve()
+
+
+# ---- the documents name only what exists ---------------------------------------------------
+USER_DOCS = ("README.md", "docs/usage.md")
+
+
+def _code(text: str) -> list[str]:
+    """The code of a Markdown text: each line of a fenced block and each inline code span."""
+    fenced = re.findall(r"^```[^\n]*\n(.*?)^```", text, flags=re.MULTILINE | re.DOTALL)
+    rest = re.sub(r"^```[^\n]*\n.*?^```", "", text, flags=re.MULTILINE | re.DOTALL)
+    return [line for block in fenced for line in block.splitlines()] + re.findall(
+        r"`([^`]+)`", rest)
+
+
+def _cli():
+    import typer
+
+    from magtact.cli import app
+
+    group = typer.main.get_command(app)
+    return {name: {o for p in cmd.params for o in (*p.opts, *p.secondary_opts)}
+            for name, cmd in group.commands.items()}
+
+
+def _cli_mentions(text: str) -> list[tuple[str, list[str]]]:
+    """(command, options) for every ``magtact COMMAND ...`` in the code of ``text``."""
+    found = []
+    for code in _code(text):
+        for part in re.split(r"&&|;", code.replace("\n", " ")):
+            m = re.match(r"\s*magtact\s+([a-z][\w-]*)(.*)", part)
+            if m:
+                found.append((m.group(1), re.findall(r"(?<![\w-])(--?[a-zA-Z][\w-]*)",
+                                                     m.group(2).split("#")[0])))
+    return found
+
+
+@pytest.mark.parametrize("name", USER_DOCS)
+def test_every_command_and_option_the_documents_name_exists(name):
+    cli = _cli()
+    text = (ROOT / name).read_text("utf-8")
+    mentions = _cli_mentions(text)
+    assert len({c for c, _ in mentions}) >= 8  # the documents walk through the commands
+    wrong = [(c, o) for c, opts in mentions for o in ([None] if c not in cli else opts)
+             if c not in cli or (o is not None and o not in cli[c] and o != "--help")]
+    assert wrong == []
+    # an option named on its own (`--f-lo`) belongs to some command
+    every = set().union(*cli.values()) | {"--help"}
+    alone = {o for code in _code(text) for o in re.findall(r"^(--[a-z][\w-]*)", code.strip())}
+    assert sorted(alone - every) == []
+
+
+def test_the_command_check_sees_a_wrong_command_and_option():
+    cli = _cli()
+    mentions = _cli_mentions("Run `magtact simulate --H 3 --heigth 4` and\n```bash\n"
+                             "magtact simlate --out x  # comment --no\n```\n")
+    assert ("simulate", ["--H", "--heigth"]) in mentions and ("simlate", ["--out"]) in mentions
+    assert "--heigth" not in cli["simulate"] and "simlate" not in cli
+
+
+def _python_names(text: str) -> set[str]:
+    return set(re.findall(r"(?<![\w./-])(magtact(?:\.[A-Za-z_]\w*)+)", text))
+
+
+def _resolves(name: str) -> bool:
+    import importlib
+
+    parts = name.split(".")
+    for k in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        try:
+            for attr in parts[k:]:
+                obj = getattr(obj, attr)
+        except AttributeError:
+            return False
+        return True
+    return False
+
+
+@pytest.mark.parametrize("name", USER_DOCS)
+def test_every_python_name_the_documents_name_exists(name):
+    names = _python_names((ROOT / name).read_text("utf-8"))
+    assert len(names) >= 5
+    assert sorted(n for n in names if not _resolves(n)) == []
+
+
+def test_the_name_check_sees_a_missing_name():
+    assert _python_names("use `magtact.doe.load_bundled()` or magtact.nothing_here.") == {
+        "magtact.doe.load_bundled", "magtact.nothing_here"}
+    assert _resolves("magtact.doe.load_bundled") and not _resolves("magtact.nothing_here")
+    assert not _resolves("magtact.doe.load_bundeld")
+
+
+def test_the_bundled_data_readme_lists_the_data_sets_attributes():
+    from magtact.doe import load_bundled
+
+    ds = load_bundled()
+    text = (ROOT / "src" / "magtact" / "doe" / "data" / "README.md").read_text("utf-8")
+    table = text[text.index("| attribute |"):]
+    table = table[:table.index("\n\n")]
+    named = set(re.findall(r"`([a-z]\w*)`", table)) - {"fe"} - set(ds.data_vars)
+    prefixes = set(re.findall(r"`([a-z]\w*_)\*`", table))
+    actual = set(ds.attrs)
+    assert named <= actual, named - actual
+    assert {a for a in actual if not any(a.startswith(p) for p in prefixes)} <= named
+    for var in ds.data_vars:
+        assert f"`{var}" in text or f" {var}`" in text or f", {var}" in text, var

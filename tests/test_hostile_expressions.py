@@ -135,7 +135,7 @@ def test_model_file_read_errors_name_the_file(tmp_path):
     with pytest.raises(ValueError, match=r"B_r.json: not a model file \(JSON nested too deeply"):
         load_model(path)
     path.write_bytes(b'{"format": "\xff"}')
-    with pytest.raises(ValueError, match="B_r.json: not UTF-8 text"):
+    with pytest.raises(ValueError, match="B_r.json: is not UTF-8 text"):
         load_model(path)
     path.unlink()
     path.mkdir()

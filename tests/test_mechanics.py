@@ -362,3 +362,54 @@ def test_a_singular_tangent_is_non_convergence(monkeypatch):
     monkeypatch.setattr(model._linear, "factorize", singular)
     with pytest.raises(NewtonFailed, match="singular tangent"):
         model._jacobian()
+
+
+def test_linear_solvers_agree_and_pardiso_falls_back_to_superlu(monkeypatch):
+    """PARDISO (pypardiso's public factorize/solve) and SuperLU solve the same unsymmetric
+    system, factorised twice as in Newton's method; without pypardiso, "pardiso" is SuperLU
+    with a warning."""
+    import sys
+
+    import scipy.sparse as sps
+
+    import magtact.mechanics._model as model
+
+    rng = np.random.default_rng(3)
+    n = 300
+    A = sps.random(n, n, density=0.02, random_state=4, format="csr") + 10 * sps.eye(n)
+    b = rng.standard_normal(n)
+    solutions = []
+    for name in ("pardiso", "superlu") if model.pardiso_available() else ("superlu",):
+        solver = model._linear_solver(name, 1)
+        solver.factorize(2 * A)
+        solver.factorize(A.tocsr())  # a new Jacobian of the same pattern
+        x = solver.solve(b)
+        solver.free()
+        assert np.linalg.norm(A @ x - b) <= 1e-12 * np.linalg.norm(b)
+        solutions.append(x)
+    np.testing.assert_allclose(solutions[0], solutions[-1], rtol=0, atol=1e-12)
+    monkeypatch.setitem(sys.modules, "pypardiso", None)  # not installed
+    model.pardiso_available.cache_clear()
+    try:
+        assert not model.pardiso_available()
+        with pytest.warns(RuntimeWarning, match="SciPy's SuperLU"):
+            assert isinstance(model._linear_solver("pardiso", 1), model._SuperLU)
+    finally:
+        model.pardiso_available.cache_clear()
+
+
+def test_the_model_defaults_are_the_studys():
+    """One home for the structural defaults: magtact.study.Mechanics."""
+    import inspect
+
+    from magtact.mechanics import SOLVERS, Stepping
+    from magtact.study import Mechanics
+
+    m, st = Mechanics(), Stepping()
+    assert (st.dt_initial, st.dt_min, st.dt_max, st.max_iter, st.tol) == (
+        m.dt_initial, m.dt_min, m.dt_max, m.max_newton, m.newton_tol)
+    p = inspect.signature(HalfBodyModel).parameters
+    assert (p["penalty"].default, p["elastic_slip"].default, p["solver"].default,
+            p["threads"].default) == (m.contact_penalty, m.elastic_slip, m.solver, m.threads)
+    field = next(f for f in dataclasses.fields(Mechanics) if f.name == "solver")
+    assert SOLVERS == field.metadata["choices"] == ("pardiso", "superlu")

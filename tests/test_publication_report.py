@@ -77,7 +77,7 @@ def test_files_figures_and_report_section(records, tmp_path):
     # the method is the report's appendix, linked from its header, with the sensor figure
     method = html[html.index('<h2 id="method">'):]
     assert '<a href="#method">' in html[:html.index('id="summary"')]
-    assert "6. Sensitivity" in method and "<svg" in method
+    assert "6. Sensitivity" in method and "data:image/svg+xml;base64," in method
 
 
 def test_resolution_range_lines_pass_through_the_origin(records, tmp_path, monkeypatch):

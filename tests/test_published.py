@@ -154,9 +154,32 @@ def test_published_fit_on_the_bundled_data_runs_through_the_optimiser():
     assert fit.models["f_r"].info["definition"] == "published"
     ms = fit.model_set(study)
     assert ms.definition == "published"
-    table = heights_batch(ms, [3e-3, 5e-3], study)
-    for a in (table.f_r_min, table.f_z_max, table.gamma_r_max, table.gamma_z_max):
-        assert np.all(np.isfinite(a))
+    from magtact.sensitivity import gamma
+
+    def responses(t, theta, height):
+        """(Γ_r, Γ_z, f_r, f_z) per unit G of the published models."""
+        return (*gamma(ms, t, theta, height, 1.0), *ms.forces(t, theta, height, 1.0))
+
+    heights = [3e-3, 5e-3]
+    table = heights_batch(ms, heights, study)
+    assert table.converged.all()
+    for i, height in enumerate(heights):
+        # the optimiser's extrema over the stable box are the extrema of the published models:
+        # each is the models' value at its reported location, inside the box, and no point of
+        # a grid over the box does better
+        t_m, theta_m = table.t_m[i], table.theta_m[i]
+        assert 0 < t_m <= 1 and 0 < theta_m <= study.loading.theta_max + 1e-12
+        t, th = np.meshgrid(np.linspace(0, t_m, 41), np.linspace(0, theta_m, 21), indexing="ij")
+        grid = responses(t, th, height)
+        for k, best, loc in ((0, table.gamma_r_max[i], table.loc_gamma_r[i]),
+                             (1, table.gamma_z_max[i], table.loc_gamma_z[i]),
+                             (3, table.f_z_max[i], table.loc_f_z[i])):
+            assert 0 <= loc[0] <= t_m + 1e-12 and 0 <= loc[1] <= theta_m + 1e-12
+            assert float(responses(*loc, height)[k]) == pytest.approx(best, rel=1e-9)
+            assert best >= grid[k].max() * (1 - 1e-9) and best > 0
+        assert table.f_r_min[i] <= grid[2].min() * (1 - 1e-9) and table.f_r_min[i] < 0
+    # a lower body is stiffer in compression
+    assert table.f_z_max[0] > table.f_z_max[1]
 
 
 def test_shipped_fit_is_not_used_for_the_other_definition():

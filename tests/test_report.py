@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import html
 import json
 import re
 
@@ -45,7 +46,7 @@ def results_folder(tmp_path):
 def test_report_embeds_figures_and_reports_absent_and_failed_stages(tmp_path):
     folder = results_folder(tmp_path)
     text = build_report(folder).read_text(encoding="utf-8")
-    imgs = re.findall(r'<img src="([^"]+)"', text)
+    imgs = re.findall(r'<img src="(data:image/png[^"]+)"', text)  # the method's drawing is SVG
     assert len(imgs) == 1 and imgs[0].startswith("data:image/png;base64,")
     decoded = base64.b64decode(imgs[0].split(",", 1)[1])
     assert decoded == (folder / "doe" / "forces.png").read_bytes()
@@ -109,18 +110,57 @@ def test_run_records_ok_failed_and_skipped_stages(tmp_path, monkeypatch):
     assert load_study(tmp_path / "out" / "study.toml") == load_study(None)
     text = result.report.read_text(encoding="utf-8")
     assert "solver diverged at t = 0.4" in text and "needs the metamodels" in text
-    assert text.count("<img ") == 1
+    assert text.count('<img src="data:image/png') == 1  # the stage's figure (not the method's)
 
 
-def test_markdown_headings_tables_code_and_math():
-    from magtact.report._html import _markdown
+def visible(html_text: str) -> str:
+    """The text a browser shows: tags stripped, entities decoded."""
+    return html.unescape(re.sub(r"<[^>]+>", "", html_text))
 
-    html = _markdown("# Title\n\nsome `x<1` text\ncontinued\n\n| a | b |\n|---|---|\n| 1 | 2 |\n"
-                     "\n$$\nB = t^2\n$$\n```\ncode & more\n```\n")
-    assert "<h3>Title</h3>" in html
-    assert "<p>some <code>x&lt;1</code> text continued</p>" in html
-    assert "<table><tr><th>a</th><th>b</th></tr><tr><td>1</td><td>2</td></tr></table>" in html
-    assert "<pre>B = t^2</pre>" in html and "<pre>code &amp; more</pre>" in html
+
+def test_markdown_headings_tables_code_emphasis_links_lists_and_math():
+    from magtact.report._markdown import render_markdown
+
+    out = render_markdown("# Title\n\nsome `x<1` **bold** *it* [a link](https://x.org) text\n"
+                          "continued\n\n- one\n- two\n\n| a | b |\n|---|---|\n| 1 | 2 |\n"
+                          "\n$$\nB_{r} = t^2 * x_1\n$$\n```\ncode & more\n```\n"
+                          "<script>x</script>\n")
+    assert '<h3>Title</h3>' in out
+    assert "<code>x&lt;1</code>" in out and "<strong>bold</strong>" in out
+    assert "<em>it</em>" in out and '<a href="https://x.org">a link</a>' in out
+    assert "<li>one</li>" in out and "<li>two</li>" in out
+    assert re.search(r"<th>a</th>\s*<th>b</th>", out) and re.search(r"<td>1</td>\s*<td>2</td>", out)
+    assert "B_{r} = t^2 * x_1\n</code></pre>" in out  # math verbatim, no emphasis
+    assert "code &amp; more" in out
+    assert "<script>" not in out  # raw HTML is escaped
+
+
+def test_markdown_images_embedded_or_shown_as_text():
+    from magtact.report._markdown import render_markdown
+
+    out = render_markdown("![a drawing](d.svg) and ![gone](missing.png)",
+                          images=lambda src: b"<svg/>" if src == "d.svg" else None)
+    assert 'src="data:image/svg+xml;base64,PHN2Zy8+"' in out and 'alt="a drawing"' in out
+    assert "[image: gone]" in visible(out) and "missing.png" not in out
+
+
+def test_method_appendix_renders_markdown_images_and_internal_links():
+    """The method document in the report: no Markdown syntax left in the visible text, the
+    sensor drawing embedded, every internal link pointing at a heading of the appendix."""
+    from magtact.report._html import _method
+
+    out = _method()
+    text = visible(out)
+    for syntax in ("**", "![", "](#", "]("):
+        assert syntax not in text, syntax
+    svg = re.search(r'<img src="data:image/svg\+xml;base64,([^"]+)" alt="([^"]+)"', out)
+    assert svg and svg.group(2) == "The sensor in the plane of shear"
+    assert base64.b64decode(svg.group(1)).lstrip().startswith((b"<?xml", b"<svg"))
+    assert "<strong>Coordinates.</strong>" in out and "<em>Figure: the cross-section" in out
+    ids = set(re.findall(r'id="(method-[^"]+)"', out))
+    links = re.findall(r'href="#([^"]+)"', out)
+    assert len(links) >= 10 and set(links) <= ids
+    assert "<table>" in out and 'class="language-math"' in out
 
 
 def test_evidence_json_with_a_convergence_study_becomes_a_table(tmp_path):

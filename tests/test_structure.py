@@ -8,6 +8,7 @@ functions, which a run-time check would miss until the function runs.
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -115,6 +116,86 @@ def test_no_import_cycle_between_sub_packages():
     cycle = find_cycle(graph)
     assert cycle is None, "import cycle " + " -> ".join(cycle) + ": " + "; ".join(
         f"{a} -> {b} at {', '.join(graph[a][b])}" for a, b in zip(cycle, cycle[1:], strict=False))
+
+
+# ---- the graph between modules -------------------------------------------------------------
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in _sources()}
+
+
+def _module_imports(path: Path, modules) -> list[tuple[str, int]]:
+    """The magtact modules ``path`` imports (absolute names, with line numbers): for
+    ``from X import a``, the module ``X.a`` if there is one, else ``X``."""
+    module = _module_name(path)
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text("utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names if a.name.startswith("magtact")]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - node.level + 1]
+                name = ".".join(base + ([node.module] if node.module else []))
+            else:
+                name = node.module or ""
+            if name.startswith("magtact"):
+                out += [(f"{name}.{a.name}" if f"{name}.{a.name}" in modules else name,
+                         node.lineno) for a in node.names]
+    return out
+
+
+@functools.cache
+def module_graph() -> dict[str, dict[str, list[int]]]:
+    """module → imported module → line numbers, over every module of the package (imports
+    inside functions included)."""
+    modules = _modules()
+    graph: dict[str, dict[str, list[int]]] = {}
+    for name, path in modules.items():
+        for target, line in _module_imports(path, modules):
+            while target and target not in modules:
+                target = target.rpartition(".")[0]
+            if target and target != name:
+                graph.setdefault(name, {}).setdefault(target, []).append(line)
+    return graph
+
+
+def private_import(importer: str, imported: str) -> bool:
+    """True if ``importer`` reaches into a private ``_module`` of a package it is not part
+    of (``magtact.a._b`` is private to ``magtact.a``)."""
+    parts = imported.split(".")
+    for k in range(1, len(parts)):
+        parent = ".".join(parts[:k])
+        if parts[k].startswith("_") and not (importer == parent
+                                             or importer.startswith(parent + ".")):
+            return True
+    return False
+
+
+def test_the_module_graph_sees_circles_and_private_imports():
+    graph = module_graph()
+    assert "magtact.metamodel._symbols" in graph["magtact.metamodel._fit"]
+    assert "magtact.study" in graph["magtact.mechanics._simulate"]
+    assert private_import("magtact.cli._report", "magtact.report._html")
+    assert not private_import("magtact.report", "magtact.report._html")
+    assert not private_import("magtact.report._html", "magtact.report._card")
+    assert not private_import("magtact.doe._jobs", "magtact._versions")
+    assert private_import("magtact.pipeline", "magtact.optimise._run")
+    assert find_cycle({"m._a": {"m._b": [1]}, "m._b": {"m._a": [2]}}) == ["m._a", "m._b", "m._a"]
+
+
+def test_no_import_circle_between_modules():
+    graph = module_graph()
+    cycle = find_cycle(graph)
+    assert cycle is None, "import circle " + " -> ".join(cycle) + ": " + "; ".join(
+        f"{a} -> {b} at line {graph[a][b]}" for a, b in zip(cycle, cycle[1:], strict=False))
+
+
+def test_no_module_imports_another_packages_private_module():
+    offenders = [f"{a} imports {b} (line {', '.join(map(str, lines))})"
+                 for a, targets in module_graph().items() for b, lines in targets.items()
+                 if private_import(a, b)]
+    assert offenders == []
 
 
 def test_stages_do_not_import_the_report():

@@ -302,3 +302,10 @@ def test_study_and_data_arguments_are_told_apart():
                                                                              Path("b.csv")])
     assert split_study_and_data(["a.csv"]) == (None, [Path("a.csv")])
     assert split_study_and_data([]) == (None, [])
+
+
+def test_the_synthetic_example_simulates_the_fabricated_sensor():
+    from magtact.publication import reference
+    from magtact.validation import SYNTHETIC_H
+
+    assert SYNTHETIC_H == reference.H_FABRICATED == pytest.approx(4.1e-3, rel=1e-12)

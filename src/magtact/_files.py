@@ -1,5 +1,9 @@
-"""Writing result files: every file appears whole or not at all.
+"""Reading the files a user hands in, and writing result files.
 
+A user's file is read by :func:`read_text_capped`: UTF-8 (with or without a byte-order mark),
+at most a stated number of bytes, every failure one :class:`UnreadableFile` with the reason.
+
+Result files appear whole or not at all.
 A file is written to a temporary sibling and renamed over the target (``os.replace`` is atomic
 on one file system), so an interrupted run never leaves a half-written table, JSON or data set
 that a later run or reader would take for a finished one.
@@ -117,3 +121,36 @@ def file_problem(path: str | os.PathLike, want: str = "file") -> str | None:
     return ("a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode)
             else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
             else "a special file")
+
+
+class UnreadableFile(Exception):
+    """A file :func:`read_text_capped` refuses; ``str(exc)`` is the reason, without the path
+    (the caller names the file in its own error)."""
+
+
+def read_text_capped(path: str | os.PathLike, max_bytes: int) -> str:
+    """The text of the file ``path``: UTF-8 with or without a byte-order mark, at most
+    ``max_bytes`` bytes (checked before reading).
+
+    Raises
+    ------
+    UnreadableFile
+        If ``path`` is not a file, is larger than ``max_bytes``, cannot be read, or is not
+        UTF-8 text (the message gives the first offending byte and its offset).
+    """
+    path = Path(path)
+    try:
+        problem = file_problem(path)
+        if problem is not None:
+            raise UnreadableFile("not found" if problem == "not found" else f"is {problem}")
+        size = path.stat().st_size
+        if size > max_bytes:
+            raise UnreadableFile(f"has {size:,} bytes; at most {max_bytes:,} are read")
+        data = path.read_bytes()
+    except OSError as exc:
+        raise UnreadableFile(f"cannot be read: {exc.strerror or exc}") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise UnreadableFile(f"is not UTF-8 text (byte {data[exc.start]:#04x} at offset "
+                             f"{exc.start}); save it as UTF-8") from None

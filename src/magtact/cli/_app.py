@@ -92,6 +92,9 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=False,
+    # Plain help text: option help carries its unit in brackets ("[mm]", "[kPa]"), which
+    # rich's markup would read as a style tag and drop.
+    rich_markup_mode=None,
 )
 console = Console(stderr=True)
 

@@ -15,6 +15,6 @@ def report_command(
     folder: Annotated[Path, typer.Argument(help="Results folder of 'magtact run'.")],
 ) -> None:
     """Rebuild FOLDER/report.html from the files in FOLDER (absent stages are reported)."""
-    from ..report._html import build_report
+    from ..report import build_report
 
     console.print(f"wrote {build_report(folder)}", highlight=False)

@@ -13,8 +13,7 @@ from rich.table import Table
 from .._errors import MagtactError
 from .._floor import RELATIVE_FLOOR
 from ..study import MESH_DENSITIES, PRESETS, Study, checked_si, to_si
-from ..validation import N_GRID
-from ..validation._stats import MAX_GRID
+from ..validation import MAX_GRID, N_GRID
 from ._app import app, check_out, console, get_study, out_dir
 
 #: Highest filter cut-off accepted (cycles per mm of u_z; the samples are far coarser).

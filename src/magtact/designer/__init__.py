@@ -1,7 +1,7 @@
 """The designer's answer: force resolution with a named Hall chip, measuring range, the chip's
 limits, and the margin for the fabrication tolerance of G (docs/method.md §10)."""
 
-from ..optimise._setting import SettingChoice, best_setting, setting_for, with_setting
+from ..optimise import SettingChoice, best_setting, setting_for, with_setting
 from ..study import HALL_PRESETS, HallChip, HallPreset, hall_chip
 from ._answer import (
     DesignAnswer,

@@ -10,8 +10,14 @@ import numpy as np
 from scipy.optimize import minimize
 
 from ..metamodel import ExactField, ModelSet
-from ..optimise import DesignResult, chip_margin, per_design
-from ..optimise._setting import SettingChoice, setting_for, with_setting
+from ..optimise import (
+    DesignResult,
+    SettingChoice,
+    chip_margin,
+    per_design,
+    setting_for,
+    with_setting,
+)
 from ..parts import SettingFigures, grade, silicones_around
 from ..sensitivity import force_noise
 from ..study import MU0, HallChip, Study, StudyError, from_si, hall_chip, mm, mt

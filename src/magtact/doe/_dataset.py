@@ -21,9 +21,10 @@ from .._errors import MagtactError, MissingFileError
 from .._files import atomic_path, file_problem
 from .._files import write_csv as _write_csv
 from .._versions import DOE
+from .._versions import package_versions as versions
 from ..study import Study, from_si
 from ._cache import Entry
-from ._jobs import FieldJob, PathJob, versions
+from ._jobs import FieldJob, PathJob
 
 DIMS = ("t", "theta", "H", "G")
 #: Variable name -> (dimensions, units, long name).

@@ -11,8 +11,9 @@ Two kinds of job (docs/method.md §4):
 A job's key is the SHA-256 of a canonical JSON text of every input that can change its result:
 the study settings it reads (in SI), its own levels, the solver's name and model version
 (``magtact.mechanics.MODEL_VERSION``, ``magtact.magnetics.MODEL_VERSION``, bumped by hand when a
-change alters results; editing a comment does not invalidate the cache) and the versions of the
-numerical libraries. Settings a job does not read (the other levels, the design ranges, the
+change alters results; editing a comment does not invalidate the cache) and the major.minor
+versions of the numerical libraries that compute the job (policy: :mod:`magtact._versions`).
+Settings a job does not read (the other levels, the design ranges, the
 constraints, ``theta_max`` and, for path jobs, the G levels) are left out, so changing them reuses
 the cached jobs.
 
@@ -31,8 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._versions import FIELD, MECHANICS
-from .._versions import package_versions as versions
+from .._versions import FIELD, MECHANICS, key_versions
 from ..study import Study, kpa, mm
 from ._cache import Entry
 
@@ -130,7 +130,7 @@ def path_key_inputs(study: Study, solver: dict) -> dict:
     return {
         "kind": "path",
         "solver": solver,
-        "versions": versions(MECHANICS),
+        "versions": key_versions(MECHANICS),
         "body": _section(study, "body"),
         "magnet": _section(study, "magnet"),
         "loading": _section(study, "loading", drop=("theta_max",)),
@@ -144,7 +144,7 @@ def field_key_inputs(study: Study, solver: dict) -> dict:
     return {
         "kind": "field",
         "solver": solver,
-        "versions": versions(FIELD),
+        "versions": key_versions(FIELD),
         "body": _section(study, "body"),
         "magnet": _section(study, "magnet"),
         "loading": _section(study, "loading", drop=("theta_max", "mu_f")),

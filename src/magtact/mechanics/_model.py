@@ -3,17 +3,25 @@ two rigid plates with Coulomb friction, adaptive load stepping (docs/method.md Â
 
 from __future__ import annotations
 
+import functools
 import time
+import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import felupe as fem
 import numpy as np
 
 from ..geometry import BodyMesh
+from ..study import Mechanics
 
-#: Sparse direct solvers of the (unsymmetric) Newton systems.
-SOLVERS = ("pardiso", "superlu")
+#: Default settings of the structural model: the study's (``magtact.study.Mechanics``).
+_DEFAULT = Mechanics()
+
+#: Sparse direct solvers of the (unsymmetric) Newton systems (the choices of the study's
+#: ``mechanics.solver``).
+SOLVERS: tuple[str, ...] = tuple(
+    next(f for f in fields(Mechanics) if f.name == "solver").metadata["choices"])
 
 
 class NewtonFailed(Exception):
@@ -21,14 +29,11 @@ class NewtonFailed(Exception):
 
 
 class _Pardiso:
-    """PARDISO (MKL, via pypardiso) for one sparsity pattern: the symbolic analysis (ordering)
-    runs once per pattern, the numerical factorisation once per Jacobian, the solve per
-    iteration.
-
-    The stiffness pattern of the active DOFs does not change during a path: contact only adds to
-    the diagonal 3Ã—3 blocks of the contact nodes, which the solid's pattern already holds.
-    pypardiso exposes only the combined phases, so its ``_call_pardiso`` is used with the
-    PARDISO phases 11 (analysis), 22 (factorisation) and 33 (solve).
+    """PARDISO (MKL, via pypardiso's public ``PyPardisoSolver``): ``factorize`` runs the
+    analysis and the numerical factorisation of each Jacobian (PARDISO phase 12), ``solve``
+    reuses that factorisation (phase 33: pypardiso recognises the factorised matrix).
+    pypardiso's public API has no numerical-only factorisation (phase 22), so the analysis is
+    repeated for every Jacobian although the pattern does not change during a path.
     """
 
     def __init__(self, threads: int):
@@ -37,29 +42,20 @@ class _Pardiso:
         self.ps = PyPardisoSolver(mtype=11)  # real unsymmetric
         if threads > 0 and hasattr(self.ps.libmkl, "MKL_Set_Num_Threads"):
             self.ps.libmkl.MKL_Set_Num_Threads(int(threads))
-        self.pattern = None
         self.A = None
 
     def factorize(self, A) -> None:
         A = A.tocsr()
         A.sort_indices()
-        self.ps._check_A(A)
-        if self.pattern is None or not (np.array_equal(self.pattern[0], A.indptr)
-                                        and np.array_equal(self.pattern[1], A.indices)):
-            self.ps.set_phase(11)
-            self.ps._call_pardiso(A, np.zeros((A.shape[0], 1)))
-            self.pattern = (A.indptr.copy(), A.indices.copy())
-        self.ps.set_phase(22)
-        self.ps._call_pardiso(A, np.zeros((A.shape[0], 1)))
+        self.ps.factorize(A)
         self.A = A
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        self.ps.set_phase(33)
-        return self.ps._call_pardiso(self.A, np.asfortranarray(b.reshape(-1, 1))).ravel()
+        return np.asarray(self.ps.solve(self.A, np.asarray(b, dtype=float))).ravel()
 
     def free(self) -> None:
         self.ps.free_memory(everything=True)
-        self.pattern = self.A = None
+        self.A = None
 
 
 class _SuperLU:
@@ -80,6 +76,19 @@ class _SuperLU:
         self.lu = None
 
 
+@functools.cache
+def pardiso_available() -> bool:
+    """Whether pypardiso and its MKL library can be loaded (installed with magtact on x86-64;
+    MKL exists for x86-64 only)."""
+    try:
+        from pypardiso import PyPardisoSolver
+
+        PyPardisoSolver()
+    except (ImportError, OSError):
+        return False
+    return True
+
+
 def _singular_errors() -> tuple[type[BaseException], ...]:
     """Exceptions by which the linear solvers report a singular matrix: SuperLU raises
     RuntimeError ("Factor is exactly singular"), PARDISO its PyPardisoError."""
@@ -91,10 +100,16 @@ def _singular_errors() -> tuple[type[BaseException], ...]:
     return (*errors, PyPardisoError)
 
 
-
 def _linear_solver(name: str, threads: int):
+    """The linear solver ``name``; ``"pardiso"`` falls back to SuperLU (with a warning) where
+    pypardiso or MKL is not installed: both solve the same systems to round-off."""
     if name == "pardiso":
-        return _Pardiso(threads)
+        if pardiso_available():
+            return _Pardiso(threads)
+        warnings.warn("pypardiso (MKL) is not installed: the Newton systems are solved by "
+                      "SciPy's SuperLU (slower; pip install pypardiso, x86-64 only)",
+                      RuntimeWarning, stacklevel=3)
+        return _SuperLU(threads)
     if name == "superlu":
         return _SuperLU(threads)
     raise ValueError(f"unknown linear solver {name!r}; choose one of {SOLVERS}")
@@ -121,34 +136,20 @@ class Stepping:
     convergence.
     """
 
-    dt_initial: float = 0.025
-    dt_min: float = 1e-4
-    dt_max: float = 0.1
-    max_iter: int = 12
+    dt_initial: float = _DEFAULT.dt_initial
+    dt_min: float = _DEFAULT.dt_min
+    dt_max: float = _DEFAULT.dt_max
+    max_iter: int = _DEFAULT.max_newton
     easy_iter: int = 4
     growth: float = 1.5
     cutback: float = 0.5
-    tol: float = 1e-6
+    tol: float = _DEFAULT.newton_tol
     line_search: int = 4
 
     def __post_init__(self):
         if not 0 < self.dt_min <= self.dt_initial <= self.dt_max:
             raise ValueError(f"load steps must satisfy 0 < dt_min <= dt_initial <= dt_max, got "
                              f"{self.dt_min:g}, {self.dt_initial:g}, {self.dt_max:g}")
-
-
-class _Timed:
-    """Wrap a callable and accumulate its wall time into ``timings[key]``."""
-
-    def __init__(self, fun: Callable, timings: dict, key: str):
-        self.fun, self.timings, self.key = fun, timings, key
-
-    def __call__(self, *args, **kwargs):
-        t0 = time.perf_counter()
-        try:
-            return self.fun(*args, **kwargs)
-        finally:
-            self.timings[self.key] += time.perf_counter() - t0
 
 
 class HalfBodyModel:
@@ -195,8 +196,9 @@ class HalfBodyModel:
     """
 
     def __init__(self, bmesh: BodyMesh, G: float, bulk_ratio: float, mu_f: float, *,
-                 base: str = "clamped", penalty: float = 5.0, elastic_slip: float = 5e-5,
-                 solver: str = "pardiso", threads: int = 1):
+                 base: str = "clamped", penalty: float = _DEFAULT.contact_penalty,
+                 elastic_slip: float = _DEFAULT.elastic_slip, solver: str = _DEFAULT.solver,
+                 threads: int = _DEFAULT.threads):
         if base not in ("clamped", "sliding"):
             raise ValueError(f"base must be 'clamped' or 'sliding', got {base!r}")
         self.bmesh = bmesh
@@ -221,10 +223,8 @@ class HalfBodyModel:
             fem.ContactRigidPlane(self.field, bmesh.surface, self.lower, [0, 0, 1.0], **kw),
             fem.ContactRigidPlane(self.field, bmesh.surface, self.upper, [0, 0, -1.0], **kw),
         ]
-        for item, key in [(self.solid, "solid")] + [(c, "contact") for c in self.contacts]:
-            item.assemble.vector = _Timed(item.assemble.vector, self.timings, key)
-            item.assemble.matrix = _Timed(item.assemble.matrix, self.timings, key)
         self.items = [self.solid, *self.contacts]
+        self._timing_keys = ["solid"] + ["contact"] * len(self.contacts)
 
         # prescribed degrees of freedom (dof = 3 node + component)
         def dofs(nodes, comps):
@@ -287,16 +287,27 @@ class HalfBodyModel:
         line search and the step control handle them)."""
         f = np.zeros(self.n_dofs)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            for item in self.items:
-                r = np.asarray(item.assemble.vector(field=self.field).todense()).ravel()
+            for r in self._assemble("vector", field=self.field):
+                r = np.asarray(r.todense()).ravel()
                 f[: len(r)] += r
         return f
 
+    def _assemble(self, kind: str, **kwargs) -> list:
+        """``item.assemble.vector`` or ``.matrix`` of every item (FElupe's public assembly),
+        its wall time added to ``timings["solid"]`` or ``timings["contact"]``."""
+        out = []
+        for item, key in zip(self.items, self._timing_keys, strict=True):
+            t0 = time.perf_counter()
+            out.append(getattr(item.assemble, kind)(**kwargs))
+            self.timings[key] += time.perf_counter() - t0
+        return out
+
     def _jacobian(self) -> None:
         """Assemble the tangent at the current state and factorise its free-free block."""
-        K = self.items[0].assemble.matrix()
-        for item in self.items[1:]:
-            K = K + item.assemble.matrix()
+        matrices = self._assemble("matrix")
+        K = matrices[0]
+        for k in matrices[1:]:
+            K = K + k
         K = K.tocsr()
         rows = K[self.dof1]
         t0 = time.perf_counter()

@@ -24,9 +24,8 @@ from math import factorial
 import numpy as np
 
 from ..study import Study
-from ._fit import _affine_in_H
 from ._model import geometry_values
-from ._symbols import feature_jacobian, features, q_hessian
+from ._symbols import affine_in_H, feature_jacobian, features, q_hessian
 
 #: Finite-difference step in the Hall position [m].
 STEP = 2e-5
@@ -44,11 +43,11 @@ def _coefficients(fun, study: Study) -> tuple[float, float, float]:
     magnet height: fun(s, H) = c0 + c_H H + c_Hm s.magnet.H_m. Without H_m as a design
     variable c_Hm = 0 and c0 holds the magnet's own height."""
     if "H_m" not in study.geometric_variables:
-        return (*_affine_in_H(lambda h: fun(study, h), study), 0.0)
+        return (*affine_in_H(lambda h: fun(study, h), study), 0.0)
     lo, hi = study.geometric_variables["H_m"]
     def at(v):
         sub = study.at(H_m=v)
-        return _affine_in_H(lambda h: fun(sub, h), study)
+        return affine_in_H(lambda h: fun(sub, h), study)
 
     (c0_lo, c1_lo), (c0_mid, c1_mid), (c0_hi, c1_hi) = (at(v) for v in (lo, 0.5 * (lo + hi), hi))
     scale = max(abs(c0_lo), abs(c0_hi), abs(c1_lo) * study.design.H[1])

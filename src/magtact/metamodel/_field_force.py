@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import sympy as sp
@@ -121,6 +121,10 @@ class ComposedForce:
     G. B models are any objects with the ``value``/``jet`` interface of
     :class:`magtact.metamodel.Metamodel`.
     """
+
+    #: The sensitivity definition this force model serves (``ModelSet.definition``; a force
+    #: model without this attribute serves the Jacobian definition).
+    definition: ClassVar[str] = "published"
 
     model: FieldForceModel
     B_r: Any

@@ -44,12 +44,11 @@ import sympy as sp
 from .._errors import MagtactError
 from .._floor import above_floor
 from ..geometry import hall_from_magnet_centre, loading_path
-from ..study import Study, mm, mt
-from ..study._model import holdout_limit
+from ..study import Study, holdout_limit, mm, mt
 from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._regressor import SymbolicRegressor
-from ._symbols import GEOMETRY, SYMBOLS, H, features, p, q
+from ._symbols import GEOMETRY, SYMBOLS, H, affine_in_H, features, p, q
 
 #: Names of the geometric design variables besides H (data-set dimensions, model inputs).
 GEO_NAMES = tuple(g.name for g in GEOMETRY)
@@ -162,25 +161,10 @@ def data_hash(ds) -> str:
     return h.hexdigest()
 
 
-def _affine_in_H(fun, study: Study) -> tuple[float, float]:
-    """Coefficients (c0, c1) of a function of H that is affine: fun(H) = c0 + c1 H."""
-    lo, hi = study.design.H
-    c1 = (fun(hi) - fun(lo)) / (hi - lo)
-    c0 = fun(lo) - c1 * lo
-    mid = 0.5 * (lo + hi)
-    scale = max(abs(fun(lo)), abs(fun(hi)))
-    if not abs(fun(mid) - (c0 + c1 * mid)) <= 1e-12 * scale:
-        raise ValueError("the loading path is not affine in H; the field features do not apply")
-    # Rounding leaves ~1e-16 where a coefficient is exactly zero (e.g. H_g = dz_sat + H_m).
-    c0 = 0.0 if abs(c0) <= 1e-12 * scale else c0
-    c1 = 0.0 if abs(c1) * hi <= 1e-12 * scale else c1
-    return float(c0), float(c1)
-
-
 def hall_features(study: Study) -> tuple[sp.Expr, sp.Expr]:
     """(X, Z) [mm]: Hall point relative to the magnet's centre as expressions of (p, q, H)."""
-    a0, a1 = _affine_in_H(lambda h: float(loading_path(study, 1.0, 0.0, h)[1]), study)
-    x0, x1 = _affine_in_H(lambda h: float(hall_from_magnet_centre(study, 0.0, 0.0, h)[1]), study)
+    a0, a1 = affine_in_H(lambda h: float(loading_path(study, 1.0, 0.0, h)[1]), study)
+    x0, x1 = affine_in_H(lambda h: float(hall_from_magnet_centre(study, 0.0, 0.0, h)[1]), study)
     a = sp.Float(a0) + sp.Float(a1) * H  # u_z per unit t [m]
     X = mm(-(-a * q))      # x = −u_r, u_r = −a q
     Z = mm(sp.Float(x0) + sp.Float(x1) * H - a * p)  # z = −(centre + u_z)

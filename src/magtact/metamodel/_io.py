@@ -22,7 +22,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import MagtactError, MissingFileError
-from .._files import file_problem
+from .._files import UnreadableFile, file_problem, read_text_capped
 from ._field_force import FIELD_SYMBOLS, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
@@ -181,15 +181,11 @@ def _read_json(path: Path):
     if problem is not None:
         raise MagtactError(f"{path}: not a model file: it is {problem}")
     try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise MagtactError(f"{path}: {path.stat().st_size:,} bytes; a model file has at most "
-                             f"{MAX_FILE_BYTES:,}")
-        text = path.read_bytes().decode("utf-8-sig")
+        text = read_text_capped(path, MAX_FILE_BYTES)
+    except UnreadableFile as exc:
+        raise MagtactError(f"{path}: {exc}") from None
+    try:
         return json.loads(text)
-    except OSError as exc:
-        raise MagtactError(f"{path}: cannot be read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError as exc:
-        raise MagtactError(f"{path}: not UTF-8 text (byte offset {exc.start})") from None
     except json.JSONDecodeError as exc:
         raise MagtactError(f"{path}: not valid JSON ({exc})") from None
     except ValueError as exc:  # e.g. an integer of more digits than Python converts

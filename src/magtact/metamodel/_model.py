@@ -297,12 +297,10 @@ class ModelSet:
     def definition(self) -> str:
         """The sensitivity definition the force models serve: ``"jacobian"`` for models of
         (t, θ, H), ``"published"`` for force models of (B_r, B_z, t, θ, H) along the path."""
-        from ._field_force import ComposedForce
-
-        kinds = {isinstance(m, ComposedForce) for m in (self.f_r, self.f_z)}
+        kinds = {getattr(m, "definition", "jacobian") for m in (self.f_r, self.f_z)}
         if len(kinds) != 1:
             raise ValueError("f_r and f_z belong to different sensitivity definitions")
-        return "published" if kinds.pop() else "jacobian"
+        return kinds.pop()
 
     @property
     def geometry(self) -> tuple[str, ...]:

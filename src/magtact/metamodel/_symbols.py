@@ -68,3 +68,22 @@ def q_hessian(t, theta) -> np.ndarray:
     out[..., 0, 1] = out[..., 1, 0] = sec2
     out[..., 1, 1] = 2.0 * t * sec2 * np.tan(theta)
     return out
+
+
+def affine_in_H(fun, study) -> tuple[float, float]:
+    """Coefficients (c0, c1) of a function of H that is affine: fun(H) = c0 + c1 H.
+
+    Checked at the midpoint of the study's H range; the Hall-point features (X, Z) are built
+    from these coefficients (docs/method.md §5).
+    """
+    lo, hi = study.design.H
+    c1 = (fun(hi) - fun(lo)) / (hi - lo)
+    c0 = fun(lo) - c1 * lo
+    mid = 0.5 * (lo + hi)
+    scale = max(abs(fun(lo)), abs(fun(hi)))
+    if not abs(fun(mid) - (c0 + c1 * mid)) <= 1e-12 * scale:
+        raise ValueError("the loading path is not affine in H; the field features do not apply")
+    # Rounding leaves ~1e-16 where a coefficient is exactly zero (e.g. H_g = dz_sat + H_m).
+    c0 = 0.0 if abs(c0) <= 1e-12 * scale else c0
+    c1 = 0.0 if abs(c1) * hi <= 1e-12 * scale else c1
+    return float(c0), float(c1)

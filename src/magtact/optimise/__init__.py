@@ -57,9 +57,12 @@ from ._run import (
     optimise,
     write_optimise_outputs,
 )
+from ._setting import SettingChoice, best_setting, setting_for, sigma_objective, with_setting
 
 __all__ = [
-    "DesignSet", "GeometricChoice", "GeometryOptimisation", "geometry_json",
+    "SettingChoice", "best_setting", "setting_for", "sigma_objective", "with_setting",
+    "DesignSet", "FrontGapWarning", "GeometricChoice", "GeometryOptimisation", "describe",
+    "geometry_json",
     "optimise_geometry", "write_geometry_outputs",
     "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignProblem",
     "DesignResult",
@@ -67,7 +70,7 @@ __all__ = [
     "ParetoSet", "Reduction", "ShearBoundConditioning", "Timings", "as_responses",
     "batch_optimum", "best_magnetisation", "box_optimum", "chip_margin", "choose", "compare",
     "decision_index", "design_maps", "exact_reduction", "feasible_G", "force_constraints",
-    "front_gap", "heights_batch", "CAPTIONS", "FrontGapWarning", "describe", "nondominated",
+    "front_gap", "heights_batch", "CAPTIONS", "nondominated",
     "optimise", "pareto_nsga2", "per_design",
     "per_height", "shear_bound_conditioning", "sweep", "write_optimise_outputs",
 ]

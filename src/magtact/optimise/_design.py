@@ -23,17 +23,11 @@ from ._box import BatchOptimum, BoxOptimum, batch_optimum, box_optimum
 MAXIMISED: tuple[str, ...] = ("f_z", "gamma_r", "gamma_z")
 
 
-def as_responses(models: Responses | ModelSet, study: Study | None = None) -> Responses:
-    """``models`` as :class:`magtact.sensitivity.Responses` (a ModelSet is wrapped). With a
-    ``study`` whose ``[optimise] objective`` is ``"sigma_F"``, the responses of its force-noise
-    objective (:func:`magtact.optimise.sigma_objective`, docs/method.md §10)."""
+def as_responses(models: Responses | ModelSet) -> Responses:
+    """``models`` as :class:`magtact.sensitivity.Responses` (a ModelSet is wrapped)."""
     if isinstance(models, Responses):
         return models
     if isinstance(models, ModelSet):
-        if study is not None and study.optimise.objective == "sigma_F":
-            from ._setting import sigma_objective
-
-            return sigma_objective(models, study).responses
         return Responses(models)
     raise TypeError(f"expected Responses or ModelSet, got {type(models).__name__}")
 

@@ -30,6 +30,7 @@ from ._pareto import (
     pareto_nsga2,
     sweep,
 )
+from ._setting import sigma_objective
 
 
 @dataclass(frozen=True)
@@ -198,7 +199,10 @@ def optimise(models: Responses | ModelSet, study: Study,
     InfeasibleError
         If no design in the bounds meets the constraints (with the best reachable values).
     """
-    R = as_responses(models, study)
+    if isinstance(models, ModelSet) and study.optimise.objective == "sigma_F":
+        R = sigma_objective(models, study).responses  # the force-noise objective (§10)
+    else:
+        R = as_responses(models)
     R.models.check_finite(study)  # no NaN or inf from a model into the results
     clock = time.perf_counter
     t0 = clock()

@@ -20,8 +20,7 @@ import numpy as np
 from ..metamodel import ExactField, ModelSet
 from ..parts import ChipSetting, SettingFigures
 from ..sensitivity import Responses, dF_dB
-from ..study import Study, StudyError, hall_chip
-from ..study._hall import candidate_settings, setting_figures
+from ..study import Study, StudyError, candidate_settings, hall_chip, setting_figures
 from ._design import DesignResult, per_design
 
 #: Points per side of the grid over the stable box on which settings are compared.

@@ -12,7 +12,8 @@ from ..study import to_si
 #: Designs of the publication: (H [mm], G as printed [kPa]).
 ORIGINAL = (3.0, 2.94)
 FABRICATED = (4.1, 2.94)
-#: Height of the fabricated sensor [m] (the material is the original design's).
+#: Height of the fabricated sensor [m] (the material is the original design's); the SYNTHETIC
+#: validation example simulates this sensor (``magtact.validation.SYNTHETIC_H``).
 H_FABRICATED = to_si(FABRICATED[0], "mm")
 
 #: Per design: Γ_r,max, Γ_z,max [N/T], F_r,min, F_z,max [N]; G as printed.

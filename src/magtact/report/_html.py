@@ -14,17 +14,18 @@ The report is built from the files a run leaves in its folder, never from memory
 
 from __future__ import annotations
 
-import base64
 import csv
-import html
-import json
 import re
 from datetime import UTC, datetime
 from pathlib import Path
 
 from .._errors import MissingFileError
 from ._card import read_card
+from ._fragments import escape as _e
+from ._fragments import figure as _figure
+from ._fragments import load_json as _load_json
 from ._labels import label, value_text
+from ._markdown import render_markdown
 from ._publication import publication_section
 
 #: Stages in pipeline order: (folder, title, what it is).
@@ -63,6 +64,7 @@ th,td{border:1px solid #ccc;padding:.2em .5em;text-align:right}th{background:#f3
 td.l,th.l{text-align:left}
 figure{margin:1em 0;text-align:center}figure img{max-width:min(100%,900px);border:1px solid #eee}
 figcaption{font-size:.85em;color:#555}
+img.embedded{display:block;max-width:min(100%,700px);margin:1em auto}
 pre{background:#f7f7f7;padding:.7em;overflow-x:auto;font-size:.8em}
 .ok{color:#176b2c;font-weight:bold}.failed{color:#b00020;font-weight:bold}
 .skipped,.absent{color:#8a6d00;font-weight:bold}
@@ -274,19 +276,27 @@ def _budget_section(folder: Path, run_id: str | None) -> str:
 
 
 def _method() -> str:
-    """The method (docs/method.md, shipped with the package) as the report's appendix."""
+    """The method (docs/method.md, shipped with the package) as the report's appendix, its
+    figures embedded."""
     from importlib import resources
 
     here = resources.files("magtact.report")
     try:
         text = here.joinpath("method.md").read_text(encoding="utf-8")
-        svg = here.joinpath("sensor.svg").read_text(encoding="utf-8")
     except OSError:
         return ('<h2 id="method">Method</h2><div class="missing">The method document is not '
                 "part of this installation.</div>")
-    svg = svg[svg.index("<svg"):] if "<svg" in svg else ""
+
+    def image(src: str) -> bytes | None:
+        name = src.rsplit("/", 1)[-1]
+        try:
+            return here.joinpath(name).read_bytes() if name == src else None
+        except OSError:
+            return None
+
+    body = render_markdown(text, anchor_prefix="method-", images=image)
     return ('<h2 id="method">Method</h2><details open><summary>docs/method.md</summary>'
-            f'<figure class="sensor">{svg}</figure>{_markdown(text)}</details>')
+            f"{body}</details>")
 
 
 def _definition(folder: Path) -> str | None:
@@ -426,7 +436,7 @@ def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> 
             out.append(_figure(p, captions.get(p.stem)))
     for p in files:
         if p.suffix == ".md":
-            out.append(_markdown(p.read_text(encoding="utf-8", errors="replace")))
+            out.append(render_markdown(p.read_text(encoding="utf-8", errors="replace")))
     for p in files:
         if p.suffix == ".csv":
             out.append(_csv_table(p, captions.get(p.stem)))
@@ -559,57 +569,6 @@ def _versions(manifest: dict) -> str:
 
 
 # ---- pieces --------------------------------------------------------------------------------
-def _figure(path: Path, caption: str | None) -> str:
-    data = base64.b64encode(path.read_bytes()).decode("ascii")
-    cap = caption or path.stem.replace("_", " ")
-    return (f'<figure><img src="data:image/png;base64,{data}" alt="{_e(cap)}">'
-            f"<figcaption>{_e(cap)} <small>({_e(path.name)})</small></figcaption></figure>")
-
-
-def _markdown(text: str) -> str:
-    """Minimal Markdown → HTML: headings, pipe tables, fenced code, $$ blocks, paragraphs."""
-    out, lines, k = [], text.splitlines(), 0
-    while k < len(lines):
-        line = lines[k]
-        if line.startswith("```") or line.strip() == "$$":
-            end = "```" if line.startswith("```") else "$$"
-            j = k + 1
-            while j < len(lines) and not lines[j].startswith(end):
-                j += 1
-            out.append(f"<pre>{_e(chr(10).join(lines[k + 1:j]))}</pre>")
-            k = j + 1
-        elif line.startswith("#"):
-            level = min(len(line) - len(line.lstrip("#")) + 2, 6)
-            out.append(f"<h{level}>{_inline(line.lstrip('#').strip())}</h{level}>")
-            k += 1
-        elif line.startswith("|"):
-            rows = []
-            while k < len(lines) and lines[k].startswith("|"):
-                cells = [c.strip() for c in lines[k].strip().strip("|").split("|")]
-                if not all(set(c) <= set("-: ") for c in cells):
-                    tag = "th" if not rows else "td"
-                    rows.append("<tr>" + "".join(f"<{tag}>{_inline(c)}</{tag}>" for c in cells)
-                                + "</tr>")
-                k += 1
-            out.append("<table>" + "".join(rows) + "</table>")
-        elif line.strip():
-            j = k
-            while j < len(lines) and lines[j].strip() and not lines[j].startswith(
-                    ("#", "|", "```", "$$")):
-                j += 1
-            out.append(f"<p>{_inline(' '.join(lines[k:j]))}</p>")
-            k = j
-        else:
-            k += 1
-    return "\n".join(out)
-
-
-def _inline(text: str) -> str:
-    """Escape, then turn `code` spans into <code>."""
-    parts = _e(text).split("`")
-    return "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
-
-
 def _csv_table(path: Path, caption: str | None) -> str:
     try:
         with path.open(newline="", encoding="utf-8") as f:
@@ -697,17 +656,6 @@ def _is_synthetic(folder: Path) -> bool:
     if any("synthetic" in p.name.lower() for p in folder.iterdir()):
         return True
     return any((_load_json(p) or {}).get("synthetic") is True for p in folder.glob("*.json"))
-
-
-def _load_json(path: Path):
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
-        return None
-
-
-def _e(x) -> str:
-    return html.escape(str(x), quote=True)
 
 
 def _plain(v) -> str:

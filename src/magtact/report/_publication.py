@@ -67,7 +67,9 @@ def publication_figures(folder: str | Path) -> list[Path]:
 
 def publication_section(folder: Path, run_definition: str | None) -> str:
     """HTML of the section (``folder`` = ``<run>/publication``; absent: how to make it)."""
-    from ._html import _e, _figure, _load_json
+    from ._fragments import escape as _e
+    from ._fragments import figure as _figure
+    from ._fragments import load_json as _load_json
 
     head = ('<h2 id="publication">magtact and the publication</h2>'
             "<p>de Boer et al. (Sensors 2017) optimise the MagOne sensor with a sensitivity "

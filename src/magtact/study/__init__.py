@@ -1,6 +1,13 @@
 """Study settings: typed, immutable, loaded from TOML in user units, SI inside."""
 
-from ._hall import HALL_PRESETS, HallChip, HallPreset, hall_chip
+from ._hall import (
+    HALL_PRESETS,
+    HallChip,
+    HallPreset,
+    candidate_settings,
+    hall_chip,
+    setting_figures,
+)
 from ._load import (
     PRESETS,
     StudyError,
@@ -27,11 +34,12 @@ from ._model import (
     Sensitivity,
     Study,
     Tolerances,
+    holdout_limit,
 )
 from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
-    "check_holdout",
+    "candidate_settings", "check_holdout", "holdout_limit", "setting_figures",
     "ARRAY_LAYOUTS", "Array", "Environment", "Tolerances",
     "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
     "Design", "HallChip", "HallPreset", "Loading", "Magnet", "Magnetics", "Material", "Mechanics",

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from ..parts import MLX_FIELDS, ChipSetting, SettingError, SettingFigures, chip_table
-from ._load import StudyError
+from ._errors import StudyError
 from ._model import Study
 
 

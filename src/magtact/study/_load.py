@@ -10,31 +10,12 @@ from dataclasses import fields, replace
 from importlib import resources
 from pathlib import Path
 
-import tomli_w
-
-from .._errors import MagtactError
-from .._files import file_problem
+from .._files import UnreadableFile, file_problem, read_text_capped
+from ._errors import StudyError
 from ._model import GEOMETRY, SECTIONS, Study, holdout_limit, key_of
 from ._units import LABEL, MU0, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
-
-
-class StudyError(MagtactError):
-    """A study file is invalid. ``key`` names the offending TOML key (``section.key``)."""
-
-    def __init__(self, key: str, message: str, source: str | None = None):
-        self.key, self.reason = key, message
-        where = f"{source}: " if source else ""
-        super().__init__(_one_line(f"{where}[{key}] {message}"))
-
-
-def _one_line(text: str) -> str:
-    """``text`` with line breaks and other unprintable characters escaped (keys and values
-    quoted from a file may hold any character)."""
-    if text.isprintable():
-        return text
-    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def magone() -> Study:
@@ -87,18 +68,9 @@ def _read_text(path: Path) -> str:
         raise StudyError("file", f"is not a file: it is {problem} (a study is one TOML file)",
                          str(path))
     try:
-        size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise StudyError("file", f"has {size:,} bytes; a study file has at most "
-                                     f"{MAX_FILE_BYTES:,}", str(path))
-        data = path.read_bytes()
-    except OSError as exc:
-        raise StudyError("file", f"cannot be read: {exc.strerror or exc}", str(path)) from None
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise StudyError("file", f"is not UTF-8 text (byte {data[exc.start]:#04x} at offset "
-                                 f"{exc.start}); save it as UTF-8", str(path)) from None
+        return read_text_capped(path, MAX_FILE_BYTES)
+    except UnreadableFile as exc:
+        raise StudyError("file", str(exc), str(path)) from None
 
 
 def _clip(text: str, n: int = 60) -> str:
@@ -459,29 +431,3 @@ def check_holdout(s: Study, n_theta: int | None = None, n_H: int | None = None,
 
 def _mm(x: float) -> str:
     return f"{from_si(x, 'mm'):.6g}"
-
-
-def study_to_toml(s: Study) -> str:
-    """The complete study as TOML in user units (``base = "none"``: nothing implicit)."""
-    out: dict = {"base": "none", "name": s.name, "description": s.description}
-    for name in SECTIONS:
-        sec = getattr(s, name)
-        table = {}
-        for f in fields(sec):
-            value, unit = getattr(sec, f.name), f.metadata["unit"]
-            if isinstance(value, tuple):
-                value = [_tidy(v, unit) for v in value]
-            elif isinstance(value, float):
-                value = _tidy(value, unit)
-            table[key_of(f)] = value
-        out[name] = table
-    return tomli_w.dumps(out)
-
-
-def _tidy(si: float, unit: str) -> float:
-    """The shortest user-unit number that converts back to exactly ``si``."""
-    for digits in range(12, 18):
-        user = float(f"{from_si(si, unit):.{digits}g}")
-        if to_si(user, unit) == si:
-            return user
-    return float(from_si(si, unit))

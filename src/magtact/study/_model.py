@@ -16,9 +16,10 @@ import math
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
+import tomli_w
 
 from ..parts import GRADES, SILICONES, SIZES
-from ._units import PHYSICAL
+from ._units import PHYSICAL, from_si, to_si
 
 
 def setting(default, unit: str = "", *, positive: bool = False, choices=None,
@@ -507,8 +508,6 @@ class Study:
 
     def to_toml(self) -> str:
         """The study as TOML text in user units (round-trips through :func:`load_study`)."""
-        from ._load import study_to_toml
-
         return study_to_toml(self)
 
 
@@ -522,3 +521,29 @@ GEOMETRY: dict[str, str] = {"R_m": "magnet", "H_m": "magnet", "R": "body"}
 SECTIONS: tuple[str, ...] = tuple(
     f.name for f in fields(Study) if f.name not in ("name", "description")
 )
+
+
+def study_to_toml(s: Study) -> str:
+    """The complete study as TOML in user units (``base = "none"``: nothing implicit)."""
+    out: dict = {"base": "none", "name": s.name, "description": s.description}
+    for name in SECTIONS:
+        sec = getattr(s, name)
+        table = {}
+        for f in fields(sec):
+            value, unit = getattr(sec, f.name), f.metadata["unit"]
+            if isinstance(value, tuple):
+                value = [_tidy(v, unit) for v in value]
+            elif isinstance(value, float):
+                value = _tidy(value, unit)
+            table[key_of(f)] = value
+        out[name] = table
+    return tomli_w.dumps(out)
+
+
+def _tidy(si: float, unit: str) -> float:
+    """The shortest user-unit number that converts back to exactly ``si``."""
+    for digits in range(12, 18):
+        user = float(f"{from_si(si, unit):.{digits}g}")
+        if to_si(user, unit) == si:
+            return user
+    return float(from_si(si, unit))

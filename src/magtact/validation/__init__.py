@@ -9,11 +9,13 @@ from ._filter import FilterSettings, bandpass
 from ._io import RESPONSES, UNITS, Curve, DataError, Experiment, read_experiment
 from ._model import PathModel
 from ._outputs import write_outputs
-from ._stats import N_GRID, ResponseStats, Validation, excluded_ranges, validate
-from ._synthetic import SYNTHETIC_DIR, synthetic_files
+from ._stats import MAX_GRID, N_GRID, ResponseStats, Validation, excluded_ranges, validate
+from ._synthetic import SYNTHETIC_DIR, SYNTHETIC_H, synthetic_files
 
 __all__ = [
-    "N_GRID", "RESPONSES", "SYNTHETIC_DIR", "UNITS", "Curve", "DataError", "Experiment",
+    "MAX_GRID", "N_GRID", "RESPONSES", "SYNTHETIC_DIR", "SYNTHETIC_H", "UNITS", "Curve",
+    "DataError",
+    "Experiment",
     "FilterSettings", "PathModel", "ResponseStats", "Validation", "bandpass",
     "excluded_ranges", "read_experiment", "synthetic_files", "validate", "write_outputs",
 ]

@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError, MissingFileError
-from .._files import file_problem
+from .._files import UnreadableFile, file_problem, read_text_capped
 from .._numbers import parse_float
 from ..study import check_si, mm, to_si
 
@@ -226,15 +226,9 @@ def _read_file(path: Path):
     if problem is not None:
         raise DataError(f"{path}: not a file: it is {problem} (give CSV files)")
     try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise DataError(f"{path}: {path.stat().st_size:,} bytes; a data file has at most "
-                            f"{MAX_FILE_BYTES:,}")
-        text = path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise DataError(f"{path}: not a UTF-8 text file ({exc.reason} at byte "
-                        f"{exc.start})") from None
-    except OSError as exc:
-        raise DataError(f"{path}: cannot be read: {exc.strerror or exc}") from None
+        text = read_text_capped(path, MAX_FILE_BYTES)
+    except UnreadableFile as exc:
+        raise DataError(f"{path}: {exc}") from None
     lines = text.splitlines()
     meta: dict[str, str] = {}
     meta_line: dict[str, int] = {}

@@ -17,13 +17,16 @@ from pathlib import Path
 import numpy as np
 
 from ..geometry import shear_displacement
-from ..publication import reference
-from ..study import MESH_DENSITIES, Study, kpa, load_study, mm
+from ..study import MESH_DENSITIES, Study, kpa, load_study, mm, to_si
 from ._io import RESPONSES, UNITS
 from ._model import PathModel
 
 #: Folder of the shipped example files.
 SYNTHETIC_DIR = Path(__file__).parent / "data"
+
+#: Base height of the example's sensor [m]: the height of the sensor fabricated in de Boer et
+#: al., Sensors 17 (2017) 2539 (its material is the study's original design).
+SYNTHETIC_H = to_si(4.1, "mm")
 
 #: Noise model (SI): standard deviations of each effect.
 NOISE = {
@@ -105,7 +108,8 @@ def make_synthetic(model: PathModel, u_z_end: float, *, n_sensors: int = 4, n_re
 
 
 def write_synthetic(out: str | Path, study: Study | None = None, *, seed: int = 20240607,
-                    solver: str = "exact", mesh: str | None = None) -> list[Path]:
+                    solver: str = "exact", mesh: str | None = None,
+                    H: float = SYNTHETIC_H) -> list[Path]:
     """Simulate the fabricated design and write the SYNTHETIC example files.
 
     Parameters
@@ -114,6 +118,9 @@ def write_synthetic(out: str | Path, study: Study | None = None, *, seed: int = 
         Folder for ``synthetic_S<sensor>_r<repeat>.csv``.
     study : Study, optional
         Default: the built-in MagOne study.
+    H : float
+        Base height of the simulated sensor [m]; default :data:`SYNTHETIC_H` (the fabricated
+        sensor's); its shear modulus is the study's original design's.
     seed : int
         Random seed.
     solver : {"exact", "fe"}
@@ -131,8 +138,7 @@ def write_synthetic(out: str | Path, study: Study | None = None, *, seed: int = 
     study = load_study(None) if study is None else study
     theta = study.loading.theta_max
     mesh = study.mechanics.mesh if mesh is None else mesh
-    # the fabricated sensor: the publication's height, the original design's material
-    H, G = reference.H_FABRICATED, study.design.G_original
+    G = study.design.G_original
     model = PathModel.from_simulation(study, H, G, theta, solver=solver, mesh=mesh)
     u_z_end = float(loading_path(study, 1.0, theta, H)[1])
     out = Path(out)
