@@ -369,3 +369,17 @@ def test_model_error_widens_the_deviations_and_is_checked(smap):
     assert all(with_model.std[k] > plain.std[k] for k in plain.std)
     with pytest.raises(MagtactError, match="model_error must be two relative errors >= 0"):
         calibrate_unit(smap, p, model_error=(-0.1, 0.0))
+
+
+def test_press_numbers_follow_the_usual_float_grammar(tmp_path):
+    """A press file's cells are read as every data file's: Python-only syntax is refused."""
+    from magtact.calibration import PRESS_COLUMNS, read_presses
+    from magtact.validation import DataError
+
+    path = tmp_path / "presses.csv"
+    row = ["0.001", "0", "0.03", "0", "0", "1_0.0"]
+    path.write_text(",".join(PRESS_COLUMNS) + "\n" + ",".join(row) + "\n", encoding="utf-8")
+    with pytest.raises(DataError, match=r"line 2, column 'F_z_N': not a number: '1_0.0'"):
+        read_presses(path)
+    with pytest.raises(DataError, match="not a file: it is a folder"):
+        read_presses(tmp_path)

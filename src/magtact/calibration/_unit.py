@@ -24,9 +24,10 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import least_squares
 
-from .._errors import MagtactError, MissingFileError
+from .._errors import MagtactError
+from .._numbers import parse_float
 from ..study import from_si, mm, to_si
-from ..validation import DataError
+from ..validation import DataError, read_table_lines
 from ._map import SensorMap, UnitParameters, _check_readings
 
 #: Parameter names in the order of :meth:`UnitParameters.vector`, with the unit they are shown in.
@@ -92,27 +93,8 @@ def read_presses(path) -> Presses:
         a NaN, a ragged row or an empty file.
     """
     path = Path(path)
-    if not path.exists():
-        raise MissingFileError(f"{path}: no such press file")
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise DataError(f"{path}: not a UTF-8 text file ({exc.reason} at byte "
-                        f"{exc.start})") from None
-    lines = text.splitlines()
-    meta, meta_line, i = {}, {}, 0
-    while i < len(lines) and (lines[i].lstrip().startswith("#") or not lines[i].strip()):
-        body = lines[i].lstrip().lstrip("#").strip()
-        if body:
-            sep = "=" if "=" in body else (":" if ":" in body else None)
-            if sep is None:
-                raise DataError(f"{path}: line {i + 1}: metadata must read 'key = value', "
-                                f"got {body!r}")
-            k, v = (s.strip() for s in body.split(sep, 1))
-            meta[k.lower()], meta_line[k.lower()] = v, i + 1
-        i += 1
-    if i >= len(lines):
-        raise DataError(f"{path}: empty file (no header row of column names)")
+    lines, meta, meta_line, i = read_table_lines(path, "press file",
+                                                 "give one CSV file of presses")
     header_no = i + 1
     header = [h.strip() for h in next(csv.reader([lines[i]]), [])]
     for c in PRESS_COLUMNS:
@@ -134,7 +116,7 @@ def read_presses(path) -> Presses:
         for c in PRESS_COLUMNS:
             cell = cells[header.index(c)]
             try:
-                v = float(cell)
+                v = parse_float(cell)  # the usual float grammar, as every data file
             except ValueError:
                 what = "empty cell" if not cell else f"not a number: {cell!r}"
                 raise DataError(f"{path}: line {j + 1}, column {c!r}: {what}") from None
@@ -151,7 +133,7 @@ def read_presses(path) -> Presses:
         if key not in meta:
             return default
         try:
-            v = to_si(float(meta[key]), unit)
+            v = to_si(parse_float(meta[key]), unit)
         except ValueError:
             raise DataError(f"{path}: line {meta_line[key]}: {key} = {meta[key]!r} is not a "
                             "number") from None

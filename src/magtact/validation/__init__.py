@@ -6,7 +6,15 @@ with a :class:`PathModel` (metamodels, direct simulation, samples or any functio
 """
 
 from ._filter import FilterSettings, bandpass
-from ._io import RESPONSES, UNITS, Curve, DataError, Experiment, read_experiment
+from ._io import (
+    RESPONSES,
+    UNITS,
+    Curve,
+    DataError,
+    Experiment,
+    read_experiment,
+    read_table_lines,
+)
 from ._model import PathModel
 from ._outputs import write_outputs
 from ._stats import MAX_GRID, N_GRID, ResponseStats, Validation, excluded_ranges, validate
@@ -17,5 +25,6 @@ __all__ = [
     "DataError",
     "Experiment",
     "FilterSettings", "PathModel", "ResponseStats", "Validation", "bandpass",
-    "excluded_ranges", "read_experiment", "synthetic_files", "validate", "write_outputs",
+    "excluded_ranges", "read_experiment", "read_table_lines", "synthetic_files", "validate",
+    "write_outputs",
 ]

@@ -218,13 +218,28 @@ def read_experiment(paths) -> Experiment:
                       metadata=first_meta)
 
 
-def _read_file(path: Path):
-    """Parse one file → (curves, theta, where theta was read, metadata)."""
+def read_table_lines(path: Path, what: str, hint: str) -> tuple[list[str], dict, dict, int]:
+    """The lines of a CSV table with ``# key = value`` metadata lines at its top.
+
+    Returns
+    -------
+    lines, metadata (lower-case key → value), the line number of each key, and the index of
+    the header row (the first line that is neither metadata nor blank).
+
+    Raises
+    ------
+    MissingFileError
+        If ``path`` does not exist (``what`` names the kind of file).
+    DataError
+        If it is not a readable UTF-8 file of at most ``MAX_FILE_BYTES`` (``hint`` says what to
+        give instead of something that is not a file), a metadata line is not ``key = value``,
+        or no header row follows.
+    """
     problem = file_problem(path)
     if problem == "not found":
-        raise MissingFileError(f"{path}: no such data file")
+        raise MissingFileError(f"{path}: no such {what}")
     if problem is not None:
-        raise DataError(f"{path}: not a file: it is {problem} (give CSV files)")
+        raise DataError(f"{path}: not a file: it is {problem} ({hint})")
     try:
         text = read_text_capped(path, MAX_FILE_BYTES)
     except UnreadableFile as exc:
@@ -246,6 +261,12 @@ def _read_file(path: Path):
         i += 1
     if i >= len(lines):
         raise DataError(f"{path}: empty file (no header row of column names)")
+    return lines, meta, meta_line, i
+
+
+def _read_file(path: Path):
+    """Parse one file → (curves, theta, where theta was read, metadata)."""
+    lines, meta, meta_line, i = read_table_lines(path, "data file", "give CSV files")
     header_line = i + 1
     header = [h.strip() for h in _cells(path, lines[i], i + 1)]
     columns = _columns(path, header, header_line)
