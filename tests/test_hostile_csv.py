@@ -82,7 +82,7 @@ def test_values_outside_the_physical_range(tmp_path):
 
 
 def test_folder_and_unreadable_files(tmp_path, monkeypatch):
-    refused([good(tmp_path, "a.csv", 1), tmp_path], f"{tmp_path}: is not a file")
+    refused([good(tmp_path, "a.csv", 1), tmp_path], f"{tmp_path}: not a file: it is a folder")
     locked = good(tmp_path, "locked.csv", 2)
 
     def deny(self, *args, **kwargs):
