@@ -286,7 +286,7 @@ def test_report_shows_the_budget_section(tmp_path, budget, study):
     html = build_report(tmp_path).read_text(encoding="utf-8")
     assert "is not of this run" not in html and f"<td>{row['worst_mN']:.6g}</td>" in html
     (tmp_path / "budget" / "budget.json").unlink()
-    assert "Error budget" not in build_report(tmp_path).read_text(encoding="utf-8")
+    assert "No error budget in this folder" in build_report(tmp_path).read_text(encoding="utf-8")
 
 
 def test_no_noise_figure_leaves_the_noise_row_and_the_pitch_out(models, study, design):

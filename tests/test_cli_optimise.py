@@ -94,7 +94,7 @@ def test_optimise_user_errors(tmp_path, model_dir, small_study, monkeypatch, cap
 def test_compare_prints_percentages(model_dir):
     result = CliRunner().invoke(app, ["compare", "4,20", "4,30", "--models", str(model_dir)])
     assert result.exit_code == 0, result.output
-    assert result.output.count("+50.00") == 4  # every quantity scales with G
+    assert result.output.count("+50.00") == 8  # every quantity scales with G, σ_F too
     bad = CliRunner().invoke(app, ["compare", "4", "4,30", "--models", str(model_dir)])
     assert "first design must be 'H_MM,G_KPA'" in str(bad.exception)
 

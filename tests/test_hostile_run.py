@@ -50,7 +50,7 @@ def test_second_study_into_the_same_folder_shows_only_its_results(tmp_path, monk
     run(tmp_path, "FirstStudy", monkeypatch)
     first_id = json.loads((tmp_path / "R" / "run.json").read_text())["run_id"]
     html = (tmp_path / "R" / "report.html").read_text()
-    assert html.count("<td>FirstStudy</td>") == 6  # a table per stage, the chosen design
+    assert html.count("<td>FirstStudy</td>") == 5  # a table per tabled stage
     result = run(tmp_path, "SecondStudy", monkeypatch, skip_from="metamodel")
     manifest = json.loads((tmp_path / "R" / "run.json").read_text())
     assert manifest["run_id"] != first_id and manifest["study"] == "SecondStudy"
@@ -72,14 +72,14 @@ def test_interrupted_run_keeps_the_previous_results_and_is_named(tmp_path, monke
     assert (folder / "report.html").read_text() == before  # the finished run's report stays
     assert json.loads((folder / "run.json").read_text())["study"] == "FirstStudy"
     html = build_report(folder).read_text()
-    assert html.count("<td>FirstStudy</td>") == 6 and "SecondStudy" not in html
+    assert html.count("<td>FirstStudy</td>") == 5 and "SecondStudy" not in html
     assert "partial.csv" not in html and "half,done" not in html
     assert "<b>Interrupted run.</b>" in html
     assert "interrupted during the stage <i>Metamodels</i> (KeyboardInterrupt)" in html
     assert "finished stages: Magnetic field (ok), Design of experiments (ok)" in html
     run(tmp_path, "ThirdStudy", monkeypatch)  # a complete run replaces both
     html = (folder / "report.html").read_text()
-    assert html.count("<td>ThirdStudy</td>") == 6 and "Interrupted run" not in html
+    assert html.count("<td>ThirdStudy</td>") == 5 and "Interrupted run" not in html
     assert not list(folder.glob(".magtact-*-*"))  # no staging folder left
 
 

@@ -53,9 +53,10 @@ def test_report_embeds_figures_and_reports_absent_and_failed_stages(tmp_path):
     assert "F over &lt;t&gt;" in text  # caption from captions.json, escaped
     assert "5 more rows in table.csv" in text
     assert "RuntimeError: boom" in text and 'class="l failed"' in text
-    assert text.count("No results for this stage") == 4  # field, metamodel, optimise, validation
+    # field, metamodel, optimise, calibration, validation (the budget says so in its own words)
+    assert text.count("No results for this stage") == 5 and "No error budget" in text
     assert "No chosen design" in text and "No benchmark results" in text
-    assert "numpy" in text and 'name = &quot;MagOne&quot;' in text
+    assert "numpy" in text and '<td class="l">name</td><td class="l">MagOne</td>' in text
     assert "SYNTHETIC" not in text
 
 
@@ -172,7 +173,7 @@ def test_evidence_json_with_a_convergence_study_becomes_a_table(tmp_path):
         "refinement": [{"h_mm": 0.5, "err": 0.1}, {"h_mm": 0.25, "err": 0.03, "rate": 1.7}]}))
     text = build_report(folder, evidence=bench).read_text(encoding="utf-8")
     assert "No benchmark results" not in text
-    assert ("<tr><th>h_mm</th><th>err</th><th>rate</th></tr><tr><td>0.5</td><td>0.1</td>"
+    assert ("<tr><th>h [mm]</th><th>err</th><th>rate</th></tr><tr><td>0.5</td><td>0.1</td>"
             "<td></td></tr><tr><td>0.25</td><td>0.03</td><td>1.7</td></tr>") in text
 
 
