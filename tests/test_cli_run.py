@@ -15,13 +15,14 @@ from magtact.study import load_study
 
 
 def fast_study(tmp_path, **sections):
-    """The MagOne study with small metamodel and optimiser budgets (the DOE sections unchanged,
-    so the bundled data set applies)."""
+    """The MagOne study with small metamodel, optimiser and Monte-Carlo budgets (the DOE
+    sections unchanged, so the bundled data set applies)."""
     s = load_study(None)
     sections = {"metamodel": replace(s.metamodel, generations=5, population=400, max_length=40,
                                      retries=0, holdout_paths=2),
                 "optimise": replace(s.optimise, population=24, ga_generations=3,
-                                    nsga2_generations=10, grid_n=4, sweep_n=101), **sections}
+                                    nsga2_generations=10, grid_n=4, sweep_n=101),
+                "tolerances": replace(s.tolerances, samples=400), **sections}
     s = replace(s, **sections)
     path = tmp_path / "fast.toml"
     path.write_text(s.to_toml(), encoding="utf-8")
@@ -35,6 +36,14 @@ def visible_text(html: str) -> str:
 
     html = re.sub(r"(?is)<(style|script|pre|code)\b.*?</\1>", " ", html)
     return html_module.unescape(re.sub(r"(?s)<[^>]+>", " ", html))
+
+
+@pytest.fixture(autouse=True)
+def small_firmware_sweep(monkeypatch):
+    """The run's calibration measures two firmware candidates (the chain, not the sweep)."""
+    from magtact import pipeline
+
+    monkeypatch.setattr(pipeline, "RUN_CALIBRATION", {"degrees": (6,), "table_sizes": (32,)})
 
 
 def check_run(tmp_path, study_file):
