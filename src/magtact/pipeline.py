@@ -346,16 +346,23 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     return "design chosen"
 
 
-def _stage_budget(ctx: _Context, rec: StageRecord) -> str:
+def _one_geometry(ctx: _Context, what: str):
+    """The run's result for a stage that belongs to one geometry (else the stage is skipped,
+    saying why)."""
     if ctx.result is None:
         raise StageSkipped("needs the chosen design, which is missing")
     if ctx.study.geometric_variables:
-        raise StageSkipped("the error budget belongs to one geometry: budget the chosen "
-                           "geometry with its own study (fixed R_m, H_m, R)")
+        raise StageSkipped(f"{what} belongs to one geometry: give the chosen geometry a study "
+                           "of its own (fixed R_m, H_m, R)")
+    return ctx.result
+
+
+def _stage_budget(ctx: _Context, rec: StageRecord) -> str:
+    result = _one_geometry(ctx, "the error budget")
     from .budget import write_budgets
     from .report import budget_figures
 
-    budgets = ctx.result.budgets  # computed for the design card
+    budgets = result.budgets  # computed for the design card
     write_budgets(budgets, ctx.study, ctx.folder / "budget", figures=budget_figures)
     top = budgets[0].largest(1)[0]
     return (f"largest row of the chosen design: {top.name} ({top.component}), "
@@ -369,15 +376,11 @@ RUN_CALIBRATION = {"degrees": (4, 6, 8, 10, 12), "table_sizes": (16, 32, 64, 128
 
 
 def _stage_calibration(ctx: _Context, rec: StageRecord) -> str:
-    if ctx.result is None:
-        raise StageSkipped("needs the chosen design, which is missing")
-    if ctx.study.geometric_variables:
-        raise StageSkipped("a calibration belongs to one geometry: calibrate the chosen "
-                           "geometry with its own study (fixed R_m, H_m, R)")
+    result = _one_geometry(ctx, "a calibration")
     from .calibration import write_calibration_outputs
     from .report import calibration_figures
 
-    cal = ctx.result.calibrate(**RUN_CALIBRATION)
+    cal = result.calibrate(**RUN_CALIBRATION)
     write_calibration_outputs(cal, ctx.folder / "calibration", figures=calibration_figures)
     a = cal.firmware.chosen
     if not cal.firmware.reached:

@@ -28,7 +28,7 @@ def calibrate_command(
     noise: Annotated[float | None, typer.Option(
         "--noise-uT", help="Field noise of the Hall chip, 1 sigma per axis (µT), for the "
                            "resolution sigma_F the firmware map is held to; default: the "
-                           "study's hall.noise_x_uT, noise_z_uT.")] = None,
+                           "noise of the study's chip at the design's setting.")] = None,
     presses: Annotated[Path | None, typer.Option(
         "--presses", help="CSV of a built unit's presses (columns B_x_T, B_y_T, B_z_T, F_x_N, "
                           "F_y_N, F_z_N): fit the unit's parameters and export its map.")] = None,
