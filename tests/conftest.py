@@ -7,12 +7,20 @@ on ``sys.path``), so that no test module imports another.
 from __future__ import annotations
 
 import os
+
+# The suite runs one worker per core (pytest-xdist, -n auto): each computes with one BLAS and
+# MKL thread, so that the workers do not oversubscribe the cores (threads of the processes the
+# tests start too).
+for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
+
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
 import sympy as sp
 import xarray as xr
+from threadpoolctl import threadpool_limits
 
 from magtact.doe import run_doe
 from magtact.geometry import hall_from_magnet_centre, loading_path
@@ -21,6 +29,8 @@ from magtact.metamodel import ModelSet
 from magtact.metamodel import p as ps
 from magtact.metamodel import q as qs
 from magtact.study import study_from_dict
+
+threadpool_limits(1)  # libraries loaded before the environment above was read
 
 # ---- the magnet of the built-in study, and its field computed independently of magtact ---------
 MU0 = 1.257e-6  # docs/method.md §1
