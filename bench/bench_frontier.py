@@ -43,6 +43,7 @@ from magtact.geometry._body_mesh import _GRADING, DENSITIES
 
 RESULTS = Path(__file__).parent / "results"
 RUNS = RESULTS / "frontier_runs.json"
+SUPERSEDED = RESULTS / "frontier_runs_superseded.json"
 #: Densities of this benchmark only: the coarse mesh with 2/3 and 1.5 times its cells per
 #: direction (counts rounded).
 DENSITIES.setdefault("coarse_x0.67", {"m": 2, "radial": (1, 2, 1), "h_z": 1.8e-3,
@@ -54,6 +55,19 @@ SEQUENCES = {
     "hex8": [("coarse", 2.0), ("default", 2.0), ("fine", None)],
     "hex27": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
 }
+
+
+def _git_commit() -> str:
+    import subprocess
+
+    try:
+        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                             text=True, cwd=Path(__file__).parent, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "src"], capture_output=True,
+                               text=True, cwd=Path(__file__).parent, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return out + ("+modified" if dirty else "")
 
 
 def _load_runs() -> list[dict]:
@@ -76,8 +90,9 @@ def run(route: str, mesh: str, H_mm: float) -> dict:
     study = load_study("magone")
     study = replace(study, mechanics=replace(study.mechanics, element=route, threads=1))
     rec = {"route": route, "mesh": mesh, "H_mm": H_mm, "theta_rad": study.loading.theta_max,
-           "machine": {"platform": platform.platform(), "load_average_at_start":
-                       os.getloadavg()}}
+           "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
+                       "load_average_at_start": os.getloadavg()},
+           "code": _git_commit()}
     t0 = time.perf_counter()
     try:
         r = simulate_path(study, H_mm * 1e-3, study.loading.theta_max, mesh=mesh)
@@ -85,13 +100,20 @@ def run(route: str, mesh: str, H_mm: float) -> dict:
                 "n_cells": r.n_cells, "steps": r.steps, "jacobians": r.jacobians,
                 "newton_iterations": r.newton_iterations,
                 "timings_s": {k: round(v, 2) for k, v in r.timings.items()},
-                "F_z_t1_N": float(r.F_z[-1]), "F_r_min_N": float(np.min(r.F_r))}
+                "F_z_t1_N": float(r.F_z[-1]), "F_r_min_N": float(np.min(r.F_r)),
+                "t": r.t.tolist(), "F_z_N": r.F_z.tolist(), "F_r_N": r.F_r.tolist()}
     except PathFailed as exc:
         rec |= {"completed": False, "error": str(exc),
                 "wall_time_s": round(time.perf_counter() - t0, 2)}
-    runs = [r for r in _load_runs()
-            if (r["route"], r["mesh"], r["H_mm"]) != (route, mesh, H_mm)] + [rec]
-    _save(RUNS, runs)
+    # the wall time is measured on a shared machine: the load beside it says how shared
+    rec["machine"]["load_average_at_end"] = os.getloadavg()
+    old = _load_runs()
+    key = (route, mesh, H_mm)
+    replaced = [r for r in old if (r["route"], r["mesh"], r["H_mm"]) == key]
+    if replaced:  # earlier records of the same path (older code) are kept aside
+        _save(SUPERSEDED, (json.loads(SUPERSEDED.read_text()) if SUPERSEDED.is_file() else [])
+              + replaced)
+    _save(RUNS, [r for r in old if (r["route"], r["mesh"], r["H_mm"]) != key] + [rec])
     return rec
 
 

@@ -362,3 +362,22 @@ def test_a_singular_tangent_is_non_convergence(monkeypatch):
     monkeypatch.setattr(model._linear, "factorize", singular)
     with pytest.raises(NewtonFailed, match="singular tangent"):
         model._jacobian()
+
+
+# ---- the batched tangent of 27-node cells ----------------------------------------------------
+def test_batched_tangent_of_27_node_cells_equals_felupes_integral():
+    """The cell stiffness of the batched matrix products equals FElupe's einsum of the same
+    form, on distorted 27-node cells with a random (unsymmetric) fourth-order tangent."""
+    import felupe as fem
+
+    from magtact.mechanics._model import grad_grad_values
+
+    mesh = fem.Cube(n=3).convert(order=2, calc_midfaces=True, calc_midvolumes=True)
+    rng = np.random.default_rng(1)
+    mesh.update(points=mesh.points + 0.01 * rng.standard_normal(mesh.points.shape))
+    region = fem.RegionTriQuadraticHexahedron(mesh)
+    field = fem.FieldContainer([fem.Field(region, dim=3)])
+    A = rng.standard_normal((3, 3, 3, 3, *region.dV.shape))
+    reference = fem.IntegralForm([A], field, region.dV, u=field).integrate()[0]
+    np.testing.assert_allclose(grad_grad_values(region.dhdX, A, region.dV), reference,
+                               rtol=1e-12, atol=1e-12 * np.abs(reference).max())
