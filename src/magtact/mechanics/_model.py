@@ -186,6 +186,8 @@ class Stepping:
     penalty, thousands of times the stiffness of its surface, and releasing it a fraction of a
     nanometre off the plate; the released iterate's residual is the force that would hold the
     point there, and it stays above ``tol`` at any step size (docs/method.md §3).
+    ``reuse_ratio``: an iteration that reduced the best residual so far by at least this factor
+    keeps its tangent (and factorisation) for the next (0: a new tangent every iteration).
     """
 
     dt_initial: float = 0.025
@@ -198,6 +200,7 @@ class Stepping:
     tol: float = 1e-6
     line_search: int = 4
     tol_cycling: float = 1e-5
+    reuse_ratio: float = 0.0
 
 
 class _Timed:
@@ -449,8 +452,9 @@ class HalfBodyModel:
                     raise NewtonFailed(
                         f"no progress of the Newton iterations (residual {fnorm:.2e})")
                 cycling, stalled = True, 0
+            contracted = bool(np.isfinite(best) and fnorm <= st.reuse_ratio * best)
             best = min(best, fnorm)
-            if it < st.max_iter:
+            if it < st.max_iter and (cycling or not contracted):
                 self._jacobian()
         raise NewtonFailed(f"not converged in {st.max_iter} iterations (residual {fnorm:.2e})")
 

@@ -1,0 +1,179 @@
+"""The 27-node (hex27) structural route: where its time goes and why its Newton iterations stalled.
+
+Two parts, each writing a section of ``bench/results/quadratic.json``:
+
+- ``tangent``: wall time of the solid's tangent integration, FElupe's einsum against the batched
+  matrix products of ``magtact.mechanics._model.grad_grad_values`` (minimum of ``--repeat``
+  alternating calls, same state), and of one PARDISO factorisation, on the hex8 ``default``
+  mesh and the hex27 ``coarse_x0.67`` and ``coarse`` meshes (H = 3 mm).
+- ``newton``: one path at θ_max with every Newton iteration logged (residual, line-search factor,
+  contact points per plate and node class, points that changed contact, the nodes with the
+  largest residual). ``--tol-cycling`` sets ``Stepping.tol_cycling`` (1e-6: the tolerance
+  of the cycling mode equals the plain one, i.e. the model before that mode had its own);
+  ``--penalty`` the contact penalty.
+
+    python bench/bench_quadratic.py tangent --repeat 4
+    python bench/bench_quadratic.py newton --mesh coarse_x0.67 --H 3 --tol-cycling 1e-6
+
+Wall times on a shared machine: the load average is recorded beside each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import bench_frontier  # noqa: F401  (registers the coarse_x0.67 and coarse_x1.5 densities)
+import numpy as np
+
+OUT = Path(__file__).parent / "results" / "quadratic.json"
+NAMES = ("corner", "edge", "face")
+
+
+def _study(element: str, penalty: float | None = None):
+    from magtact.study import load_study
+
+    study = load_study("magone")
+    mech = replace(study.mechanics, element=element, threads=1)
+    if penalty is not None:
+        mech = replace(mech, contact_penalty=penalty)
+    return replace(study, mechanics=mech)
+
+
+def tangent(repeat: int) -> dict:
+    import felupe as fem
+
+    from magtact.mechanics import build_model
+    from magtact.mechanics._model import _NearlyIncompressibleSolid
+
+    out = {"load_average_at_start": os.getloadavg(), "cases": []}
+    for element, mesh in (("hex8", "default"), ("hex27", "coarse_x0.67"), ("hex27", "coarse")):
+        m = build_model(_study(element), 3e-3, mesh=mesh)
+        rng = np.random.default_rng(0)
+        m.field[0].values[:] += 2e-5 * rng.standard_normal(m.field[0].values.shape)
+        solids = [fem.SolidBodyNearlyIncompressible(fem.NeoHooke(mu=m.G), m.field, bulk=5e3 * m.G),
+                  _NearlyIncompressibleSolid(fem.NeoHooke(mu=m.G), m.field, bulk=5e3 * m.G)]
+        times = [[], []]
+        for _ in range(repeat):
+            for k, s in enumerate(solids):
+                t0 = time.perf_counter()
+                K = s.assemble.matrix(m.field)
+                times[k].append(time.perf_counter() - t0)
+        K0, K1 = (s.results.stiffness for s in solids)
+        m._jacobian()
+        t0 = time.perf_counter()
+        m._linear.factorize(m._linear.A)
+        t_fact = time.perf_counter() - t0
+        out["cases"].append({
+            "element": element, "mesh": mesh, "n_dofs": m.n_dofs, "n_cells": m.bmesh.n_cells,
+            "nnz": int(K.nnz), "felupe_einsum_s": min(times[0]), "batched_s": min(times[1]),
+            "model_uses": "batched" if element == "hex27" else "felupe_einsum",
+            "max_relative_difference": float(abs(K1 - K0).max() / abs(K0).max()),
+            "factorisation_s": t_fact})
+        print(out["cases"][-1], flush=True)
+    out["load_average_at_end"] = os.getloadavg()
+    return out
+
+
+def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None) -> dict:
+    from magtact.geometry import loading_path
+    from magtact.mechanics import build_model
+    from magtact.mechanics._model import NewtonFailed
+    from magtact.mechanics._simulate import stepping_of
+
+    study = _study("hex27", penalty)
+    H, theta = H_mm * 1e-3, study.loading.theta_max
+    m = build_model(study, H, mesh=mesh)
+    bm = m.bmesh
+    cls = np.full(bm.n_points, -1)
+    for lo, hi, c in ((0, 8, 0), (8, 20, 1), (20, 26, 2)):
+        cls[np.unique(bm.cells[:, lo:hi])] = c
+    surface = set(bm.surface.tolist())
+    steps, state = [], {"its": []}
+    line_search, solve_step = m._line_search, m._newton
+
+    def logged_line_search(u, du, halvings, below=np.inf):
+        u0 = u.copy()
+        f, fnorm = line_search(u, du, halvings, below)
+        k = int(np.argmax(np.abs(du)))
+        rec = {"residual": fnorm, "alpha": float((u[k] - u0[k] + du[k]) / du[k]),
+               "du_max_m": float(np.abs(du[m.dof1]).max())}
+        for name, c in zip(("lower", "upper"), m.contacts, strict=True):
+            act, cl = c.results.active, cls[c.points]
+            rec[f"{name}_in_contact"] = {NAMES[j]: int(np.sum(act & (cl == j))) for j in range(3)}
+            prev = state.get(name)
+            if prev is not None and np.any(act != prev):
+                ch = act != prev
+                rec[f"{name}_changed"] = {NAMES[j]: int(np.sum(ch & (cl == j))) for j in range(3)}
+                rec[f"{name}_changed_gaps_um"] = [
+                    round(float(g) * 1e6, 4) for g in c._kinematics(c._gap_vectors())[0][ch][:8]]
+            state[name] = act.copy()
+        r = np.zeros(m.n_dofs)
+        r[m.dof1] = f[m.dof1]
+        node = np.abs(r.reshape(-1, 3)).max(axis=1)
+        rec["largest_residual_nodes"] = [
+            {"node": int(n), "class": NAMES[cls[n]] if n < bm.n_points else "plate",
+             "on_surface": n in surface, "residual_N": float(node[n])}
+            for n in np.argsort(node)[::-1][:3]]
+        state["its"].append(rec)
+        return f, fnorm
+
+    def logged_step(u_r, u_z, st):
+        state["its"] = []
+        try:
+            n = solve_step(u_r, u_z, replace(st, tol_cycling=tol_cycling))
+        except NewtonFailed as exc:
+            steps.append({"converged": False, "reason": str(exc), "iterations": state["its"]})
+            raise
+        steps.append({"converged": True, "iterations": state["its"]})
+        return n
+
+    m._line_search, m._newton = logged_line_search, logged_step
+    t0, status = time.perf_counter(), "completed"
+    load = os.getloadavg()
+    try:
+        res = m.solve_path(lambda tt: tuple(float(v) for v in loading_path(study, tt, theta, H)),
+                           study.t_levels, stepping=stepping_of(study))
+        forces = {"F_z_t1_N": 2 * float(res["lower"][-1, 2]),
+                  "F_r_min_N": 2 * float(res["lower"][:, 0].min())}
+    except Exception as exc:  # noqa: BLE001  (the failure is the result)
+        status, forces = str(exc), {}
+    for s, (ta, tb, _) in zip(steps, m.log, strict=True):
+        s["t"] = [ta, tb]
+    return {"mesh": mesh, "H_mm": H_mm, "tol_cycling": tol_cycling,
+            "contact_penalty": study.mechanics.contact_penalty, "status": status,
+            "wall_time_s": time.perf_counter() - t0, "load_average_at_start": load,
+            "load_average_at_end": os.getloadavg(), "n_dofs": m.n_dofs,
+            "newton_iterations": m.iterations, "jacobians": m.jacobians,
+            "timings_s": dict(m.timings), **forces, "steps": steps}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    t = sub.add_parser("tangent")
+    t.add_argument("--repeat", type=int, default=4)
+    n = sub.add_parser("newton")
+    n.add_argument("--mesh", default="coarse_x0.67")
+    n.add_argument("--H", type=float, default=3.0)
+    n.add_argument("--tol-cycling", type=float, default=1e-5)
+    n.add_argument("--penalty", type=float, default=None)
+    args = ap.parse_args()
+    data = json.loads(OUT.read_text()) if OUT.is_file() else {}
+    if args.cmd == "tangent":
+        data["tangent"] = tangent(args.repeat)
+    else:
+        rec = newton(args.mesh, args.H, args.tol_cycling, args.penalty)
+        key = f"newton_{args.mesh}_H{args.H:g}_tolcycling{args.tol_cycling:g}" + (
+            f"_penalty{args.penalty:g}" if args.penalty is not None else "")
+        data[key] = rec
+        print({k: v for k, v in rec.items() if k != "steps"})
+    OUT.write_text(json.dumps(data, indent=1, default=float))
+
+
+if __name__ == "__main__":
+    main()
