@@ -381,3 +381,54 @@ def test_batched_tangent_of_27_node_cells_equals_felupes_integral():
     reference = fem.IntegralForm([A], field, region.dV, u=field).integrate()[0]
     np.testing.assert_allclose(grad_grad_values(region.dhdX, A, region.dV), reference,
                                rtol=1e-12, atol=1e-12 * np.abs(reference).max())
+
+
+@pytest.mark.parametrize("tol_cycling, converges", [(1e-5, True), (1e-6, False)])
+def test_a_grazing_contact_point_converges_at_the_cycling_tolerance(monkeypatch, tol_cycling,
+                                                                    converges):
+    """Residuals that alternate between a held (1e-3) and a released (5e-6) grazing point: the
+    step converges once the contact state cycles if 5e-6 is below ``tol_cycling``, otherwise it
+    fails for lack of progress."""
+    import scipy.sparse as sp
+
+    from magtact.mechanics._model import NewtonFailed, Stepping
+
+    model = _cylinder_model()
+    shape = (len(model.dof1), len(model.dof0))
+    monkeypatch.setattr(model, "_jacobian", lambda: setattr(model, "_K10", sp.csr_matrix(shape)))
+    monkeypatch.setattr(model._linear, "solve", lambda b: np.zeros_like(b))
+    residuals = iter([1e-3, 5e-6] * 10)
+    monkeypatch.setattr(model, "_line_search",
+                        lambda *args: (np.zeros(model.n_dofs), next(residuals)))
+    st = Stepping(tol=1e-6, tol_cycling=tol_cycling)
+    if converges:
+        assert model._newton(0.0, 0.0, st) == 6  # cycling from the 4th iteration
+    else:
+        with pytest.raises(NewtonFailed, match="no progress"):
+            model._newton(0.0, 0.0, st)
+
+
+@pytest.mark.parametrize("reuse_ratio, tangents", [(0.0, 4), (0.5, 2)])
+def test_a_contracting_tangent_is_kept_with_reuse_ratio(monkeypatch, reuse_ratio, tangents):
+    """Residuals 1e-1, 1e-3, 1e-5, 1e-7: with reuse_ratio 0.5 the tangent of the first
+    iteration is kept (each iteration at least halves the residual), without it every
+    iteration but the last assembles a new one (plus the first of the step)."""
+    import scipy.sparse as sp
+
+    from magtact.mechanics._model import Stepping
+
+    model = _cylinder_model()
+    shape = (len(model.dof1), len(model.dof0))
+    calls = []
+
+    def jacobian():
+        calls.append(1)
+        model._K10 = sp.csr_matrix(shape)
+
+    monkeypatch.setattr(model, "_jacobian", jacobian)
+    monkeypatch.setattr(model._linear, "solve", lambda b: np.zeros_like(b))
+    residuals = iter([1e-1, 1e-3, 1e-5, 1e-7])
+    monkeypatch.setattr(model, "_line_search",
+                        lambda *args: (np.zeros(model.n_dofs), next(residuals)))
+    assert model._newton(0.0, 0.0, Stepping(tol=1e-6, reuse_ratio=reuse_ratio)) == 4
+    assert len(calls) == tangents
