@@ -4,8 +4,9 @@ Two parts, each writing a section of ``bench/results/quadratic.json``:
 
 - ``tangent``: wall time of the solid's tangent integration, FElupe's einsum against the batched
   matrix products of ``magtact.mechanics._model.grad_grad_values`` (minimum of ``--repeat``
-  alternating calls, same state), and of one PARDISO factorisation, on the hex8 ``default``
-  mesh and the hex27 ``coarse_x0.67`` and ``coarse`` meshes (H = 3 mm).
+  alternating calls, same state), of the whole tangent assembly with FElupe's stock solid and
+  with the model's, and of one PARDISO factorisation, on the hex8 ``default`` mesh and the
+  hex27 ``coarse_x0.67`` and ``coarse`` meshes (H = 3 mm).
 - ``newton``: one path at θ_max with every Newton iteration logged (residual, line-search factor,
   contact points per plate and node class, points that changed contact, the nodes with the
   largest residual). ``--tol-cycling`` sets ``Stepping.tol_cycling`` (1e-6: the tolerance
@@ -48,7 +49,7 @@ def tangent(repeat: int) -> dict:
     import felupe as fem
 
     from magtact.mechanics import build_model
-    from magtact.mechanics._model import _NearlyIncompressibleSolid
+    from magtact.mechanics._model import _NearlyIncompressibleSolid, grad_grad_values
 
     out = {"load_average_at_start": os.getloadavg(), "cases": []}
     for element, mesh in (("hex8", "default"), ("hex27", "coarse_x0.67"), ("hex27", "coarse")):
@@ -57,12 +58,20 @@ def tangent(repeat: int) -> dict:
         m.field[0].values[:] += 2e-5 * rng.standard_normal(m.field[0].values.shape)
         solids = [fem.SolidBodyNearlyIncompressible(fem.NeoHooke(mu=m.G), m.field, bulk=5e3 * m.G),
                   _NearlyIncompressibleSolid(fem.NeoHooke(mu=m.G), m.field, bulk=5e3 * m.G)]
-        times = [[], []]
+        times = [[], [], [], []]
+        region = m.field.region
         for _ in range(repeat):
             for k, s in enumerate(solids):
                 t0 = time.perf_counter()
                 K = s.assemble.matrix(m.field)
                 times[k].append(time.perf_counter() - t0)
+            A = solids[0].results.elasticity[0]  # the integration alone, both ways
+            t0 = time.perf_counter()
+            fem.IntegralForm([A], m.field, region.dV, u=m.field).integrate()
+            times[2].append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            grad_grad_values(region.dhdX, A, region.dV)
+            times[3].append(time.perf_counter() - t0)
         K0, K1 = (s.results.stiffness for s in solids)
         m._jacobian()
         t0 = time.perf_counter()
@@ -70,7 +79,8 @@ def tangent(repeat: int) -> dict:
         t_fact = time.perf_counter() - t0
         out["cases"].append({
             "element": element, "mesh": mesh, "n_dofs": m.n_dofs, "n_cells": m.bmesh.n_cells,
-            "nnz": int(K.nnz), "felupe_einsum_s": min(times[0]), "batched_s": min(times[1]),
+            "nnz": int(K.nnz), "felupe_einsum_s": min(times[2]), "batched_s": min(times[3]),
+            "tangent_assembly_stock_s": min(times[0]), "tangent_assembly_model_s": min(times[1]),
             "model_uses": "batched" if element == "hex27" else "felupe_einsum",
             "max_relative_difference": float(abs(K1 - K0).max() / abs(K0).max()),
             "factorisation_s": t_fact})

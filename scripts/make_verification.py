@@ -335,10 +335,12 @@ def quadratic_section(r: Results) -> list[str]:
         rows = [[c["element"], c["mesh"], f"{c['n_dofs']:,}", f"{c['nnz']:,}",
                  f"{c['felupe_einsum_s']:.3f}", f"{c['batched_s']:.3f}",
                  f"{c['felupe_einsum_s'] / c['batched_s']:.1f}", c["model_uses"],
+                 f"{c['tangent_assembly_stock_s']:.3f}", f"{c['tangent_assembly_model_s']:.3f}",
                  f"{c['max_relative_difference']:.0e}", f"{c['factorisation_s']:.2f}"]
                 for c in t["cases"]]
         out += table(["element", "mesh", "DOFs", "non-zeros", "einsum [s]", "batched [s]",
-                      "ratio", "model uses", "max rel. diff.", "factorisation [s]"], rows)
+                      "ratio", "model uses", "tangent, stock [s]", "tangent, model [s]",
+                      "max rel. diff.", "factorisation [s]"], rows)
     runs = {k: v for k, v in q.items() if k.startswith("newton_")}
     if runs:
         out += ["**Newton iterations logged along one path** (hex27, θ_max, the study's 21 "

@@ -100,7 +100,8 @@ def _linear_solver(name: str, threads: int):
     raise ValueError(f"unknown linear solver {name!r}; choose one of {SOLVERS}")
 
 
-def grad_grad_values(dhdX: np.ndarray, A: np.ndarray, dV: np.ndarray) -> np.ndarray:
+def grad_grad_values(dhdX: np.ndarray, A: np.ndarray, dV: np.ndarray,
+                     chunk: int = 8) -> np.ndarray:
     """Cell stiffness values K_aibk = Σ_q ∂_J h_a A_iJkL ∂_L h_b dV of a bilinear form in the
     gradients of one vector field, by two batched matrix products per cell (docs/method.md §3).
 
@@ -117,6 +118,8 @@ def grad_grad_values(dhdX: np.ndarray, A: np.ndarray, dV: np.ndarray) -> np.ndar
         The fourth-order tangent ∂P_iJ / ∂F_kL (broadcast over q or c allowed).
     dV : (q, c) ndarray
         Quadrature weights times the Jacobian determinants.
+    chunk : int
+        Cells per batch.
 
     Returns
     -------
@@ -126,13 +129,19 @@ def grad_grad_values(dhdX: np.ndarray, A: np.ndarray, dV: np.ndarray) -> np.ndar
     a, J, q, c = dhdX.shape
     d = A.shape[0]
     A = np.broadcast_to(A, (d, J, d, J, q, c))
-    B = np.ascontiguousarray((dhdX * dV).transpose(3, 2, 0, 1))  # (c, q, a, J)
-    Bt = np.ascontiguousarray(dhdX.transpose(3, 2, 1, 0))  # (c, q, L, b)
-    F = np.ascontiguousarray(A.transpose(5, 4, 1, 0, 3, 2))  # (c, q, J, i, L, k)
-    X = np.matmul(B, F.reshape(c, q, J, d * J * d))  # (c, q, a, i L k)
-    X = X.reshape(c, q, a, d, J, d).transpose(0, 2, 3, 5, 1, 4).reshape(c, a * d * d, q * J)
-    K = np.matmul(X, Bt.reshape(c, q * J, a))  # (c, a i k, b)
-    return np.ascontiguousarray(K.reshape(c, a, d, d, a).transpose(1, 2, 4, 3, 0))
+    dV = np.broadcast_to(dV, (q, c))
+    out = np.empty((a, d, a, d, c), dtype=np.result_type(dhdX, A, dV))
+    for s in range(0, c, chunk):  # chunks of cells: the intermediates stay in the caches
+        cs = slice(s, min(s + chunk, c))
+        n = cs.stop - cs.start
+        B = np.ascontiguousarray((dhdX[..., cs] * dV[:, cs]).transpose(3, 2, 0, 1))  # c q a J
+        Bt = np.ascontiguousarray(dhdX[..., cs].transpose(3, 2, 1, 0))  # (c, q, L, b)
+        F = np.ascontiguousarray(A[..., cs].transpose(5, 4, 1, 0, 3, 2))  # (c, q, J, i, L, k)
+        X = np.matmul(B, F.reshape(n, q, J, d * J * d))  # (c, q, a, i L k)
+        X = X.reshape(n, q, a, d, J, d).transpose(0, 2, 3, 5, 1, 4).reshape(n, a * d * d, q * J)
+        K = np.matmul(X, Bt.reshape(n, q * J, a))  # (c, a i k, b)
+        out[..., cs] = K.reshape(n, a, d, d, a).transpose(1, 2, 4, 3, 0)
+    return out
 
 
 class _BatchedForm(fem.IntegralForm):
