@@ -313,8 +313,9 @@ def frontier_section(r: Results) -> list[str]:
         out += [f"Cheapest within the target of the converged value at H = {h} mm: "
                 + "; ".join(words) + ".", ""]
     for run in f["failed_runs"]:
-        out += [f"Not completed: {run['route']} on `{run['mesh']}` at H = {run['H_mm']:g} mm "
-                f"({run['error']}).", ""]
+        variant = f" ({run['variant']})" if run.get("variant") else ""
+        out += [f"Not completed: {run['route']}{variant} on `{run['mesh']}` at "
+                f"H = {run['H_mm']:g} mm ({run['error']}).", ""]
     return out + quadratic_section(r)
 
 
@@ -335,7 +336,8 @@ def quadratic_section(r: Results) -> list[str]:
         rows = [[c["element"], c["mesh"], f"{c['n_dofs']:,}", f"{c['nnz']:,}",
                  f"{c['felupe_einsum_s']:.3f}", f"{c['batched_s']:.3f}",
                  f"{c['felupe_einsum_s'] / c['batched_s']:.1f}", c["model_uses"],
-                 f"{c['tangent_assembly_stock_s']:.3f}", f"{c['tangent_assembly_model_s']:.3f}",
+                 *(f"{c[k]:.3f}" if k in c else "—"
+                   for k in ("tangent_assembly_stock_s", "tangent_assembly_model_s")),
                  f"{c['max_relative_difference']:.0e}", f"{c['factorisation_s']:.2f}"]
                 for c in t["cases"]]
         out += table(["element", "mesh", "DOFs", "non-zeros", "einsum [s]", "batched [s]",
@@ -366,14 +368,16 @@ def quadratic_section(r: Results) -> list[str]:
             moved = [i for i in last["iterations"] if "lower_changed" in i]
             gaps = sorted({g for i in moved for g in i.get("lower_changed_gaps_um", [])})
             worst = last["iterations"][0]["largest_residual_nodes"][0]
+            kinds = {tuple(sorted((k, n) for k, n in i["lower_changed"].items() if n))
+                     for i in moved}
+            which = (f"always one {worst['class']} node (node {worst['node']}, the largest "
+                     "residual when in contact)"
+                     if kinds == {((worst["class"], 1),)} else f"nodes changed: {sorted(kinds)}")
             out += [f"Last step tried on `{v['mesh']}` at H = {v['H_mm']:g} mm (t = "
                     f"{last['t'][0]:.5f} → {last['t'][1]:.5f}): residuals {res}. The lower "
                     f"plate's contact set changes in {len(moved)} of "
-                    f"{len(last['iterations'])} iterations, always one {worst['class']} node "
-                    f"of the side (node {worst['node']}, the largest residual when in "
-                    f"contact), at gaps of {', '.join(f'{g:g}' for g in gaps)} µm: the point "
-                    "grazes the plate, and the iterates alternate between holding it with the "
-                    "penalty and releasing it a fraction of a nanometre off the plate.", ""]
+                    f"{len(last['iterations'])} iterations, {which}, at gaps of "
+                    f"{', '.join(f'{g:g}' for g in gaps)} µm.", ""]
     return out
 
 
