@@ -1,7 +1,10 @@
 """The 27-node (hex27) structural route: where its time goes and why its Newton iterations stalled.
 
-Two parts, each writing a section of ``bench/results/quadratic.json``:
+Three parts, each writing a section of ``bench/results/quadratic.json``:
 
+- ``penalty``: the normal contact multiplier λ_n against the mean diagonal stiffness of the
+  contact nodes, with and without the volumetric term (hex8 ``coarse``/``default``, hex27
+  ``coarse_x0.67``/``coarse``, H = 3 mm, reference configuration).
 - ``tangent``: wall time of the solid's tangent integration, FElupe's einsum against the batched
   matrix products of ``magtact.mechanics._model.grad_grad_values`` (minimum of ``--repeat``
   alternating calls, same state), of the whole tangent assembly with FElupe's stock solid and
@@ -14,6 +17,7 @@ Two parts, each writing a section of ``bench/results/quadratic.json``:
   ``--penalty`` the contact penalty.
 
     python bench/bench_quadratic.py tangent --repeat 4
+    python bench/bench_quadratic.py penalty
     python bench/bench_quadratic.py newton --mesh coarse_x0.67 --H 3 --tol-cycling 1e-6
 
 Wall times on a shared machine: the load average is recorded beside each.
@@ -87,6 +91,33 @@ def tangent(repeat: int) -> dict:
         print(out["cases"][-1], flush=True)
     out["load_average_at_end"] = os.getloadavg()
     return out
+
+
+def penalty_scale() -> dict:
+    """The normal contact multiplier against the contact nodes' mean diagonal stiffness, with
+    and without the volumetric term (a shear-only solid: bulk modulus 0), upper plate, H = 3 mm,
+    reference configuration."""
+    import felupe as fem
+
+    from magtact.mechanics import build_model
+
+    out = []
+    for element, mesh in (("hex8", "coarse"), ("hex8", "default"), ("hex27", "coarse_x0.67"),
+                          ("hex27", "coarse")):
+        m = build_model(_study(element), 3e-3, mesh=mesh)
+        c = m.contacts[1]
+        dofs = 3 * c.points + 2
+        shear = fem.SolidBodyNearlyIncompressible(fem.NeoHooke(mu=m.G), m.field, bulk=0.0)
+        diag_shear = np.asarray(shear.assemble.matrix().tocsr()[dofs, dofs]).ravel()
+        diag_full = np.asarray(m.solid.assemble.matrix().tocsr()[dofs, dofs]).ravel()
+        lam = c.contact_multipliers().normal
+        out.append({"element": element, "mesh": mesh, "penalty": c.multiplier,
+                    "lambda_n_over_G_m": lam / m.G,
+                    "mean_diagonal_over_G_m": float(diag_full.mean() / m.G),
+                    "mean_shear_diagonal_over_G_m": float(diag_shear.mean() / m.G),
+                    "lambda_n_over_mean_shear_diagonal": float(lam / diag_shear.mean())})
+        print(out[-1], flush=True)
+    return {"cases": out}
 
 
 def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None) -> dict:
@@ -167,6 +198,7 @@ def main() -> None:
     sub = ap.add_subparsers(dest="cmd", required=True)
     t = sub.add_parser("tangent")
     t.add_argument("--repeat", type=int, default=4)
+    sub.add_parser("penalty")
     n = sub.add_parser("newton")
     n.add_argument("--mesh", default="coarse_x0.67")
     n.add_argument("--H", type=float, default=3.0)
@@ -176,6 +208,8 @@ def main() -> None:
     data = json.loads(OUT.read_text()) if OUT.is_file() else {}
     if args.cmd == "tangent":
         data["tangent"] = tangent(args.repeat)
+    elif args.cmd == "penalty":
+        data["penalty_scale"] = penalty_scale()
     else:
         rec = newton(args.mesh, args.H, args.tol_cycling, args.penalty)
         key = f"newton_{args.mesh}_H{args.H:g}_tolcycling{args.tol_cycling:g}" + (
