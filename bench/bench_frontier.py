@@ -86,12 +86,14 @@ def _save(path: Path, data) -> None:
     os.replace(tmp, path)
 
 
-def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0) -> dict:
+def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
+        penalty_per_class: bool = False) -> dict:
     """Solve one path at θ_max and add its record to ``frontier_runs.json``.
 
     ``reuse_ratio`` > 0 runs the Newton iterations with tangents kept while they contract the
     residual by that factor (``Stepping.reuse_ratio``); the record is then a variant of the
-    route (``"variant": "reuse_<ratio>"``), kept beside the plain one.
+    route (``"variant": "reuse_<ratio>"``), kept beside the plain one; so is
+    ``penalty_per_class`` (``HalfBodyModel(penalty_per_node_class=True)``).
     """
     from dataclasses import replace
 
@@ -104,6 +106,11 @@ def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0) -> dict:
     if reuse_ratio > 0:
         plain = _simulate.stepping_of
         _simulate.stepping_of = lambda s: replace(plain(s), reuse_ratio=reuse_ratio)
+    if penalty_per_class:
+        from functools import partial
+
+        variant = "+".join(v for v in (variant, "penalty_per_class") if v)
+        _simulate.HalfBodyModel = partial(_simulate.HalfBodyModel, penalty_per_node_class=True)
     rec = {"route": route, "mesh": mesh, "H_mm": H_mm, "variant": variant,
            "theta_rad": study.loading.theta_max,
            "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
@@ -389,10 +396,13 @@ def main() -> None:
     r.add_argument("--H", type=float, required=True, help="base height [mm]")
     r.add_argument("--reuse-ratio", type=float, default=0.0,
                    help="keep a tangent while it contracts the residual by this factor")
+    r.add_argument("--penalty-per-class", action="store_true",
+                   help="contact penalty per class of surface node (27-node cells)")
     sub.add_parser("assemble")
     args = ap.parse_args()
     if args.cmd == "run":
-        print(json.dumps(run(args.route, args.mesh, args.H, args.reuse_ratio)))
+        print(json.dumps(run(args.route, args.mesh, args.H, args.reuse_ratio,
+                             args.penalty_per_class)))
     else:
         print(json.dumps(assemble(), indent=1)[:4000])
 

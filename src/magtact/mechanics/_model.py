@@ -172,6 +172,17 @@ class _NearlyIncompressibleSolid(fem.SolidBodyNearlyIncompressible):
         self._form = _BatchedForm
 
 
+def _node_classes(bmesh: BodyMesh) -> list[np.ndarray]:
+    """The free-surface nodes of ``bmesh`` split into cell corners, mid-edge and mid-face nodes
+    (one group for 8-node cells)."""
+    if bmesh.order == 1:
+        return [bmesh.surface]
+    groups = []
+    for lo, hi in ((0, 8), (8, 20), (20, 26)):
+        groups.append(np.intersect1d(bmesh.surface, np.unique(bmesh.cells[:, lo:hi])))
+    return groups
+
+
 class StepFailure(Exception):
     """A load step could not be converged with the smallest allowed step size."""
 
@@ -260,6 +271,11 @@ class HalfBodyModel:
         Sparse direct solver of the (unsymmetric) Newton systems.
     threads : int
         Threads of the PARDISO solver (0: the library default).
+    penalty_per_node_class : bool
+        Contact items per class of surface node (cell corners, mid-edge, mid-face nodes of
+        27-node cells), each with its penalty relative to the mean diagonal stiffness of its own
+        class instead of all surface nodes (the corner nodes of 27-node cells are far softer
+        than the mid-face ones).
 
     Notes
     -----
@@ -272,7 +288,8 @@ class HalfBodyModel:
 
     def __init__(self, bmesh: BodyMesh, G: float, bulk_ratio: float, mu_f: float, *,
                  base: str = "clamped", penalty: float = 5.0, elastic_slip: float = 5e-5,
-                 solver: str = "pardiso", threads: int = 1):
+                 solver: str = "pardiso", threads: int = 1,
+                 penalty_per_node_class: bool = False):
         if base not in ("clamped", "sliding"):
             raise ValueError(f"base must be 'clamped' or 'sliding', got {base!r}")
         self.bmesh = bmesh
@@ -293,10 +310,11 @@ class HalfBodyModel:
         kw = {"friction": mu_f, "multiplier": penalty, "items": [self.solid]}
         if mu_f > 0:
             kw["elastic_slip"] = elastic_slip
-        self.contacts = [
-            fem.ContactRigidPlane(self.field, bmesh.surface, self.lower, [0, 0, 1.0], **kw),
-            fem.ContactRigidPlane(self.field, bmesh.surface, self.upper, [0, 0, -1.0], **kw),
-        ]
+        groups = _node_classes(bmesh) if penalty_per_node_class else [bmesh.surface]
+        self.contacts = [  # all lower-plate items first, then the upper plate's
+            fem.ContactRigidPlane(self.field, nodes, centre, normal, **kw)
+            for centre, normal in ((self.lower, [0, 0, 1.0]), (self.upper, [0, 0, -1.0]))
+            for nodes in groups if len(nodes)]
         for item, key in [(self.solid, "solid")] + [(c, "contact") for c in self.contacts]:
             item.assemble.vector = _Timed(item.assemble.vector, self.timings, key)
             item.assemble.matrix = _Timed(item.assemble.matrix, self.timings, key)
