@@ -30,16 +30,22 @@ Routes:
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import platform
-import time
-from pathlib import Path
 
-import numpy as np
+# one core per path: no BLAS threads (numpy's einsum calls BLAS; on a shared machine its
+# threads make the tangent assembly many times slower), as in the DOE's workers
+for _var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-from magtact.geometry._body_mesh import _GRADING, DENSITIES
+import argparse  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from magtact.geometry._body_mesh import _GRADING, DENSITIES  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results"
 RUNS = RESULTS / "frontier_runs.json"
@@ -115,7 +121,8 @@ def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
            "theta_rad": study.loading.theta_max,
            "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
                        "load_average_at_start": os.getloadavg()},
-           "code": _git_commit()}
+           "code": _git_commit(),
+           "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")}
     t0 = time.perf_counter()
     try:
         r = simulate_path(study, H_mm * 1e-3, study.loading.theta_max, mesh=mesh)

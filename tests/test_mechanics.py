@@ -364,26 +364,7 @@ def test_a_singular_tangent_is_non_convergence(monkeypatch):
         model._jacobian()
 
 
-# ---- the batched tangent of 27-node cells ----------------------------------------------------
-def test_batched_tangent_of_27_node_cells_equals_felupes_integral():
-    """The cell stiffness of the batched matrix products equals FElupe's einsum of the same
-    form, on distorted 27-node cells with a random (unsymmetric) fourth-order tangent."""
-    import felupe as fem
-
-    from magtact.mechanics._model import grad_grad_values
-
-    mesh = fem.Cube(n=3).convert(order=2, calc_midfaces=True, calc_midvolumes=True)
-    rng = np.random.default_rng(1)
-    mesh.update(points=mesh.points + 0.01 * rng.standard_normal(mesh.points.shape))
-    region = fem.RegionTriQuadraticHexahedron(mesh)
-    field = fem.FieldContainer([fem.Field(region, dim=3)])
-    A = rng.standard_normal((3, 3, 3, 3, *region.dV.shape))
-    reference = fem.IntegralForm([A], field, region.dV, u=field).integrate()[0]
-    for chunk in (3, 8):  # chunks of cells that do and do not divide the 8 cells
-        np.testing.assert_allclose(grad_grad_values(region.dhdX, A, region.dV, chunk=chunk),
-                                   reference, rtol=1e-12, atol=1e-12 * np.abs(reference).max())
-
-
+# ---- Newton controls ------------------------------------------------------------------------
 @pytest.mark.parametrize("tol_cycling, converges", [(1e-5, True), (1e-6, False)])
 def test_a_grazing_contact_point_converges_at_the_cycling_tolerance(monkeypatch, tol_cycling,
                                                                     converges):
@@ -468,3 +449,17 @@ def test_27_node_block_dragged_over_a_plate_slides_at_the_coulomb_limit():
     F = model.solve_path(path, [0.5, 1.0])["upper"]
     assert abs(F[0, 0]) < 1e-9 * abs(F[0, 2])
     assert abs(F[-1, 0] / F[-1, 2]) == pytest.approx(mu, rel=0.01)
+
+
+def test_node_classes_partition_the_surface_of_27_node_cells(study):
+    """Corner, mid-edge and mid-face nodes of the free surface: disjoint, together the surface;
+    one group for 8-node cells."""
+    from magtact.mechanics._model import _node_classes
+
+    q2 = body_mesh(study, 3e-3, "coarse", order=2)
+    groups = _node_classes(q2)
+    assert len(groups) == 3 and sum(len(g) for g in groups) == len(q2.surface)
+    np.testing.assert_array_equal(np.sort(np.concatenate(groups)), q2.surface)
+    assert np.all(groups[0] < q2.n_corners) and np.all(groups[1] >= q2.n_corners)
+    q1 = body_mesh(study, 3e-3, "coarse")
+    np.testing.assert_array_equal(_node_classes(q1)[0], q1.surface)

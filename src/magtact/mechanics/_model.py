@@ -100,78 +100,6 @@ def _linear_solver(name: str, threads: int):
     raise ValueError(f"unknown linear solver {name!r}; choose one of {SOLVERS}")
 
 
-def grad_grad_values(dhdX: np.ndarray, A: np.ndarray, dV: np.ndarray,
-                     chunk: int = 8) -> np.ndarray:
-    """Cell stiffness values K_aibk = Σ_q ∂_J h_a A_iJkL ∂_L h_b dV of a bilinear form in the
-    gradients of one vector field, by two batched matrix products per cell (docs/method.md §3).
-
-    The same numbers as FElupe's einsum of the form, with the cells as the batch axis of
-    ``np.matmul`` instead of the last (strided) axis of an einsum: about 20 times faster for
-    27-node cells with 27 quadrature points; for 8-node cells FElupe's chunked einsum is faster
-    (bench/results/quadratic.json).
-
-    Parameters
-    ----------
-    dhdX : (a, J, q, c) ndarray
-        Shape-function gradients of the a nodes at the q quadrature points of the c cells.
-    A : (i, J, k, L, q, c) ndarray
-        The fourth-order tangent ∂P_iJ / ∂F_kL (broadcast over q or c allowed).
-    dV : (q, c) ndarray
-        Quadrature weights times the Jacobian determinants.
-    chunk : int
-        Cells per batch.
-
-    Returns
-    -------
-    (a, i, b, k, c) ndarray
-        C-ordered values for FElupe's sparse assembly.
-    """
-    a, J, q, c = dhdX.shape
-    d = A.shape[0]
-    A = np.broadcast_to(A, (d, J, d, J, q, c))
-    dV = np.broadcast_to(dV, (q, c))
-    out = np.empty((a, d, a, d, c), dtype=np.result_type(dhdX, A, dV))
-    for s in range(0, c, chunk):  # chunks of cells: the intermediates stay in the caches
-        cs = slice(s, min(s + chunk, c))
-        n = cs.stop - cs.start
-        B = np.ascontiguousarray((dhdX[..., cs] * dV[:, cs]).transpose(3, 2, 0, 1))  # c q a J
-        Bt = np.ascontiguousarray(dhdX[..., cs].transpose(3, 2, 1, 0))  # (c, q, L, b)
-        F = np.ascontiguousarray(A[..., cs].transpose(5, 4, 1, 0, 3, 2))  # (c, q, J, i, L, k)
-        X = np.matmul(B, F.reshape(n, q, J, d * J * d))  # (c, q, a, i L k)
-        X = X.reshape(n, q, a, d, J, d).transpose(0, 2, 3, 5, 1, 4).reshape(n, a * d * d, q * J)
-        K = np.matmul(X, Bt.reshape(n, q * J, a))  # (c, a i k, b)
-        out[..., cs] = K.reshape(n, a, d, d, a).transpose(1, 2, 4, 3, 0)
-    return out
-
-
-class _BatchedForm(fem.IntegralForm):
-    """FElupe's integral form whose single-field gradient–gradient bilinear form (the solid's
-    tangent) of cells with more than 8 nodes is integrated by :func:`grad_grad_values`; every
-    other form as FElupe does."""
-
-    def integrate(self, parallel=False, out=None):
-        if self.mode == 1 or len(self.forms) != 1:
-            return super().integrate(parallel=parallel, out=out)
-        form = self.forms[0]
-        if not (form.grad_v and form.grad_u and type(form.v) is fem.Field
-                and form.u.region is form.v.region and form.v.region.dhdX.shape[0] > 8):
-            return super().integrate(parallel=parallel, out=out)
-        values = grad_grad_values(form.v.region.dhdX, form.fun, form.dV)
-        if out is not None and out[0] is not None and out[0].shape == values.shape:
-            out[0][...] = values
-            return out
-        return [values]
-
-
-class _NearlyIncompressibleSolid(fem.SolidBodyNearlyIncompressible):
-    """FElupe's ``SolidBodyNearlyIncompressible`` with its tangent integrated by
-    :func:`grad_grad_values` (same values, less time)."""
-
-    def __init__(self, umat, field, bulk):
-        super().__init__(umat, field, bulk=bulk)
-        self._form = _BatchedForm
-
-
 def _node_classes(bmesh: BodyMesh) -> list[np.ndarray]:
     """The free-surface nodes of ``bmesh`` split into cell corners, mid-edge and mid-face nodes
     (one group for 8-node cells)."""
@@ -305,7 +233,7 @@ class HalfBodyModel:
         self.lower, self.upper = n, n + 1
         region = (fem.RegionTriQuadraticHexahedron if quadratic else fem.RegionHexahedron)(mesh)
         self.field = fem.FieldContainer([fem.Field(region, dim=3)])
-        self.solid = _NearlyIncompressibleSolid(
+        self.solid = fem.SolidBodyNearlyIncompressible(
             fem.NeoHooke(mu=self.G), self.field, bulk=bulk_ratio * self.G)
         kw = {"friction": mu_f, "multiplier": penalty, "items": [self.solid]}
         if mu_f > 0:
