@@ -256,8 +256,10 @@ def frontier_section(r: Results) -> list[str]:
            f"in {tgt['doe_minutes_2_workers']} min).", ""]
     out += ["Wall times were measured on the shared 2-core machine; the column *load* gives the "
             "1-minute load average when the path started (— where the benchmark did not record "
-            "it). Under a load of 8 to 11 a path takes several times as long as on an idle "
-            "core, so those times are upper bounds, not the cost on one idle core.", ""]
+            "it). Above a load of 2 the paths share the cores with other work, so the times "
+            "are upper bounds of the cost on one idle core; the paths run by this benchmark "
+            "since it sets one BLAS thread (`blas_threads` in the records) ran at loads of 1 "
+            "to 3.", ""]
     rows = []
     for p in f["points"]:
         H = f"{p['H_mm']:g}" if isinstance(p["H_mm"], float) else p["H_mm"]
