@@ -30,30 +30,57 @@ Routes:
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import platform
-import time
-from pathlib import Path
 
-import numpy as np
+# one core per path: no BLAS threads (numpy's einsum calls BLAS; on a shared machine its
+# threads make the tangent assembly many times slower), as in the DOE's workers
+for _var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-from magtact.geometry._body_mesh import _GRADING, DENSITIES
+import argparse  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from magtact.geometry._body_mesh import _GRADING, DENSITIES  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results"
 RUNS = RESULTS / "frontier_runs.json"
+SUPERSEDED = RESULTS / "frontier_runs_superseded.json"
 #: Densities of this benchmark only: the coarse mesh with 2/3 and 1.5 times its cells per
 #: direction (counts rounded).
 DENSITIES.setdefault("coarse_x0.67", {"m": 2, "radial": (1, 2, 1), "h_z": 1.8e-3,
                                       "n_corner": 1} | _GRADING)
 DENSITIES.setdefault("coarse_x1.5", {"m": 5, "radial": (3, 5, 3), "h_z": 0.8e-3,
                                      "n_corner": 3} | _GRADING)
+#: Observed orders taken as clean enough to extrapolate with.
+CLEAN_ORDER = (0.5, 4.0)
 #: Mesh sequence of each route, coarse to fine, with the refinement to the next mesh.
 SEQUENCES = {
     "hex8": [("coarse", 2.0), ("default", 2.0), ("fine", None)],
     "hex27": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
 }
+
+
+def _git_commit() -> str:
+    import subprocess
+
+    try:
+        out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                             text=True, cwd=Path(__file__).parent, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--", "../src"],
+                               capture_output=True, text=True, cwd=Path(__file__).parent,
+                               check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return out + ("+modified" if dirty else "")
+
+
+def _key(rec: dict) -> tuple:
+    return rec["route"], rec["mesh"], rec["H_mm"], rec.get("variant", "")
 
 
 def _load_runs() -> list[dict]:
@@ -66,18 +93,37 @@ def _save(path: Path, data) -> None:
     os.replace(tmp, path)
 
 
-def run(route: str, mesh: str, H_mm: float) -> dict:
-    """Solve one path at θ_max and add its record to ``frontier_runs.json``."""
+def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
+        penalty_per_class: bool = False) -> dict:
+    """Solve one path at θ_max and add its record to ``frontier_runs.json``.
+
+    ``reuse_ratio`` > 0 runs the Newton iterations with tangents kept while they contract the
+    residual by that factor (``Stepping.reuse_ratio``); the record is then a variant of the
+    route (``"variant": "reuse_<ratio>"``), kept beside the plain one; so is
+    ``penalty_per_class`` (``HalfBodyModel(penalty_per_node_class=True)``).
+    """
     from dataclasses import replace
 
-    from magtact.mechanics import PathFailed, simulate_path
+    from magtact.mechanics import PathFailed, _simulate, simulate_path
     from magtact.study import load_study
 
     study = load_study("magone")
     study = replace(study, mechanics=replace(study.mechanics, element=route, threads=1))
-    rec = {"route": route, "mesh": mesh, "H_mm": H_mm, "theta_rad": study.loading.theta_max,
-           "machine": {"platform": platform.platform(), "load_average_at_start":
-                       os.getloadavg()}}
+    variant = f"reuse_{reuse_ratio:g}" if reuse_ratio > 0 else ""
+    if reuse_ratio > 0:
+        plain = _simulate.stepping_of
+        _simulate.stepping_of = lambda s: replace(plain(s), reuse_ratio=reuse_ratio)
+    if penalty_per_class:
+        from functools import partial
+
+        variant = "+".join(v for v in (variant, "penalty_per_class") if v)
+        _simulate.HalfBodyModel = partial(_simulate.HalfBodyModel, penalty_per_node_class=True)
+    rec = {"route": route, "mesh": mesh, "H_mm": H_mm, "variant": variant,
+           "theta_rad": study.loading.theta_max,
+           "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
+                       "load_average_at_start": os.getloadavg()},
+           "code": _git_commit(),
+           "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS")}
     t0 = time.perf_counter()
     try:
         r = simulate_path(study, H_mm * 1e-3, study.loading.theta_max, mesh=mesh)
@@ -85,13 +131,20 @@ def run(route: str, mesh: str, H_mm: float) -> dict:
                 "n_cells": r.n_cells, "steps": r.steps, "jacobians": r.jacobians,
                 "newton_iterations": r.newton_iterations,
                 "timings_s": {k: round(v, 2) for k, v in r.timings.items()},
-                "F_z_t1_N": float(r.F_z[-1]), "F_r_min_N": float(np.min(r.F_r))}
+                "F_z_t1_N": float(r.F_z[-1]), "F_r_min_N": float(np.min(r.F_r)),
+                "t": r.t.tolist(), "F_z_N": r.F_z.tolist(), "F_r_N": r.F_r.tolist()}
     except PathFailed as exc:
         rec |= {"completed": False, "error": str(exc),
                 "wall_time_s": round(time.perf_counter() - t0, 2)}
-    runs = [r for r in _load_runs()
-            if (r["route"], r["mesh"], r["H_mm"]) != (route, mesh, H_mm)] + [rec]
-    _save(RUNS, runs)
+    # the wall time is measured on a shared machine: the load beside it says how shared
+    rec["machine"]["load_average_at_end"] = os.getloadavg()
+    old = _load_runs()
+    key = (route, mesh, H_mm, variant)
+    replaced = [r for r in old if _key(r) == key]
+    if replaced:  # earlier records of the same path (older code) are kept aside
+        _save(SUPERSEDED, (json.loads(SUPERSEDED.read_text()) if SUPERSEDED.is_file() else [])
+              + replaced)
+    _save(RUNS, [r for r in old if _key(r) != key] + [rec])
     return rec
 
 
@@ -112,13 +165,20 @@ def _convergence_records() -> list[dict]:
     return out
 
 
+def _load(rec: dict) -> float | None:
+    """1-minute load average at the start of a run (None where the record has none)."""
+    load = rec.get("machine", {}).get("load_average_at_start")
+    return None if load is None else round(float(load[0]), 2)
+
+
 def _change(a: float, b: float) -> float:
     return abs(a / b - 1)
 
 
 def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
     """Frontier points of the mesh routes and of Richardson extrapolation, and observed orders."""
-    by = {(r["route"], r["mesh"], r["H_mm"]): r for r in records if r.get("completed")}
+    by = {(r["route"], r["mesh"], r["H_mm"]): r for r in records
+          if r.get("completed") and not r.get("variant")}
     points, orders = [], []
     for route, seq in SEQUENCES.items():
         for H in (3.0, 7.0):
@@ -128,6 +188,7 @@ def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
                     points.append({
                         "route": route, "mesh": mesh, "next": finer, "refinement": ratio,
                         "H_mm": H, "wall_time_s": a["wall_time_s"], "n_dofs": a["n_dofs"],
+                        "load_1min": _load(a),
                         "F_z_t1_N": a["F_z_t1_N"], "F_r_min_N": a["F_r_min_N"],
                         "change_F_z_t1": _change(a["F_z_t1_N"], b["F_z_t1_N"]),
                         "change_F_r_min": _change(a["F_r_min_N"], b["F_r_min_N"])})
@@ -138,7 +199,11 @@ def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
                 for key in ("F_z_t1_N", "F_r_min_N"):
                     f1, f2, f3 = (t[key] for t in trio)
                     q = (f1 - f2) / (f2 - f3)
-                    rec[f"order_{key[:-2]}"] = float(np.log(q) / np.log(r)) if q > 0 else None
+                    p = float(np.log(q) / np.log(r)) if q > 0 else None
+                    rec[f"order_{key[:-2]}"] = p
+                    if p is not None and CLEAN_ORDER[0] <= p <= CLEAN_ORDER[1]:
+                        # the route's own limit: extrapolation of its two finest meshes
+                        rec[f"limit_{key}"] = f3 + (f3 - f2) / (seq[1][1] ** p - 1)
                 orders.append(rec)
     # Richardson (order 1) on consecutive hex8 pairs of the same refinement
     for H in (3.0, 7.0):
@@ -165,15 +230,24 @@ def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
             rec = {"route": "richardson", "H_mm": H, "limit_from_default_fine": limit,
                    "limit_from_default_x1.5": ext[("default", "default_x1.5")]}
             candidates = [(r, m, by[(r, m, h)]) for (r, m, h) in by if h == H]
+            candidates += [(f"{r['route']} ({r['variant']})", r["mesh"], r) for r in records
+                           if r.get("variant") and r.get("completed") and r["H_mm"] == H]
             candidates += [("richardson", f"{lo}+{hi}", ext[(lo, hi)]) for lo, hi in ext
                            if (lo, hi) != ("default", "fine")]
+            own = next((o for o in orders if o["route"] == "hex8" and o["H_mm"] == H
+                        and "meshes" in o), {})
+            rec["limit_observed_order"] = {k: own[f"limit_{k}"] for k in ("F_z_t1_N", "F_r_min_N")
+                                           if f"limit_{k}" in own}
             for route, mesh, a in candidates:  # each against the extrapolated hex8 limit
                 if mesh == "fine" and route == "hex8":
                     continue  # one of the two meshes that define the limit
                 rec.setdefault("vs_limit", []).append(
-                    {"route": route, "mesh": mesh, "wall_time_s": a["wall_time_s"]}
+                    {"route": route, "mesh": mesh, "wall_time_s": a["wall_time_s"],
+                     "load_1min": _load(a)}
                     | {f"change_{k[:-2]}": abs(a[k] / limit[k] - 1)
-                       for k in ("F_z_t1_N", "F_r_min_N")})
+                       for k in ("F_z_t1_N", "F_r_min_N")}
+                    | {f"change_{k[:-2]}_vs_observed_order": abs(a[k] / v - 1)
+                       for k, v in rec["limit_observed_order"].items()})
             orders.append(rec)
     return points, orders
 
@@ -238,9 +312,19 @@ def _cheapest(orders: list[dict], target: dict) -> dict:
             continue
         fz = [p for p in rec["vs_limit"] if p["change_F_z_t1"] <= target["change_F_z_t1"]]
         both = [p for p in fz if p["change_F_r_min"] <= target["change_F_r_min"]]
+        # against the observed-order limit where the hex8 order is clean, else order 1
+        def change(p, k):
+            return p.get(f"change_{k}_vs_observed_order", p[f"change_{k}"])
+
+        both_own = [p for p in rec["vs_limit"]
+                    if change(p, "F_z_t1") <= target["change_F_z_t1"]
+                    and change(p, "F_r_min") <= target["change_F_r_min"]]
         out[f"H_{rec['H_mm']:g}_mm"] = {
             "F_z_t1": min(fz, key=lambda p: p["wall_time_s"]) if fz else None,
-            "F_z_t1_and_F_r_min": min(both, key=lambda p: p["wall_time_s"]) if both else None}
+            "F_z_t1_and_F_r_min": min(both, key=lambda p: p["wall_time_s"]) if both else None,
+            "F_z_t1_and_F_r_min_observed_order":
+                min(both_own, key=lambda p: p["wall_time_s"]) if both_own else None,
+            "observed_order_limits": sorted(rec["limit_observed_order"])}
     return out
 
 
@@ -318,10 +402,15 @@ def main() -> None:
     r.add_argument("--route", choices=("hex8", "hex27"), required=True)
     r.add_argument("--mesh", required=True)
     r.add_argument("--H", type=float, required=True, help="base height [mm]")
+    r.add_argument("--reuse-ratio", type=float, default=0.0,
+                   help="keep a tangent while it contracts the residual by this factor")
+    r.add_argument("--penalty-per-class", action="store_true",
+                   help="contact penalty per class of surface node (27-node cells)")
     sub.add_parser("assemble")
     args = ap.parse_args()
     if args.cmd == "run":
-        print(json.dumps(run(args.route, args.mesh, args.H)))
+        print(json.dumps(run(args.route, args.mesh, args.H, args.reuse_ratio,
+                             args.penalty_per_class)))
     else:
         print(json.dumps(assemble(), indent=1)[:4000])
 

@@ -233,6 +233,14 @@ def mesh_effect_section(r: Results) -> list[str]:
     return out
 
 
+LABEL = {"F_z_t1_N": "F_z(t = 1)", "F_r_min_N": "min F_r"}
+
+
+def _load(p: dict) -> str:
+    load = p.get("load_1min")
+    return "—" if load is None else f"{load:.1f}"
+
+
 def frontier_section(r: Results) -> list[str]:
     if "frontier" not in r.files:
         return []
@@ -246,13 +254,19 @@ def frontier_section(r: Results) -> list[str]:
            f"{pct(tgt['change_F_z_t1'], 0)} in F_z(t = 1), {pct(tgt['change_F_r_min'], 0)} in "
            f"min F_r, at most {tgt['seconds_per_path']:.0f} s per path (25 paths on 2 workers "
            f"in {tgt['doe_minutes_2_workers']} min).", ""]
+    out += ["Wall times were measured on the shared 2-core machine; the column *load* gives the "
+            "1-minute load average when the path started (— where the benchmark did not record "
+            "it). Above a load of 2 the paths share the cores with other work, so the times "
+            "are upper bounds of the cost on one idle core; the paths run by this benchmark "
+            "since it sets one BLAS thread (`blas_threads` in the records) ran at loads of 1 "
+            "to 3.", ""]
     rows = []
     for p in f["points"]:
         H = f"{p['H_mm']:g}" if isinstance(p["H_mm"], float) else p["H_mm"]
-        rows.append([p["route"], p["mesh"], H, f"{p['wall_time_s']:.0f}",
+        rows.append([p["route"], p["mesh"], H, f"{p['wall_time_s']:.0f}", _load(p),
                      pct(p["change_F_z_t1"], 2), pct(p["change_F_r_min"], 2),
                      f"{p['next']} ({p['refinement']:g})" if "refinement" in p else p["next"]])
-    out += table(["route", "mesh", "H [mm]", "s per path", "ΔF_z(t=1)", "Δ min F_r",
+    out += table(["route", "mesh", "H [mm]", "s per path", "load", "ΔF_z(t=1)", "Δ min F_r",
                   "against"], rows)
     for o in f["orders"]:
         if "order_F_z_t1" in o:
@@ -271,21 +285,118 @@ def frontier_section(r: Results) -> list[str]:
                                     / o["limit_from_default_fine"]["F_z_t1_N"] - 1), 2)
                             + f" at H = {o['H_mm']:g} mm" for o in limits)
                 + " in F_z(t = 1)):", ""]
-        rows = [[p["route"], p["mesh"], f"{o['H_mm']:g}", f"{p['wall_time_s']:.0f}",
-                 pct(p["change_F_z_t1"], 3), pct(p["change_F_r_min"], 2)]
+        def own(p, k, digits):
+            v = p.get(f"change_{k}_vs_observed_order")
+            return "—" if v is None else pct(v, digits)
+
+        rows = [[p["route"], p["mesh"], f"{o['H_mm']:g}", f"{p['wall_time_s']:.0f}", _load(p),
+                 pct(p["change_F_z_t1"], 3), pct(p["change_F_r_min"], 2),
+                 own(p, "F_z_t1", 3), own(p, "F_r_min", 2)]
                 for o in limits for p in sorted(o["vs_limit"], key=lambda p: p["wall_time_s"])]
-        out += table(["route", "mesh", "H [mm]", "s per path", "ΔF_z(t=1)", "Δ min F_r"], rows)
+        out += ["The last two columns compare with the hex8 limit extrapolated with the hex8 "
+                "route's own observed order (table above) from the `default` and `fine` meshes, "
+                "F = F_fine + (F_fine − F_default) / (2^p − 1), where that order is clean "
+                "(0.5 ≤ p ≤ 4; — where it is not): "
+                + "; ".join(f"H = {o['H_mm']:g} mm: "
+                            + (", ".join(f"{LABEL[k]} = {v:.4f} N"
+                                         for k, v in o["limit_observed_order"].items())
+                               or "none")
+                            for o in limits) + ".", ""]
+        out += table(["route", "mesh", "H [mm]", "s per path", "load", "ΔF_z(t=1)",
+                      "Δ min F_r", "ΔF_z(t=1), order p", "Δ min F_r, order p"], rows)
     for H, best in f.get("cheapest_within_target", {}).items():
         h = H.removeprefix("H_").removesuffix("_mm")
         words = [f"{label}: " + (f"{b['route']} `{b['mesh']}`, {b['wall_time_s']:.0f} s per path"
                                  if b else "no measured route")
                  for label, b in (("F_z(t = 1) alone", best["F_z_t1"]),
-                                  ("with min F_r too", best["F_z_t1_and_F_r_min"]))]
+                                  ("with min F_r too", best["F_z_t1_and_F_r_min"]),
+                                  ("with min F_r too, against the observed-order limits where "
+                                   "clean", best.get("F_z_t1_and_F_r_min_observed_order")))]
         out += [f"Cheapest within the target of the converged value at H = {h} mm: "
                 + "; ".join(words) + ".", ""]
     for run in f["failed_runs"]:
-        out += [f"Not completed: {run['route']} on `{run['mesh']}` at H = {run['H_mm']:g} mm "
-                f"({run['error']}).", ""]
+        variant = f" ({run['variant']})" if run.get("variant") else ""
+        out += [f"Not completed: {run['route']}{variant} on `{run['mesh']}` at "
+                f"H = {run['H_mm']:g} mm ({run['error']}).", ""]
+    return out + quadratic_section(r)
+
+
+def quadratic_section(r: Results) -> list[str]:
+    if "quadratic" not in r.files:
+        return []
+    q = r["quadratic"]
+    out = ["### The 27-node route: where its time goes, why its Newton iterations stalled", "",
+           f"Source: {r.source('quadratic')} (`bench/bench_quadratic.py`), docs/method.md §3.",
+           ""]
+    if "tangent" in q:
+        t = q["tangent"]
+        out += ["**Tangent integration and factorisation** (H = 3 mm, minimum of repeated "
+                f"calls; load average {t['load_average_at_start'][0]:.1f} at the start, BLAS "
+                f"threads: {t.get('blas_threads', 'library default')}): FElupe's einsum of the "
+                "solid's tangent against batched matrix products per cell (the same numbers), "
+                "the whole tangent assembly with each, and one PARDISO factorisation of the "
+                "free-free block. On the idle machine the two integrations take the same "
+                "time; under load (3 to 11) FElupe's einsum, with its BLAS threads, took up to "
+                "23 times as long, so the frontier's paths now run with one BLAS thread (those "
+                "before did not).",
+                ""]
+        rows = [[c["element"], c["mesh"], f"{c['n_dofs']:,}", f"{c['nnz']:,}",
+                 f"{c['felupe_einsum_s']:.3f}", f"{c['batched_s']:.3f}",
+                 *(f"{c[k]:.3f}" if k in c else "—"
+                   for k in ("tangent_assembly_stock_s", "tangent_assembly_batched_s")),
+                 f"{c['max_relative_difference']:.0e}", f"{c['factorisation_s']:.2f}"]
+                for c in t["cases"]]
+        out += table(["element", "mesh", "DOFs", "non-zeros", "einsum [s]", "batched [s]",
+                      "tangent, einsum [s]", "tangent, batched [s]", "max rel. diff.",
+                      "factorisation [s]"], rows)
+    if "penalty_scale" in q:
+        out += ["**Contact penalty against the surface's stiffness** (upper plate, H = 3 mm, "
+                "reference configuration): the normal multiplier λ_n = penalty × the mean "
+                "diagonal stiffness of the contact nodes, which the volumetric term dominates, "
+                "against the same mean of a shear-only solid:", ""]
+        rows = [[c["element"], c["mesh"], f"{c['penalty']:g}",
+                 f"{c['mean_diagonal_over_G_m'] / c['mean_shear_diagonal_over_G_m']:.0f}",
+                 f"{c['lambda_n_over_mean_shear_diagonal']:.0f}"]
+                for c in q["penalty_scale"]["cases"]]
+        out += table(["element", "mesh", "penalty", "diagonal / shear diagonal",
+                      "λ_n / shear diagonal"], rows)
+    runs = {k: v for k, v in q.items() if k.startswith("newton_")}
+    if runs:
+        out += ["**Newton iterations logged along one path** (hex27, θ_max, the study's 21 "
+                "load levels):", ""]
+        rows = []
+        for v in runs.values():
+            tail = next((s for s in reversed(v["steps"]) if not s["converged"]), None)
+            rows.append([f"`{v['mesh']}`", f"{v['H_mm']:g}", f"{v['tol_cycling']:g}",
+                         f"{v['contact_penalty']:g}",
+                         "completed" if v["status"] == "completed" else "failed: " + v["status"],
+                         f"{v['F_z_t1_N']:.4f}" if "F_z_t1_N" in v else "—",
+                         str(v["newton_iterations"]), f"{v['wall_time_s']:.0f}",
+                         f"{v['load_average_at_start'][0]:.1f}",
+                         "—" if tail is None else
+                         f"{len([s for s in v['steps'] if not s['converged']])}"])
+        out += table(["mesh", "H [mm]", "tol_cycling", "penalty", "status", "F_z(t=1) [N]",
+                      "iterations", "s", "load", "failed steps"], rows)
+        for v in runs.values():
+            if v["status"] == "completed":
+                continue
+            last = v["steps"][-1]
+            res = ", ".join(f"{i['residual']:.1e}" for i in last["iterations"])
+            moved = [i for i in last["iterations"] if "lower_changed" in i]
+            gaps = sorted({g for i in moved for g in i.get("lower_changed_gaps_um", [])})
+            worst = last["iterations"][0]["largest_residual_nodes"][0]
+            kinds = {tuple(sorted((k, n) for k, n in i["lower_changed"].items() if n))
+                     for i in moved}
+            which = (f"always one {worst['class']} node (node {worst['node']}, the largest "
+                     "residual when in contact)"
+                     if kinds == {((worst["class"], 1),)} else f"nodes changed: {sorted(kinds)}")
+            largest = [i["largest_residual_nodes"][0]["class"] for i in last["iterations"]]
+            out += [f"Last step tried on `{v['mesh']}` at H = {v['H_mm']:g} mm (t = "
+                    f"{last['t'][0]:.5f} → {last['t'][1]:.5f}): residuals {res}. The lower "
+                    f"plate's contact set changes in {len(moved)} of "
+                    f"{len(last['iterations'])} iterations, {which}, at gaps of "
+                    f"{', '.join(f'{g:g}' for g in gaps)} µm; the largest residual sits at a "
+                    f"node of class {', '.join(largest)} in successive iterations.", ""]
     return out
 
 

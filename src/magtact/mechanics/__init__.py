@@ -4,7 +4,7 @@
 #: path give other forces: the mesh, the material law, the contact, the geometry of the body or
 #: magnet (magtact.geometry), tolerances or load stepping. Comments, refactoring and speed-ups
 #: that give the same forces leave it alone, so cached paths stay valid.
-MODEL_VERSION = 1
+MODEL_VERSION = 2
 
 from ._model import SOLVERS, HalfBodyModel, Stepping, pardiso_available  # noqa: E402
 from ._result import PathFailed, PathResult  # noqa: E402

@@ -115,6 +115,17 @@ def _linear_solver(name: str, threads: int):
     raise ValueError(f"unknown linear solver {name!r}; choose one of {SOLVERS}")
 
 
+def _node_classes(bmesh: BodyMesh) -> list[np.ndarray]:
+    """The free-surface nodes of ``bmesh`` split into cell corners, mid-edge and mid-face nodes
+    (one group for 8-node cells)."""
+    if bmesh.order == 1:
+        return [bmesh.surface]
+    groups = []
+    for lo, hi in ((0, 8), (8, 20), (20, 26)):
+        groups.append(np.intersect1d(bmesh.surface, np.unique(bmesh.cells[:, lo:hi])))
+    return groups
+
+
 class StepFailure(Exception):
     """A load step could not be converged with the smallest allowed step size."""
 
@@ -133,7 +144,14 @@ class Stepping:
     residual (from then on each update is backtracked up to ``line_search`` halvings until the
     residual decreases), three more fail to halve it, or when a residual stays non-finite after
     ``line_search`` halvings of the update. ``tol``: ‖r_free‖ / (‖r_prescribed‖ + ε) at
-    convergence.
+    convergence; ``tol_cycling``: the same once the contact state cycles. A point that grazes a
+    plate (zero gap at the solution) makes the iterates alternate between holding it with the
+    penalty, hundreds to thousands of times the stiffness of its surface, and releasing it a
+    fraction of a nanometre off the plate; the released iterate's residual is the force that
+    would hold the point there, and it stays above ``tol`` at any step size (docs/method.md §3).
+    ``reuse_ratio``: an iteration that reduced the best residual so far by at least this factor
+    keeps its tangent (and factorisation) for the next (0: a new tangent every iteration; 0.25
+    stalled 27-node paths at first contacts).
     """
 
     dt_initial: float = _DEFAULT.dt_initial
@@ -145,6 +163,8 @@ class Stepping:
     cutback: float = 0.5
     tol: float = _DEFAULT.newton_tol
     line_search: int = 4
+    tol_cycling: float = 1e-5
+    reuse_ratio: float = 0.0
 
     def __post_init__(self):
         if not 0 < self.dt_min <= self.dt_initial <= self.dt_max:
@@ -185,6 +205,11 @@ class HalfBodyModel:
         Sparse direct solver of the (unsymmetric) Newton systems.
     threads : int
         Threads of the PARDISO solver (0: the library default).
+    penalty_per_node_class : bool
+        Contact items per class of surface node (cell corners, mid-edge, mid-face nodes of
+        27-node cells), each with its penalty relative to the mean diagonal stiffness of its own
+        class instead of all surface nodes (the corner nodes of 27-node cells are far softer
+        than the mid-face ones).
 
     Notes
     -----
@@ -198,7 +223,7 @@ class HalfBodyModel:
     def __init__(self, bmesh: BodyMesh, G: float, bulk_ratio: float, mu_f: float, *,
                  base: str = "clamped", penalty: float = _DEFAULT.contact_penalty,
                  elastic_slip: float = _DEFAULT.elastic_slip, solver: str = _DEFAULT.solver,
-                 threads: int = _DEFAULT.threads):
+                 threads: int = _DEFAULT.threads, penalty_per_node_class: bool = False):
         if base not in ("clamped", "sliding"):
             raise ValueError(f"base must be 'clamped' or 'sliding', got {base!r}")
         self.bmesh = bmesh
@@ -219,10 +244,11 @@ class HalfBodyModel:
         kw = {"friction": mu_f, "multiplier": penalty, "items": [self.solid]}
         if mu_f > 0:
             kw["elastic_slip"] = elastic_slip
-        self.contacts = [
-            fem.ContactRigidPlane(self.field, bmesh.surface, self.lower, [0, 0, 1.0], **kw),
-            fem.ContactRigidPlane(self.field, bmesh.surface, self.upper, [0, 0, -1.0], **kw),
-        ]
+        groups = _node_classes(bmesh) if penalty_per_node_class else [bmesh.surface]
+        self.contacts = [  # all lower-plate items first, then the upper plate's
+            fem.ContactRigidPlane(self.field, nodes, centre, normal, **kw)
+            for centre, normal in ((self.lower, [0, 0, 1.0]), (self.upper, [0, 0, -1.0]))
+            for nodes in groups if len(nodes)]
         self.items = [self.solid, *self.contacts]
         self._timing_keys = ["solid"] + ["contact"] * len(self.contacts)
 
@@ -386,7 +412,7 @@ class HalfBodyModel:
             u += du
             f, fnorm = self._line_search(u, du, st.line_search, fnorm if cycling else np.inf)
             self.iterations += 1
-            if fnorm < st.tol:
+            if fnorm < st.tol or (cycling and fnorm < st.tol_cycling):
                 for item in self.items:
                     item.results.update_statevars()
                 self._fun = f
@@ -397,8 +423,9 @@ class HalfBodyModel:
                     raise NewtonFailed(
                         f"no progress of the Newton iterations (residual {fnorm:.2e})")
                 cycling, stalled = True, 0
+            contracted = bool(np.isfinite(best) and fnorm <= st.reuse_ratio * best)
             best = min(best, fnorm)
-            if it < st.max_iter:
+            if it < st.max_iter and (cycling or not contracted):
                 self._jacobian()
         raise NewtonFailed(f"not converged in {st.max_iter} iterations (residual {fnorm:.2e})")
 
