@@ -83,8 +83,8 @@ class Calibration:
             "files": {"c_header": "force.h", "json": "force_map.json",
                       "csv_table": "force_table.csv"},
             "usage": ("C: #include \"force.h\"; MAGTACT_REAL F[3]; "
-                      "int outside = force(bx, by, bz, F); bx, by, bz in T, F in N. Python: magtact.calibration.load_approximation"
-                      "(json.load(open('force_map.json'))['approximation']).evaluate(B)"),
+                      "int outside = force(bx, by, bz, F); bx, by, bz in T, F in N. Python: "
+                      "magtact.calibration.load_approximation(json.load(open('force_map.json'))['approximation']).evaluate(B)"),
         }
 
 
