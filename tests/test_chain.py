@@ -81,8 +81,16 @@ def test_design_with_the_magnetisation_as_a_design_variable(tmp_path, magone):
     assert any(row[0].startswith("magnetisation") for row in result.card["rows"])
     assert result.original.design.Gamma_z_max == pytest.approx(
         hg.original.design.Gamma_z_max, rel=1e-12)  # the original keeps the magnet's own M_z
-    result.write(tmp_path)
-    assert _chosen_json(tmp_path)["M_z_A_per_m"] == pytest.approx(M, rel=1e-12)
+    result.write(tmp_path / "design")
+    assert _chosen_json(tmp_path / "design")["M_z_A_per_m"] == pytest.approx(M, rel=1e-12)
+    # the run's optimisation stage on the same models chooses the same design
+    from magtact import pipeline
+
+    ctx = pipeline._Context(study=s, folder=tmp_path / "run", recompute=False, refit=False,
+                            data=None, cache=None, workers=None, log=lambda m: None,
+                            models=result.models)
+    pipeline._stage_optimise(ctx, pipeline.StageRecord("optimise", "Optimisation"))
+    assert ctx.result.variables == result.variables
 
 
 def test_optimise_command_equals_design(tmp_path, magone):
