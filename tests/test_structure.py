@@ -25,8 +25,11 @@ def _module_name(path: Path) -> str:
     return ".".join(parts)
 
 
-def _imports(path: Path) -> list[tuple[str, int]]:
-    """Absolute names of the magtact modules ``path`` imports, with their line numbers."""
+def _imports(path: Path, modules=None) -> list[tuple[str, int]]:
+    """Absolute names of the magtact modules ``path`` imports, with their line numbers.
+
+    With ``modules`` (the names of every module), ``from X import a`` is the module ``X.a`` if
+    there is one, else ``X``; without, both ``X.a`` and ``X`` (the names may be modules)."""
     module = _module_name(path)
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     out = []
@@ -40,8 +43,12 @@ def _imports(path: Path) -> list[tuple[str, int]]:
                 name = ".".join(base + ([node.module] if node.module else []))
             else:
                 name = node.module or ""
-            if name.startswith("magtact"):
-                # "from . import x" / "from .report import fig_doe": the names may be modules
+            if not name.startswith("magtact"):
+                continue
+            if modules is not None:
+                out += [(f"{name}.{a.name}" if f"{name}.{a.name}" in modules else name,
+                         node.lineno) for a in node.names]
+            else:  # "from . import x" / "from .report import fig_doe"
                 out += [(f"{name}.{a.name}", node.lineno) for a in node.names]
                 out.append((name, node.lineno))
     return out
@@ -123,28 +130,6 @@ def _modules() -> dict[str, Path]:
     return {_module_name(p): p for p in _sources()}
 
 
-def _module_imports(path: Path, modules) -> list[tuple[str, int]]:
-    """The magtact modules ``path`` imports (absolute names, with line numbers): for
-    ``from X import a``, the module ``X.a`` if there is one, else ``X``."""
-    module = _module_name(path)
-    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
-    out = []
-    for node in ast.walk(ast.parse(path.read_text("utf-8"), str(path))):
-        if isinstance(node, ast.Import):
-            out += [(a.name, node.lineno) for a in node.names if a.name.startswith("magtact")]
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[: len(base) - node.level + 1]
-                name = ".".join(base + ([node.module] if node.module else []))
-            else:
-                name = node.module or ""
-            if name.startswith("magtact"):
-                out += [(f"{name}.{a.name}" if f"{name}.{a.name}" in modules else name,
-                         node.lineno) for a in node.names]
-    return out
-
-
 @functools.cache
 def module_graph() -> dict[str, dict[str, list[int]]]:
     """module → imported module → line numbers, over every module of the package (imports
@@ -152,7 +137,7 @@ def module_graph() -> dict[str, dict[str, list[int]]]:
     modules = _modules()
     graph: dict[str, dict[str, list[int]]] = {}
     for name, path in modules.items():
-        for target, line in _module_imports(path, modules):
+        for target, line in _imports(path, modules):
             while target and target not in modules:
                 target = target.rpartition(".")[0]
             if target and target != name:

@@ -27,7 +27,7 @@ from scipy.optimize import least_squares
 from .._errors import MagtactError
 from .._numbers import parse_float
 from ..study import from_si, mm, to_si
-from ..validation import DataError, read_table_lines
+from ..validation import DataError, read_cell, read_table_lines
 from ._map import SensorMap, UnitParameters, _check_readings
 
 #: Parameter names in the order of :meth:`UnitParameters.vector`, with the unit they are shown in.
@@ -112,19 +112,7 @@ def read_presses(path) -> Presses:
         if len(cells) != len(header):
             raise DataError(f"{path}: line {j + 1}: {len(cells)} cells, the header on line "
                             f"{header_no} has {len(header)} columns")
-        values = []
-        for c in PRESS_COLUMNS:
-            cell = cells[header.index(c)]
-            try:
-                v = parse_float(cell)  # the usual float grammar, as every data file
-            except ValueError:
-                what = "empty cell" if not cell else f"not a number: {cell!r}"
-                raise DataError(f"{path}: line {j + 1}, column {c!r}: {what}") from None
-            if not math.isfinite(v):
-                raise DataError(f"{path}: line {j + 1}, column {c!r}: {cell!r} is not a "
-                                "finite number")
-            values.append(v)
-        rows.append(values)
+        rows.append([read_cell(path, j + 1, c, cells[header.index(c)]) for c in PRESS_COLUMNS])
     if not rows:
         raise DataError(f"{path}: line {header_no}: header but no presses")
     data = np.asarray(rows)

@@ -12,6 +12,7 @@ from ._io import (
     Curve,
     DataError,
     Experiment,
+    read_cell,
     read_experiment,
     read_table_lines,
 )
@@ -25,6 +26,7 @@ __all__ = [
     "DataError",
     "Experiment",
     "FilterSettings", "PathModel", "ResponseStats", "Validation", "bandpass",
-    "excluded_ranges", "read_experiment", "read_table_lines", "synthetic_files", "validate",
+    "excluded_ranges", "read_cell", "read_experiment", "read_table_lines", "synthetic_files",
+    "validate",
     "write_outputs",
 ]

@@ -218,6 +218,25 @@ def read_experiment(paths) -> Experiment:
                       metadata=first_meta)
 
 
+def read_cell(path: Path, line: int, column: str, cell: str) -> float:
+    """A table cell as a finite number, under the usual float grammar.
+
+    Raises
+    ------
+    DataError
+        Naming the file, line and column of an empty, non-numeric or non-finite cell.
+    """
+    try:
+        value = parse_float(cell)
+    except ValueError:
+        what = "empty cell" if not cell else f"not a number: {cell!r}"
+        raise DataError(f"{path}: line {line}, column {column!r}: {what}") from None
+    if not math.isfinite(value):
+        raise DataError(f"{path}: line {line}, column {column!r}: {cell!r} is not a finite "
+                        "number")
+    return value
+
+
 def read_table_lines(path: Path, what: str, hint: str) -> tuple[list[str], dict, dict, int]:
     """The lines of a CSV table with ``# key = value`` metadata lines at its top.
 
@@ -367,15 +386,7 @@ def _numbers(path: Path, rows, header: list[str], column: str) -> np.ndarray:
     out = np.empty(len(rows))
     for n, (line, cells) in enumerate(rows):
         cell = cells[k]
-        try:
-            value = parse_float(cell)
-        except ValueError:
-            what = "empty cell" if not cell else f"not a number: {cell!r}"
-            raise DataError(f"{path}: line {line}, column {column!r}: {what}") from None
-        if not math.isfinite(value):
-            raise DataError(f"{path}: line {line}, column {column!r}: {cell!r} is not a finite "
-                            "number")
-        out[n] = to_si(value, unit)
+        out[n] = to_si(read_cell(path, line, column, cell), unit)
         if not lo <= out[n] <= hi:
             raise DataError(f"{path}: line {line}, column {column!r}: {cell} is outside the "
                             f"physical range [{lo:g}, {hi:g}] {si} (in SI)")
