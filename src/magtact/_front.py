@@ -246,7 +246,8 @@ class Result:
         measured (B, F), :func:`magtact.calibration.read_presses`), of one unit
         (docs/method.md §13), with the chip at the design's setting; ``options`` as
         :func:`magtact.calibration.calibrate` (``fit``, ``degrees``, ``table_sizes``,
-        ``model_error``).
+        ``model_error``, ``force_source``: ``"auto"`` fits a unit to the FE forces of the
+        result's DOE data set when it holds the design's H, docs/method.md §13.4).
 
         Raises
         ------
@@ -261,7 +262,7 @@ class Result:
                                "design variables (study.at(...)) with models fitted to it")
         a = self.chosen if answer is None else answer
         return calibrate(self.models, self.study, a.H, a.G, a.design.M_z, noise=noise,
-                         presses=presses, chip=a.chip, **options)
+                         presses=presses, chip=a.chip, dataset=self.dataset, **options)
 
     def figures(self) -> dict[str, Figure]:
         """The optimisation's figures as matplotlib figures, by name."""

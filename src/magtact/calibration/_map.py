@@ -26,7 +26,10 @@ from ..geometry import hall_from_magnet_centre, loading_path
 from ..metamodel import ModelSet
 from ..optimise import per_design
 from ..study import Study, from_si, mm
+from ._fe import FEForces, fe_forces
 
+#: Where the map's forces come from: the metamodels, or the DOE's FE paths at the design's H.
+FORCE_SOURCES = ("models", "fe")
 #: Flags of a reading (``Reading.flag``).
 OK, OUTSIDE, NO_INVERSE, NOT_UNIQUE = 0, 1, 2, 3
 FLAG_NAMES = {OK: "in the stable region", OUTSIDE: "outside the stable region",
@@ -125,6 +128,8 @@ class SensorMap:
     Build one with :func:`sensor_map`. ``field_source`` is ``"models"`` (the model set's B_r,
     B_z along the plane of shear) or ``"exact"`` (the closed-form field of the magnet at any
     point, :func:`magtact.magnetics.cylinder_field`; needed for a chip offset).
+    ``force_source`` is ``"models"`` (the model set's f_r, f_z times G) or ``"fe"`` (``fe``:
+    the DOE's FE forces at H, interpolated, :class:`FEForces`, docs/method.md §13.4).
     """
 
     models: ModelSet
@@ -136,11 +141,17 @@ class SensorMap:
     field_scale: float = 1.0
     unit: UnitParameters = field(default_factory=UnitParameters)
     field_source: str = "models"
+    force_source: str = "models"
+    fe: FEForces | None = None
 
     def __post_init__(self):
         if self.field_source not in ("models", "exact"):
             raise ValueError(f"field_source must be 'models' or 'exact', got "
                              f"{self.field_source!r}")
+        if self.force_source not in FORCE_SOURCES or (self.force_source == "fe") != (
+                self.fe is not None):
+            raise ValueError(f"force_source must be 'models' (without fe) or 'fe' (with fe), "
+                             f"got {self.force_source!r}")
         if any(self.unit.chip_offset) and self.field_source != "exact":
             raise ValueError("a chip offset needs field_source = 'exact'")
 
@@ -199,6 +210,9 @@ class SensorMap:
         w = np.asarray(w, dtype=float)
         p, q, cx, cy, ps = self._pq(w)
         g = self.G * self.unit.G_scale
+        if self.fe is not None:
+            fr, fz = self.fe.forces(p, q, g)
+            return np.stack([fr * cx, fr * cy, fz], axis=-1)
         fr = self._plane(self.models.f_r, p, q, ps) * g
         fz = self._plane(self.models.f_z, p, q, ps) * g
         return np.stack([fr * cx, fr * cy, fz], axis=-1)
@@ -383,6 +397,7 @@ class SensorMap:
             "M_z_A_per_m": self.study.magnet.M_z * self.field_scale,
             "t_m": self.t_m, "theta_m_rad": self.theta_m,
             "F_r_range_N": F_r, "F_z_range_N": F_z, "field_source": self.field_source,
+            "force_source": self.force_source,
             "unit": self.unit.to_json(),
             "convention": ("B = (B_r cos phi, B_r sin phi, B_z), F = (F_r cos phi, F_r sin phi, "
                            "F_z); phi: the shear azimuth; F: the reaction of the base on the "
@@ -416,20 +431,36 @@ def _near_fold(w, folds, t_m) -> np.ndarray:
 
 
 def sensor_map(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
-               field_source: str = "models", design=None) -> SensorMap:
+               field_source: str | None = None, design=None, force_source: str = "models",
+               dataset=None) -> SensorMap:
     """The field-to-force map of design (H [m], G [Pa][, M_z [A/m]]) over its stable region.
 
     The region is that of :func:`magtact.optimise.per_design`: t ≤ t_m, θ ≤ θ_m, every
     azimuth φ. ``design``: that function's result for this design, if already at hand.
+    ``force_source``: ``"models"`` (the metamodels' forces) or ``"fe"`` (the FE forces of
+    ``dataset``'s paths at H, interpolated, docs/method.md §13.4; the region is then also
+    capped at the paths' largest t and θ). ``field_source``: ``"models"`` or ``"exact"``;
+    default ``"exact"`` with the FE forces (the FE source is meant to carry no model error),
+    else ``"models"``.
 
     Raises
     ------
     MagtactError
-        If G or M_z is not positive, or the stable region is degenerate (t_m = 0).
+        If G or M_z is not positive, the stable region is degenerate (t_m = 0), the force
+        source is unknown, or (FE source) ``dataset`` is missing, does not describe the study
+        or holds no paths at H (the message names what is missing).
     """
+    if force_source not in FORCE_SOURCES:
+        raise MagtactError(f"force source {force_source!r} is unknown: choose "
+                           f"{' or '.join(FORCE_SOURCES)}")
+    fe = fe_forces(dataset, H, study) if force_source == "fe" else None
+    if field_source is None:
+        field_source = "exact" if fe is not None else "models"
     design = per_design(models, H, G, study, M_z) if design is None else design
     if not design.t_m > 0:
         raise MagtactError(f"design H = {mm(H):.4g} mm has no stable region (t_m = 0): no map")
-    return SensorMap(models, study, float(H), float(G), float(design.t_m),
-                     float(design.theta_m), float(design.field_scale), UnitParameters(),
-                     field_source)
+    t_m, theta_m = float(design.t_m), float(design.theta_m)
+    if fe is not None:  # no force beyond the FE paths
+        t_m, theta_m = min(t_m, fe.t_max), min(theta_m, fe.theta_max)
+    return SensorMap(models, study, float(H), float(G), t_m, theta_m,
+                     float(design.field_scale), UnitParameters(), field_source, force_source, fe)

@@ -11,6 +11,7 @@ import numpy as np
 from .._errors import MagtactError
 from ..metamodel import ModelSet
 from ..study import HallChip, Study, from_si, hall_chip
+from ._fe import fe_forces, has_height, path_holdout
 from ._firmware import (
     DEGREES,
     TABLE_SIZES,
@@ -21,7 +22,7 @@ from ._firmware import (
     write_json,
     write_table_csv,
 )
-from ._map import OK, SensorMap, sensor_map
+from ._map import FORCE_SOURCES, OK, SensorMap, sensor_map
 from ._unit import DEFAULT_FIT, Presses, UnitCalibration, calibrate_unit
 
 #: Points per side of the (t, θ) grid of the error maps.
@@ -51,6 +52,9 @@ class Calibration:
     grid : dict
         ``t``, ``theta`` (n, n) and the chosen approximation's error ``err_r``, ``err_z`` [N]
         over the region, the maps of the report's figure.
+    force_error : dict or None
+        What limits the map's forces (:func:`force_model_error`): the metamodels' error against
+        the DOE's FE paths at H, or the FE interpolant's error between paths.
     """
 
     map: SensorMap
@@ -61,6 +65,7 @@ class Calibration:
     firmware: FirmwareChoice
     unit: UnitCalibration | None
     grid: dict
+    force_error: dict | None = None
 
     def to_json(self) -> dict:
         fw = approximation_json(self.firmware, self.map)
@@ -80,6 +85,8 @@ class Calibration:
                "max_error_F_r_mN": from_si(self.firmware.chosen.err_r, "mN"),
                "max_error_F_z_mN": from_si(self.firmware.chosen.err_z, "mN")},
             "unit": None if self.unit is None else self.unit.to_json(),
+            "force_source": self.map.force_source,
+            "force_model_error": self.force_error,
             "files": {"c_header": "force.h", "json": "force_map.json",
                       "csv_table": "force_table.csv"},
             "usage": ("C: #include \"force.h\"; MAGTACT_REAL F[3]; "
@@ -114,6 +121,56 @@ def error_grid(smap: SensorMap, choice: FirmwareChoice, n: int = N_GRID) -> dict
             "err_z": np.abs(approx[..., 2] - F[..., 2])}
 
 
+def force_source_for(force_source: str, dataset, H: float, presses: bool) -> str:
+    """The force source a calibration uses (docs/method.md §13.4): ``"models"`` or ``"fe"`` as
+    given; ``"auto"``: the FE paths for a built unit's fit (``presses``) when ``dataset`` holds
+    paths at H, else the metamodels (the design's firmware map: smooth, so its compact
+    approximation can reach σ_F).
+
+    Raises
+    ------
+    MagtactError
+        For an unknown name.
+    """
+    if force_source == "auto":
+        return "fe" if presses and has_height(dataset, H) else "models"
+    if force_source not in FORCE_SOURCES:
+        raise MagtactError(f"force source {force_source!r} is unknown: choose auto, "
+                           f"{', '.join(FORCE_SOURCES)}")
+    return force_source
+
+
+def force_model_error(smap: SensorMap, dataset) -> dict:
+    """What limits the map's forces, in mN (docs/method.md §13.4). FE source: the interpolant's
+    leave-one-θ-path-out error at H (:func:`path_holdout`; the interior paths' largest is the
+    error between paths, the end paths' is extrapolation). Metamodel source: the models'
+    largest error against the FE forces of the DOE's paths at H over the region (not measured
+    where the data set holds no paths at H)."""
+    if smap.fe is not None:
+        paths = path_holdout(dataset, smap.H, smap.G, smap.t_m)
+        inner = [p for p in paths if p.interior]
+        return {"force_source": "fe",
+                "kind": "FE interpolant, leave-one-theta-path-out at H (the interior paths: "
+                        "between paths, at twice the paths' spacing)",
+                "F_r_mN": 1e3 * max(p.err_r for p in inner),
+                "F_z_mN": 1e3 * max(p.err_z for p in inner),
+                "paths": [p.to_json() for p in paths]}
+    if not has_height(dataset, smap.H):
+        return {"force_source": "models", "kind": "not measured: no FE paths at this H",
+                "F_r_mN": None, "F_z_mN": None}
+    fe = fe_forces(dataset, smap.H)
+    T, TH = np.meshgrid(np.concatenate([[0.0], fe.t]), fe.theta, indexing="ij")
+    w = smap.features(T, TH)
+    inside = smap.inside(w)
+    fr, fz = fe.forces(w[..., 0], w[..., 1], smap.G)
+    F = smap.F_of(w)
+    return {"force_source": "models",
+            "kind": "metamodels against the DOE's FE forces at H, over the region's FE points",
+            "F_r_mN": 1e3 * float(np.abs(F[..., 0] - fr)[inside].max()),
+            "F_z_mN": 1e3 * float(np.abs(F[..., 2] - fz)[inside].max()),
+            "points": int(inside.sum())}
+
+
 def _chip(study: Study, noise: tuple[float, float] | None,
           chip: HallChip | None = None) -> tuple[HallChip, str]:
     own = chip is None
@@ -135,26 +192,31 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
               noise: tuple[float, float] | None = None, presses: Presses | None = None,
               fit=DEFAULT_FIT, degrees=DEGREES, table_sizes=TABLE_SIZES,
               model_error: tuple[float, float] | None = None,
-              chip: HallChip | None = None) -> Calibration:
+              chip: HallChip | None = None, force_source: str = "auto",
+              dataset=None) -> Calibration:
     """The calibration of design (H [m], G [Pa]) (docs/method.md §13): its map, the round-trip
     check, the resolution σ_F with the chip's noise (``noise`` = (σ_x, σ_z) [T], else the
     study's ``[hall]``), the firmware approximation held to σ_F, and, with ``presses``, the
     built unit's parameters and corrected map (whose approximation is then exported;
     ``model_error`` as in :func:`calibrate_unit`). ``chip``: the chip at the setting the
     design's answer uses (:attr:`magtact.designer.DesignAnswer.chip`), default the study's.
+    ``force_source`` (``"auto"``, ``"fe"``, ``"models"``, :func:`force_source_for`) with
+    ``dataset`` (the DOE data set of the models): where the map's forces come from.
 
     Raises
     ------
     MagtactError
-        Without a known noise, for a design without stable region, or presses that do not
-        identify the parameters of ``fit``.
+        Without a known noise, for a design without stable region, presses that do not
+        identify the parameters of ``fit``, or the FE source without FE paths at H.
     """
     from ..designer import resolution
     from ..optimise import per_design
 
-    chip, source = _chip(study, noise, chip)
+    chip, noise_source = _chip(study, noise, chip)
     design = per_design(models, H, G, study, M_z)
-    smap = sensor_map(models, study, H, G, M_z, design=design)
+    source = force_source_for(force_source, dataset, H, presses is not None)
+    smap = sensor_map(models, study, H, G, M_z, design=design, force_source=source,
+                      dataset=dataset)
     res = resolution(models, study, design, chip)
     sigma = (res.sigma_r_worst, res.sigma_z_worst)
     trip = round_trip_error(smap)
@@ -164,8 +226,8 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
         unit = calibrate_unit(smap, presses, fit=fit, model_error=model_error)
         target = unit.corrected
     choice = firmware_approximation(target, sigma, degrees=degrees, table_sizes=table_sizes)
-    return Calibration(target, chip.noise, source, sigma, trip, choice, unit,
-                       error_grid(target, choice))
+    return Calibration(target, chip.noise, noise_source, sigma, trip, choice, unit,
+                       error_grid(target, choice), force_model_error(smap, dataset))
 
 
 def write_calibration_outputs(cal: Calibration, out_dir, figures=None) -> dict[str, Path]:

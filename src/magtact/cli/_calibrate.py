@@ -11,7 +11,7 @@ import typer
 from .._errors import MagtactError
 from ..study import checked_si, from_si
 from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
-from ._optimise import ModelsOpt, study_models
+from ._optimise import ModelsOpt
 
 #: Range of a Hall chip's field noise [T]: 1 nT to 10 mT.
 NOISE_BOUNDS = (1e-9, 1e-2)
@@ -39,16 +39,24 @@ def calibrate_command(
     model_error: Annotated[float | None, typer.Option(
         "--model-error", help="Relative error of the force models (e.g. 0.01), counted in "
                               "the unit fit's weights and conditioning.")] = None,
+    force_source: Annotated[str, typer.Option(
+        "--force-source", help="Where the map's forces come from: fe (the DOE's FE paths at "
+                               "the design's H, interpolated), models (the metamodels) or auto "
+                               "(fe for a unit fit with --presses when the data hold the "
+                               "design's H, else models).")] = "auto",
     models: ModelsOpt = None,
 ) -> None:
     """The field-to-force map of a design for firmware: force.h (C99), force_map.json,
     force_table.csv, calibration.json and calibration.png in OUT."""
+    from .. import models_for
     from ..calibration import DEFAULT_FIT, calibrate, read_presses, write_calibration_outputs
     from ..report import calibration_figures
 
     s = get_study(study)
     if (H is None) != (G is None):
         raise MagtactError("give both --H and --G, or neither (the chosen design)")
+    if force_source not in ("auto", "fe", "models"):
+        raise MagtactError(f"--force-source must be auto, fe or models, got {force_source!r}")
     if model_error is not None and not 0 <= model_error <= 1:
         raise MagtactError(f"--model-error must be a fraction between 0 and 1, got "
                            f"{model_error}")
@@ -56,7 +64,8 @@ def calibrate_command(
         checked_si(noise, "uT", "--noise-uT", bounds=NOISE_BOUNDS),) * 2
     units = None if fit is None else tuple(p.strip() for p in fit.split(",") if p.strip())
     data = None if presses is None else read_presses(presses)
-    ms, _ = study_models(s, models)
+    ms, _, dataset = models_for(s, models=models,
+                                log=lambda m: console.print(m, highlight=False))
     if H is None:
         from .. import solve
 
@@ -74,7 +83,8 @@ def calibrate_command(
     eps = None if model_error is None else (model_error, model_error)
     cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
                     fit=DEFAULT_FIT if units is None else units, model_error=eps,
-                    chip=a.chip)  # the chip at this design's setting
+                    chip=a.chip,  # the chip at this design's setting
+                    force_source=force_source, dataset=dataset)
     folder = out_dir(out)
     write_calibration_outputs(cal, folder, figures=calibration_figures)
     a = cal.firmware.chosen
@@ -86,6 +96,12 @@ def calibrate_command(
         f"{from_si(cal.sigma_F[1], 'mN'):.3g} mN "
         f"({'reached' if cal.firmware.reached else 'NOT reached: see the frontier'})",
         highlight=False)
+    e = cal.force_error
+    what = ("the FE paths at H, interpolated; between paths" if cal.map.force_source == "fe"
+            else "the metamodels; against the FE paths at H")
+    limit = ("not measured (no FE paths at this H)" if e["F_r_mN"] is None else
+             f"F_r {e['F_r_mN']:.3g} mN, F_z {e['F_z_mN']:.3g} mN")
+    console.print(f"forces from {what}: largest error {limit}", highlight=False)
     if cal.unit is not None:
         u = cal.unit.unit
         chip = ", ".join(f"{from_si(v, 'mm'):.4f}" for v in u.chip_offset)

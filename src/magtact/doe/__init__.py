@@ -6,6 +6,7 @@ from ._dataset import (
     GEOMETRY_NAMES,
     bundled_for,
     bundled_path,
+    differences,
     geometry_dims,
     load_bundled,
     load_dataset,
@@ -25,7 +26,7 @@ from ._run import DOEFailed, JobFailure, RunStats, run_doe
 __all__ = [
     "DOE_SECTIONS", "ERROR_VARIABLES", "GEOMETRY_NAMES", "FINER_MESH", "CacheCorruptWarning",
     "CacheError", "DOEFailed", "JobCache", "JobFailure", "RunStats",
-    "attach_discretisation_error", "bundled_for", "error_points", "geometry_dims",
+    "attach_discretisation_error", "bundled_for", "differences", "error_points", "geometry_dims",
     "bundled_path", "default_workers", "load_bundled", "load_dataset", "matches_study",
     "run_doe", "save_dataset", "write_csv",
 ]
