@@ -25,9 +25,13 @@ from magtact.calibration import (
     c_header,
     calibrate_unit,
     error_grid,
+    fe_forces,
     fe_readings,
     firmware_approximation,
+    force_model_error,
+    force_source_for,
     load_approximation,
+    path_holdout,
     read_presses,
     round_trip_error,
     sensor_map,
@@ -383,3 +387,131 @@ def test_press_numbers_follow_the_usual_float_grammar(tmp_path):
         read_presses(path)
     with pytest.raises(DataError, match="not a file: it is a folder"):
         read_presses(tmp_path)
+
+
+# ---- the FE force source ---------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def doe():
+    return load_bundled()
+
+
+@pytest.fixture(scope="module")
+def fe_map(models, study, design, doe):
+    return sensor_map(models, study, H, G_CHOSEN, design=design, force_source="fe",
+                      dataset=doe)
+
+
+def test_fe_forces_pass_through_every_path_and_scale_with_G(fe_map, doe):
+    d = doe.sel(H=H)
+    T, TH = np.meshgrid(d["t"].values, d["theta"].values, indexing="ij")
+    for G in (G_CHOSEN, 41e3):
+        F = replace(fe_map, G=G).F_of(fe_map.features(T, TH))
+        scale = G / float(d["G"].values[0])
+        np.testing.assert_allclose(F[..., 2], d["F_z"].values[..., 0] * scale, rtol=1e-12,
+                                   atol=1e-15)
+        np.testing.assert_allclose(F[..., 0], d["F_r"].values[..., 0] * scale, rtol=1e-12,
+                                   atol=1e-10)
+    assert fe_map.field_source == "exact" and fe_map.describe()["force_source"] == "fe"
+    assert fe_map.folds["F"].size == 0 and fe_map.folds["B"].size == 0
+    assert round_trip_error(fe_map, n=500, seed=3) <= 1e-6
+
+
+def test_fe_interpolant_is_exact_for_forces_it_can_represent(doe):
+    """F_z = k_z t (1 + c sin²θ) and F_r = −k_r t tan θ lie in the interpolant's space: every
+    held-out path is reproduced to rounding, and the F_z of a path between nodes too."""
+    t, th = doe["t"].values, doe["theta"].values
+    T, TH = np.meshgrid(t, th, indexing="ij")
+    shape = (len(t), len(th), len(doe["H"]), len(doe["G"]))
+    G = doe["G"].values
+    Fz = (3.0 * T * (1 + 0.2 * np.sin(TH) ** 2))[..., None, None] * G / G[0]
+    Fr = (-0.4 * T * np.tan(TH))[..., None, None] * G / G[0]
+    synth = doe.assign(F_z=(doe["F_z"].dims, np.broadcast_to(Fz, shape).copy()),
+                       F_r=(doe["F_r"].dims, np.broadcast_to(Fr, shape).copy()))
+    for p in path_holdout(synth, H, G_CHOSEN):
+        assert p.err_r <= 1e-12 and (p.err_z <= 1e-12 or not p.interior), p
+    fe = fe_forces(synth, H)
+    fr, fz = fe.forces(0.37, 0.37 * np.tan(0.3), G[0])
+    assert fz == pytest.approx(3.0 * 0.37 * (1 + 0.2 * np.sin(0.3) ** 2), rel=1e-3)
+    assert fr == pytest.approx(-0.4 * 0.37 * np.tan(0.3), rel=1e-12)
+
+
+def test_fe_interpolant_error_between_paths_is_stated(fe_map, doe, smap, sigma):
+    """Leave-one-θ-path-out at H = 3 mm: the held-out paths are really held out (an error well
+    above rounding), the error between paths stays below the metamodels' own error against
+    the same FE forces, and far above σ_F (the FE data's own scatter between paths)."""
+    paths = path_holdout(doe, H, G_CHOSEN, fe_map.t_m)
+    inner = [p for p in paths if p.interior]
+    assert [p.interior for p in paths] == [False, True, True, True, False]
+    e = force_model_error(fe_map, doe)
+    assert e["F_z_mN"] == pytest.approx(1e3 * max(p.err_z for p in inner))
+    models_err = force_model_error(smap, doe)
+    assert models_err["force_source"] == "models" and models_err["points"] == 105
+    # the metamodels' error, computed here independently of the map
+    d = doe.sel(H=H)
+    T, TH = np.meshgrid(d["t"].values, d["theta"].values, indexing="ij")
+    F = smap.F_of(smap.features(T, TH))
+    scale = G_CHOSEN / float(d["G"].values[0])
+    assert models_err["F_z_mN"] == pytest.approx(
+        1e3 * np.abs(F[..., 2] - d["F_z"].values[..., 0] * scale).max(), rel=1e-9)
+    for p in inner:
+        assert 0.1e-3 <= p.err_z <= 1e-3 * models_err["F_z_mN"]
+        assert 0.1e-3 <= p.err_r <= 5e-3
+        assert p.err_z > 2 * sigma[1]  # the map between paths: not within 2 σ_F
+
+
+def test_fe_unit_recovered_from_eight_presses_and_map_within_two_sigma(fe_map, doe, sigma):
+    """A synthetic unit made from the FE paths (G −15 %, remanence +3 %, chip (0.2, 0, 0.1) mm)
+    fitted with the FE force source from 8 presses: parameters within 2 % and 0.02 mm, the
+    corrected map within 2 σ_F on the 1,067 other FE readings (97 points × 11 azimuths). At FE
+    points this checks identifiability (the map carries no model error there); between paths
+    the map's error is that of the test above."""
+    B, F, L = fe_readings(doe, fe_map, TRUE, seed=3)
+    k = _pick(L, PRESSES)
+    cal = calibrate_unit(fe_map, Presses(B[k], F[k]))
+    u = cal.unit
+    assert cal.corrected.force_source == "fe"
+    assert u.G_scale == pytest.approx(0.85, rel=0.02) and u.B_scale == pytest.approx(1.03,
+                                                                                     rel=0.02)
+    np.testing.assert_allclose(u.chip_offset, TRUE.chip_offset, atol=2e-5)
+    others = np.setdiff1d(np.arange(len(B)), k)
+    Bo, Fo = [], []
+    for s in range(11):
+        b, f, _ = fe_readings(doe, fe_map, TRUE, seed=100 + s)
+        Bo.append(b[others])
+        Fo.append(f[others])
+    Bo, Fo = np.concatenate(Bo), np.concatenate(Fo)
+    r = cal.corrected.force(Bo)
+    assert len(Bo) >= 1000 and (r.flag == OK).all()
+    assert np.abs(r.F[:, :2] - Fo[:, :2]).max() <= 2 * sigma[0]
+    assert np.abs(r.F[:, 2] - Fo[:, 2]).max() <= 2 * sigma[1]
+
+
+def test_fe_source_refuses_what_the_data_do_not_hold(models, study, design, doe, tmp_path):
+    with pytest.raises(MagtactError, match=r"no FE paths at H = 3\.5 mm \(its heights: 3, 4, "
+                                           r"5, 6, 7 mm\)"):
+        sensor_map(models, study, 3.5e-3, G_CHOSEN, design=design, force_source="fe",
+                   dataset=doe)
+    with pytest.raises(MagtactError, match="needs the DOE data set"):
+        sensor_map(models, study, H, G_CHOSEN, design=design, force_source="fe")
+    with pytest.raises(MagtactError, match="force source 'mesh' is unknown"):
+        sensor_map(models, study, H, G_CHOSEN, design=design, force_source="mesh")
+    with pytest.raises(MagtactError, match=r"no path θ = 0\.2 rad at H = 3 mm"):
+        fe_forces(doe, H, drop_theta=0.2)
+    other = replace(study, magnet=replace(study.magnet, R_m=2 * study.magnet.R_m))
+    with pytest.raises(MagtactError, match="does not describe study"):
+        fe_forces(doe, H, other)
+    thin = doe.isel(theta=[0, 1])
+    with pytest.raises(MagtactError, match="too few FE paths .* two sheared paths"):
+        fe_forces(thin, H)
+    assert force_source_for("auto", doe, H, presses=True) == "fe"
+    assert force_source_for("auto", doe, 3.5e-3, presses=True) == "models"
+    assert force_source_for("auto", doe, H, presses=False) == "models"
+    assert force_source_for("auto", None, H, presses=True) == "models"
+    from typer.testing import CliRunner
+
+    from magtact.cli import app
+
+    r = CliRunner().invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--H", "3",
+                                 "--G", "22", "--force-source", "mesh"])
+    assert r.exit_code != 0
+    assert "--force-source must be auto, fe or models, got 'mesh'" in str(r.exception)

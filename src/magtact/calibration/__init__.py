@@ -1,6 +1,7 @@
 """The sensor's own product: its field-to-force map, the firmware export and the calibration of a
 built unit from a few presses (docs/method.md §13)."""
 
+from ._fe import FEForces, PathHoldout, fe_forces, has_height, path_holdout
 from ._firmware import (
     Approximation,
     FirmwareChoice,
@@ -13,6 +14,7 @@ from ._firmware import (
 )
 from ._map import (
     FLAG_NAMES,
+    FORCE_SOURCES,
     NO_INVERSE,
     NOT_UNIQUE,
     OK,
@@ -26,6 +28,8 @@ from ._outputs import (
     Calibration,
     calibrate,
     error_grid,
+    force_model_error,
+    force_source_for,
     round_trip_error,
     write_calibration_outputs,
 )
@@ -43,7 +47,9 @@ from ._unit import (
 )
 
 __all__ = [
-    "DEFAULT_FIT", "FLAG_NAMES", "NOT_UNIQUE", "NO_INVERSE", "OK", "OUTSIDE", "PARAMETERS",
+    "DEFAULT_FIT", "FLAG_NAMES", "FORCE_SOURCES", "FEForces", "PathHoldout", "fe_forces",
+    "force_model_error", "force_source_for", "has_height", "path_holdout", "NOT_UNIQUE",
+    "NO_INVERSE", "OK", "OUTSIDE", "PARAMETERS",
     "PRESS_COLUMNS", "TOLERANCE", "Approximation", "Calibration", "FirmwareChoice", "Presses",
     "Reading", "SensorMap", "UnitCalibration", "UnitParameters", "approximation_json",
     "c_header", "calibrate", "calibrate_unit", "error_grid", "fe_readings",
