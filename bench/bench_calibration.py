@@ -19,7 +19,14 @@ Measures, and writes ``bench/results/calibration.json`` (docs/method.md §13):
   from 8 presses; (a) presses of the models themselves, exact and with noise, (b) presses
   made from the FE paths at H = 3 mm; recovered parameters and the corrected map's force error
   on about 1,000 other readings, against 2 σ_F; and the refusal of all-normal presses for a
-  shear (field) offset.
+  shear (field) offset;
+- the FE force source (docs/method.md §13.4): the map whose forces are the DOE's FE paths at
+  H = 3 mm, interpolated: its round trip, its leave-one-θ-path-out error at every height of
+  the DOE (the map's model error between paths) beside the FE paths' own scatter about a
+  smooth curve in θ and the metamodels' error at the same points; FE-made units fitted with it
+  (exact presses and noisy ones); the same unit fitted with one interior path held out of the
+  map and read on that path (the error of a calibrated map between paths); its firmware
+  frontier; and the refusal of a height without FE paths.
 """
 
 from __future__ import annotations
@@ -39,8 +46,11 @@ from magtact.calibration import (
     Presses,
     UnitParameters,
     calibrate_unit,
+    fe_forces,
     fe_readings,
     firmware_approximation,
+    force_model_error,
+    path_holdout,
     round_trip_error,
     sensor_map,
 )
@@ -91,6 +101,126 @@ def unit_result(cal, true, B_other, F_other, sigma):
         "within_2_sigma_F": bool(err[ok, :2].max() <= 2 * sigma[0]
                                  and err[ok, 2].max() <= 2 * sigma[1]),
     }
+
+
+def fe_scatter(ds, H, G):
+    """The FE paths' scatter about a smooth curve in θ: at each load t > 0, the largest
+    residual [mN] of a least-squares quadratic in sin²θ through the 5 paths' F_z, and of a
+    linear one in sin²θ through the 4 sheared paths' F_r / tan θ (times tan θ)."""
+    d = ds.sel(H=H)
+    t, th = d["t"].values, d["theta"].values
+    scale = G / float(d["G"].values[0])
+    v = np.sin(th) ** 2
+    Fz = d["F_z"].values[1:, :, 0] * scale
+    Fr = d["F_r"].values[1:, 1:, 0] * scale
+    A = np.vander(v, 3)
+    rz = Fz - (A @ np.linalg.lstsq(A, Fz.T, rcond=None)[0]).T
+    psi = Fr / np.tan(th[1:])
+    A1 = np.vander(v[1:], 2)
+    rr = (psi - (A1 @ np.linalg.lstsq(A1, psi.T, rcond=None)[0]).T) * np.tan(th[1:])
+    return {"F_z_quadratic_in_sin2theta_max_residual_mN": 1e3 * float(np.abs(rz).max()),
+            "F_r_linear_in_sin2theta_max_residual_mN": 1e3 * float(np.abs(rr).max()),
+            "loads": int(len(t) - 1)}
+
+
+def fe_source(models, study, ds, design, sig) -> dict:
+    """The map with the FE force source at H = 3 mm (docs/method.md §13.4)."""
+    res: dict = {}
+    t0 = time.perf_counter()
+    fmap = sensor_map(models, study, H0, G_CHOSEN, design=design, force_source="fe",
+                      dataset=ds)
+    res["build_s"] = time.perf_counter() - t0
+    res["t_m"], res["theta_m_rad"] = fmap.t_m, fmap.theta_m
+    res["round_trip_rel"] = round_trip_error(fmap, n=5000, seed=2)
+    res["folds"] = {k: int(v.size) for k, v in fmap.folds.items()}
+    L = fmap.region_samples(10000, seed=1)
+    B, F = fmap.at_load(L[:, 0], L[:, 1], L[:, 2])
+    t0 = time.perf_counter()
+    r = fmap.force(B)
+    res["B_to_F_us_per_reading"] = 1e6 * (time.perf_counter() - t0) / len(B)
+    rng = np.array([fmap.ranges[0], fmap.ranges[0], fmap.ranges[1]])
+    res["B_to_F_rel_10000"] = float(np.max(np.abs(r.F - F) / rng))
+    # the model error: between paths (held out), the FE scatter, the metamodels' at H
+    res["model_error_fe"] = force_model_error(fmap, ds)
+    res["model_error_metamodels"] = force_model_error(
+        sensor_map(models, study, H0, G_CHOSEN, design=design), ds)
+    res["held_out_paths_every_H"] = {}
+    res["fe_scatter_every_H"] = {}
+    for H in ds["H"].values:
+        paths = path_holdout(ds, float(H), G_CHOSEN)
+        inner = [p for p in paths if p.interior]
+        res["held_out_paths_every_H"][f"{1e3 * H:g}"] = {
+            "interior_max_F_r_mN": 1e3 * max(p.err_r for p in inner),
+            "interior_max_F_z_mN": 1e3 * max(p.err_z for p in inner),
+            "paths": [p.to_json() for p in paths]}
+        res["fe_scatter_every_H"][f"{1e3 * H:g}"] = fe_scatter(ds, float(H), G_CHOSEN)
+    print("FE source", json.dumps({k: res[k] for k in ("round_trip_rel", "B_to_F_rel_10000",
+                                                         "model_error_metamodels")}))
+    print("held out", json.dumps({k: (v["interior_max_F_r_mN"], v["interior_max_F_z_mN"])
+                                  for k, v in res["held_out_paths_every_H"].items()}))
+    print("scatter", json.dumps(res["fe_scatter_every_H"]))
+
+    # FE-made units fitted with the FE source
+    B, F, Lfe = fe_readings(ds, fmap, TRUE, seed=3)
+    k = pick(Lfe, PRESSES)
+    others = np.setdiff1d(np.arange(len(B)), k)
+    Bo, Fo = [], []
+    for s in range(11):  # the other FE points, each at 11 random azimuths
+        b, f, _ = fe_readings(ds, fmap, TRUE, seed=100 + s)
+        Bo.append(b[others])
+        Fo.append(f[others])
+    Bo, Fo = np.concatenate(Bo), np.concatenate(Fo)
+    rng = np.random.default_rng(17)
+    units = []
+    for nB, nF in ((0.0, 0.0), (0.1e-6, 0.05e-3), (1e-6, 1e-3), (5e-6, 2e-3)):
+        p = Presses(B[k] + rng.normal(0, nB, (8, 3)), F[k] + rng.normal(0, nF, (8, 3)),
+                    sigma_B=max(nB, 1e-7), sigma_F=max(nF, 5e-5))
+        t0 = time.perf_counter()
+        try:
+            cal = calibrate_unit(fmap, p)
+            u = {"fit_s": time.perf_counter() - t0, **unit_result(cal, TRUE, Bo, Fo, sig)}
+        except MagtactError as exc:
+            u = {"refused": str(exc)}
+        units.append({"press_noise_B_uT": 1e6 * nB, "press_noise_F_mN": 1e3 * nF, **u})
+        print("FE unit, FE source", json.dumps(units[-1]))
+    res["unit_from_fe"] = units
+
+    # one interior path held out of the map; the unit's readings on that path
+    d = ds.sel(H=H0)
+    th = d["theta"].values
+    between = []
+    for j in (1, 2, 3):
+        held = replace(fmap, fe=fe_forces(ds, H0, drop_theta=float(th[j])))
+        presses = [(t, kk if kk != j else (3 if j != 3 else 1)) for t, kk in PRESSES]
+        kp = pick(Lfe, presses)
+        cal = calibrate_unit(held, Presses(B[kp], F[kp]))
+        on = np.flatnonzero(np.isclose(Lfe[:, 1], th[j]) & (Lfe[:, 0] > 0))
+        Bh, Fh = [], []
+        for s in range(10):
+            b, f, _ = fe_readings(ds, fmap, TRUE, seed=200 + s)
+            Bh.append(b[on])
+            Fh.append(f[on])
+        between.append({"held_out_theta_rad": float(th[j]),
+                        **unit_result(cal, TRUE, np.concatenate(Bh), np.concatenate(Fh), sig)})
+        print("between paths", json.dumps(between[-1]))
+    res["unit_between_paths"] = between
+
+    t0 = time.perf_counter()
+    choice = firmware_approximation(fmap, sig)
+    a = choice.chosen
+    res["firmware"] = {"kind": a.kind, "degree_or_n": a.degree, "transform": a.transform,
+                       "bytes": a.bytes, "multiplies": a.multiplies,
+                       "max_error_F_r_mN": 1e3 * a.err_r, "max_error_F_z_mN": 1e3 * a.err_z,
+                       "reached": choice.reached, "rule": choice.rule,
+                       "wall_time_s": time.perf_counter() - t0, "frontier": choice.frontier()}
+    print("FE firmware", json.dumps({k: v for k, v in res["firmware"].items()
+                                     if k != "frontier"}))
+    try:
+        sensor_map(models, study, 3.5e-3, G_CHOSEN, force_source="fe", dataset=ds)
+        res["refusal_H_3_5_mm"] = "NOT refused"
+    except MagtactError as exc:
+        res["refusal_H_3_5_mm"] = str(exc)
+    return res
 
 
 def main() -> None:
@@ -242,6 +372,7 @@ def main() -> None:
     except MagtactError as exc:
         out["all_normal_refusal"] = str(exc)
     print(out["all_normal_refusal"])
+    out["fe_source"] = fe_source(models, study, ds, design, sig)
     out["wall_time_s"] = time.perf_counter() - t_start
     out["machine"] = {"python": platform.python_version(), "machine": platform.machine()}
     RESULTS.parent.mkdir(parents=True, exist_ok=True)

@@ -324,12 +324,13 @@ def test_calibration_figure_shows_the_error_and_the_frontier(smap, sigma, firmwa
     assert sorted(xs) == sorted(a.bytes for a in firmware.candidates)
 
 
-def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware):
+def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware, doe):
     from magtact.calibration import write_calibration_outputs
     from magtact.report import build_report
 
+    limit = force_model_error(smap, doe)
     cal = Calibration(smap, (NOISE, NOISE), "given", sigma, 3e-12, firmware, None,
-                      error_grid(smap, firmware, n=5))
+                      error_grid(smap, firmware, n=5), limit)
     files = write_calibration_outputs(cal, tmp_path / "calibration")
     assert {p.name for p in files.values()} == {"force.h", "force_map.json", "force_table.csv",
                                                  "calibration.json"}
@@ -338,6 +339,9 @@ def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware):
     a = firmware.chosen
     assert f"{a.kind} ({a.bytes} bytes, {a.multiplies} multiplications)" in section
     assert "3e-12 of the force range" in section and "reached" in section
+    assert (f"Forces from models; what limits them: metamodels against the DOE&#x27;s FE "
+            f"forces at H") in section
+    assert f"F_z {limit['F_z_mN']:.6g} mN" in section
 
 
 # ---- hostile press files ---------------------------------------------------------------------

@@ -477,6 +477,12 @@ def _calibration(folder: Path) -> str:
             f"(field noise {_e(', '.join(_fmt(v) for v in d.get('noise_B_uT') or []))} µT from "
             f"{_e(d.get('noise_source'))}): "
             f"{'reached' if fw.get('reached') else 'not reached'}, {_e(fw.get('rule'))}.</p>")
+        err = d.get("force_model_error")
+        if isinstance(err, dict):
+            limit = ("not measured" if err.get("F_r_mN") is None else
+                     f"F_r {_fmt(err.get('F_r_mN'))} mN, F_z {_fmt(err.get('F_z_mN'))} mN")
+            out.append(f"<p>Forces from {_e(d.get('force_source'))}; what limits them: "
+                       f"{_e(err.get('kind'))}: {limit} (docs/method.md §13.4).</p>")
         if isinstance(d.get("unit"), dict):
             out.append("<h3>Built unit</h3>" + _dict_table(d["unit"]))
         out.append(f"<p>Use: {_e(d.get('usage'))}. Files in <code>{_e(folder.name)}/</code>: "
