@@ -339,8 +339,8 @@ def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware, d
     a = firmware.chosen
     assert f"{a.kind} ({a.bytes} bytes, {a.multiplies} multiplications)" in section
     assert "3e-12 of the force range" in section and "reached" in section
-    assert (f"Forces from models; what limits them: metamodels against the DOE&#x27;s FE "
-            f"forces at H") in section
+    assert ("Forces from models; what limits them: metamodels against the DOE&#x27;s FE "
+            "forces at H") in section
     assert f"F_z {limit['F_z_mN']:.6g} mN" in section
 
 
@@ -519,3 +519,23 @@ def test_fe_source_refuses_what_the_data_do_not_hold(models, study, design, doe,
                                  "--G", "22", "--force-source", "mesh"])
     assert r.exit_code != 0
     assert "--force-source must be auto, fe or models, got 'mesh'" in str(r.exception)
+
+
+def test_calibrate_fits_a_unit_to_the_fe_forces_where_the_data_hold_H(models, study, doe):
+    """``force_source="auto"``: a unit's presses are fitted with the FE forces when the data set
+    holds the design's H; the design's own map stays on the metamodels, and the summary says
+    where the forces come from and what limits them."""
+    from magtact.calibration import calibrate
+
+    B, F, L = fe_readings(doe, replace(sensor_map(models, study, H, G_CHOSEN),
+                                       field_source="exact"), TRUE, seed=3)
+    k = _pick(L, PRESSES)
+    cal = calibrate(models, study, H, G_CHOSEN, noise=(NOISE, NOISE),
+                    presses=Presses(B[k], F[k]), dataset=doe, degrees=(6,), table_sizes=())
+    assert cal.map.force_source == "fe" and cal.force_error["force_source"] == "fe"
+    assert cal.unit.unit.B_scale == pytest.approx(1.03, rel=1e-9)
+    summary = cal.to_json()
+    assert summary["force_source"] == "fe" and summary["force_model_error"]["F_z_mN"] > 0
+    with pytest.raises(MagtactError, match="no FE paths at H = 3.5 mm"):
+        calibrate(models, study, 3.5e-3, G_CHOSEN, noise=(NOISE, NOISE),
+                  presses=Presses(B[k], F[k]), dataset=doe, force_source="fe")

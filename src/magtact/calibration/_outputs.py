@@ -213,8 +213,10 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
     from ..optimise import per_design
 
     chip, noise_source = _chip(study, noise, chip)
-    design = per_design(models, H, G, study, M_z)
     source = force_source_for(force_source, dataset, H, presses is not None)
+    if source == "fe":  # what the data lack is said before the design's work
+        fe_forces(dataset, H, study)
+    design = per_design(models, H, G, study, M_z)
     smap = sensor_map(models, study, H, G, M_z, design=design, force_source=source,
                       dataset=dataset)
     res = resolution(models, study, design, chip)
