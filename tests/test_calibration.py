@@ -416,6 +416,13 @@ def test_fe_forces_pass_through_every_path_and_scale_with_G(fe_map, doe):
         np.testing.assert_allclose(F[..., 0], d["F_r"].values[..., 0] * scale, rtol=1e-12,
                                    atol=1e-10)
     assert fe_map.field_source == "exact" and fe_map.describe()["force_source"] == "fe"
+    # beyond the paths (t > 1, θ > θ_max): flagged, no force
+    B_in, _ = fe_map.at_load(0.5, 0.2)
+    B_deep, _ = fe_map.at_load(1.05, 0.2)
+    B_steep, _ = fe_map.at_load(0.5, 0.45)
+    r = fe_map.force(np.stack([B_in, B_deep, B_steep]))
+    assert r.flag[0] == OK and (r.flag[1:] != OK).all()
+    assert np.isfinite(r.F[0]).all() and np.isnan(r.F[1:]).all()
     assert fe_map.folds["F"].size == 0 and fe_map.folds["B"].size == 0
     assert round_trip_error(fe_map, n=500, seed=3) <= 1e-6
 

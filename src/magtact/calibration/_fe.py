@@ -189,8 +189,8 @@ def fe_forces(dataset, H: float, study=None, drop_theta: float | None = None) ->
     t = np.asarray(d["t"].values, dtype=float)
     theta = np.asarray(d["theta"].values, dtype=float)
     G_level = float(d["G"].values[0])
-    F_r = np.asarray(d["F_r"].values[..., 0], dtype=float)
-    F_z = np.asarray(d["F_z"].values[..., 0], dtype=float)
+    F_r = np.asarray(d["F_r"].isel(G=0).transpose("t", "theta").values, dtype=float)
+    F_z = np.asarray(d["F_z"].isel(G=0).transpose("t", "theta").values, dtype=float)
     keep = np.ones(len(theta), dtype=bool)
     if drop_theta is not None:
         hit = np.isclose(theta, drop_theta, rtol=0, atol=1e-12)
@@ -251,8 +251,8 @@ def path_holdout(dataset, H: float, G: float, t_m: float = np.inf,
     for j, th in enumerate(full.theta):
         held = fe_forces(dataset, H, drop_theta=th)
         fr, fz = held.forces(t[use], t[use] * np.tan(th), G)
-        F_r = d["F_r"].values[use, j, 0] * scale
-        F_z = d["F_z"].values[use, j, 0] * scale
+        F_r = d["F_r"].isel(G=0, theta=j).transpose("t").values[use] * scale
+        F_z = d["F_z"].isel(G=0, theta=j).transpose("t").values[use] * scale
         out.append(PathHoldout(float(th), float(np.abs(fr - F_r).max()),
                                float(np.abs(fz - F_z).max()),
                                bool(0 < j < len(full.theta) - 1)))
