@@ -334,6 +334,90 @@ def test_placing_cut_short_is_completed_by_the_next_command(tmp_path, monkeypatc
     no_leftovers(tmp_path)
 
 
+# A ``magtact field`` in a separate process that stops in its work (half its outputs written
+# into the staging folder) or after the k-th move of the placing, until it is killed.
+FIELD = textwrap.dedent('''
+    import sys, time
+    from pathlib import Path
+    import magtact.magnetics as magnetics
+    from magtact import _runfolder
+
+    pause, ready, seconds = sys.argv[1], Path(sys.argv[2]), float(sys.argv[4])
+
+    def wait_here():
+        ready.write_text("ready")
+        time.sleep(seconds)  # a SIGTERM held during the placing takes effect after it
+
+    real = magnetics.write_field_outputs
+
+    def paused(study, folder, **kw):
+        files = real(study, folder, **kw)
+        if pause == "work":
+            (Path(folder) / "field.csv").write_text("half")
+            wait_here()
+        return files
+
+    magnetics.write_field_outputs = paused
+    if pause.startswith("move:"):
+        moves, replace = [0], _runfolder._replace
+
+        def counted(src, dst):
+            replace(src, dst)
+            moves[0] += 1
+            if moves[0] == int(pause[5:]):
+                wait_here()
+        _runfolder._replace = counted
+    sys.argv = ["magtact", "field", "--solver", "exact", "--out", sys.argv[3]]
+    from magtact.cli import main
+    main()
+''')
+
+
+@pytest.mark.parametrize(("sig", "pause"), [
+    pytest.param(sig, pause, id=f"{sig.name}-{pause}",
+                 marks=() if (sig, pause) == (signal.SIGKILL, "move:2") else pytest.mark.long)
+    for sig, pause in [(signal.SIGTERM, "work"), (signal.SIGKILL, "work"),
+                       (signal.SIGKILL, "move:2"), (signal.SIGTERM, "move:1")]])
+def test_a_killed_command_leaves_its_earlier_outputs_or_its_new_ones(tmp_path, sig, pause):
+    """Killed in its work, a command leaves the earlier outputs; killed while putting its files
+    in place, the next command on the folder completes the placing (SIGTERM is held until the
+    placing is done)."""
+    out = tmp_path / "f"
+    out.mkdir()
+    (out / "mine.txt").write_text("the user's")
+    with _runfolder.command_outputs(out, "magtact field") as o:
+        for name in ("field.csv", "field_maps.png", "field_maps.svg"):
+            (o.folder / name).write_text(f"earlier {name}")
+    before = files(out)
+    ready = tmp_path / "ready"
+    seconds = "1" if sig == signal.SIGTERM and pause != "work" else "60"
+    proc = subprocess.Popen([sys.executable, "-c", FIELD, pause, str(ready), str(out), seconds],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env=os.environ | {"PYTHONPATH": os.pathsep.join(sys.path)})
+    deadline = time.monotonic() + 120
+    while not ready.exists():
+        if proc.poll() is not None or time.monotonic() > deadline:
+            proc.kill()
+            raise AssertionError(proc.communicate()[1].decode())
+        time.sleep(0.05)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == (143 if sig == signal.SIGTERM else -signal.SIGKILL), err
+    with _runfolder.command_outputs(out, "magtact report"):
+        pass  # the next writer on the folder
+    now = files(out)
+    if pause == "work":
+        assert now == before
+    else:
+        assert now["mine.txt"] == b"the user's"
+        assert all(not now[n].startswith(b"earlier") for n in ("field.csv", "field_maps.png",
+                                                                 "field_maps.svg"))
+        assert now["field.csv"].startswith(b"t,theta_rad,H_mm,")
+        with _runfolder.command_outputs(out, "again", ["field.csv", "field_maps.svg"]):
+            pass  # every new file is recorded as magtact's
+    no_leftovers(out)
+
+
 # ---- file modes ------------------------------------------------------------------------------
 @pytest.mark.parametrize("umask", [0o022, 0o077])
 def test_placed_outputs_follow_the_umask(tmp_path, umask):
