@@ -154,6 +154,57 @@ def test_rerun_replaces_its_own_outputs_and_an_edited_one_is_the_users(tmp_path)
     no_leftovers(out)
 
 
+@pytest.mark.long
+@pytest.mark.parametrize("command", ["simulate", "budget", "optimise"])
+def test_a_command_run_again_replaces_its_own_outputs(tmp_path, command):
+    args, names = COMMANDS[command]
+    out = tmp_path / "o"
+    plant(out, ["mine.csv"])
+    assert cli(command, *args, "--out", out)[0] == 0
+    stamp = json.loads((out / _runfolder.OWNED).read_text())
+    assert set(names) <= set(stamp["files"]) and "mine.csv" not in stamp["files"]
+    code, text = cli(command, *args, "--out", out)
+    assert code == 0, text
+    assert (out / "mine.csv").read_bytes() == b"the user's own mine.csv\n"
+    assert json.loads((out / _runfolder.OWNED).read_text())["files"].keys() == stamp[
+        "files"].keys()
+    no_leftovers(out)
+
+
+class _Reproduction:
+    """Stands in for the result of :func:`magtact.publication.reproduce`."""
+
+    comparison = [{"quantity": "Γ_z,max", "unit": "N/T", "scale_free": False,
+                   "publication": 1.0, "jacobian / magtact": {"text": "1.1"}}]
+    wall_time_s, workers = 0.0, 1
+
+    def write(self, folder):
+        from magtact._files import write_text
+
+        return [write_text(Path(folder) / n, f"{n}\n") for n in (
+            "publication.json", "seeds.csv", "spread.csv", "comparison.csv")]
+
+
+def test_reproduce_puts_its_section_in_place_and_rebuilds_the_report(tmp_path, monkeypatch):
+    """``reproduce`` writes ``publication/`` like any command, then rebuilds ``report.html``
+    holding the folder's lock; run again, it replaces both."""
+    import magtact.publication as publication
+    import magtact.report as report
+
+    monkeypatch.setattr(publication, "reproduce", lambda *a, **kw: _Reproduction())
+    monkeypatch.setattr(report, "publication_figures", lambda folder: [])
+    out = tmp_path / "R"
+    for _ in range(2):
+        code, text = cli("reproduce", "--seeds", "1", "--out", out)
+        assert code == 0, text
+        stamp = json.loads((out / _runfolder.OWNED).read_text())
+        assert {k for k in stamp["commands"]} == {f"publication/{n}" for n in (
+            "publication.json", "seeds.csv", "spread.csv", "comparison.csv")}
+        assert "report.html" in stamp["files"] and "report.html" not in stamp["commands"]
+        assert (out / "report.html").read_text().startswith(_runfolder.REPORT_HEAD)
+        no_leftovers(out)
+
+
 # ---- the mechanism, on names of any kind ------------------------------------------------------
 NAMES = ["a.csv", "b.json", "figs/c.png", "figs/d.svg", "deep/er/e.txt"]
 

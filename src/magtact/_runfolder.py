@@ -371,7 +371,8 @@ def swap(folder: Path, stage: Path, run_id: str) -> None:
     remove = [n for n in earlier
               if os.path.lexists(folder / n) and _is_magtacts(folder, n, owned, commands)]
     gone = set(names) | set(remove)
-    kept = {k: v for k, v in owned.items() if k.split("/", 1)[0] not in gone}
+    kept = {k: v for k, v in owned.items()
+            if k.split("/", 1)[0] not in gone and os.path.lexists(folder / k)}
     if kept:  # what the folder keeps (a command's outputs) stays recorded
         new = _stamp_doc(stage)
         new["files"] = kept | new["files"]
