@@ -270,11 +270,12 @@ def test_a_command_keeps_a_finished_run_as_it_was(tmp_path, monkeypatch):
     before = files(folder)
     # a stage folder of the run holds the run's files alone; nor are the run's files at the
     # top of the folder a command's to replace
-    for stage in ("optimise", "doe"):
-        code, text = cli("field", "--solver", "exact", "--out", folder / stage)
+    for into, stage in (("optimise", "optimise"), ("doe", "doe"), ("doe/mine", "doe")):
+        code, text = cli("field", "--solver", "exact", "--out", folder / into)
         assert code == 2
         assert (f"error: {folder / stage} belongs to the results of the magtact run in {folder}, "
                 "which a command does not change") in text, text
+    assert not (folder / "doe" / "mine").exists()  # the folder made for --out is removed
     with pytest.raises(_runfolder.NotMagtactsFile, match="run.json belongs to the results"):
         with _runfolder.command_outputs(folder, "cmd") as o:
             (o.folder / "run.json").write_text("{}")
@@ -291,6 +292,20 @@ def test_a_command_keeps_a_finished_run_as_it_was(tmp_path, monkeypatch):
     assert (folder / "field.csv").read_bytes() == field
     field_beside(folder, expect=["field.csv"])  # still recorded as the command's
     no_leftovers(folder)
+
+
+def test_the_folder_that_governs_a_stage_folder_is_named_as_the_user_names_it(tmp_path,
+                                                                              monkeypatch):
+    run(tmp_path / "R", "First", monkeypatch)
+    monkeypatch.chdir(tmp_path)
+    root = _runfolder.results_root
+    assert root(Path("R/optimise")) == Path("R")
+    assert root(Path("R/optimise/sub")) == Path("R")
+    assert root(Path("R/other")) == Path("R/other")  # the run records nothing there
+    assert root(tmp_path / "R" / "doe") == tmp_path / "R"
+    assert root(Path("x/../R/doe")) == tmp_path / "R"
+    monkeypatch.chdir(tmp_path / "R")
+    assert root(Path("optimise")) == Path(".")
 
 
 def field_beside(folder: Path, expect=()) -> None:
@@ -339,8 +354,7 @@ def test_a_command_into_a_folder_in_use_is_refused_naming_the_process(tmp_path, 
         assert code == 2
         assert f"{folder} is in use by another magtact run: process {proc.pid} on " in text, text
         assert "(magtact run --out R)" in text
-        assert sorted(p.name for p in folder.iterdir()) == [".magtact-lock"] + (
-            ["optimise"] if into != "." else [])
+        assert [p.name for p in folder.iterdir()] == [".magtact-lock"]  # nothing else made
     finally:
         proc.kill()
         proc.wait()

@@ -492,26 +492,30 @@ def interrupted_runs(folder: str | os.PathLike, held: bool = False) -> list[dict
 def results_root(out: str | os.PathLike) -> Path:
     """The folder whose lock and stamp govern what a command writes into ``out``.
 
-    ``out`` itself, unless ``out`` lies inside a folder whose stamp records files below
-    ``out`` (a stage folder of a finished run, e.g. ``R/optimise``), or inside a folder that
+    ``out`` itself, unless ``out`` lies inside a folder whose stamp records files in the
+    same sub-folder (a stage folder of a finished run, e.g. ``R/optimise`` or
+    ``R/optimise/x``), or inside a folder that
     a running process is writing and that process writes where ``out`` is (a stage folder of
     a run in progress); then that folder.
     """
     given = Path(out)
     out = Path(os.path.abspath(out))
-    up = next((k for k, parent in enumerate(out.parents)
-               if _governs(parent, out.relative_to(parent).as_posix())), None)
-    if up is None:
+    root = next((parent for parent in out.parents
+                 if _governs(parent, out.relative_to(parent).as_posix())), None)
+    if root is None:
         return given
-    # the folder as the user would name it: relative to the given path where it can be
-    return (given.parents[up] if up < len(given.parents) and ".." not in given.parts
-            else out.parents[up])
+    # the folder as the user would name it: the given path less the levels below the root
+    below = len(out.relative_to(root).parts)
+    if ".." in given.parts or len(given.parts) < below:
+        return root
+    return Path(*given.parts[:len(given.parts) - below]) if len(given.parts) > below else Path()
 
 
 def _governs(parent: Path, rel: str) -> bool:
-    """True if the stamp of ``parent`` records files below ``rel``, or a process writing
-    ``parent`` writes there."""
-    if os.path.lexists(parent / OWNED) and any(f.startswith(rel + "/") for f in _stamp(parent)):
+    """True if the stamp of ``parent`` records files in the folder of ``parent`` that holds
+    ``rel``, or a process writing ``parent`` writes there."""
+    top = rel.split("/", 1)[0]
+    if os.path.lexists(parent / OWNED) and any(f.startswith(top + "/") for f in _stamp(parent)):
         return True
     if os.path.lexists(parent / LOCK) and in_use(parent):
         try:

@@ -169,6 +169,13 @@ def outputs(command: str, path: Path, *expect: str) -> Iterator[CommandOutputs]:
         If ``path`` cannot be a writable folder, another process is writing it, or an output
         would replace a file that is not magtact's (the message names the files).
     """
+    made = [p for p in (path, *path.parents) if not p.exists()]
     folder = out_dir(path)
-    with command_outputs(folder, f"magtact {command} --out {path}", expect) as out:
-        yield out
+    try:
+        with command_outputs(folder, f"magtact {command} --out {path}", expect) as out:
+            yield out
+    except BaseException:
+        for p in made:  # the folders made for the outputs, if still empty
+            with contextlib.suppress(OSError):
+                p.rmdir()
+        raise
