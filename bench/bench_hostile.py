@@ -9,7 +9,10 @@ and hands each case to a worker process that reads it with magtact
 files in a results folder, runs killed at each point by SIGTERM and SIGKILL, two runs at once,
 ordered settings, held-out paths, numbers outside the usual grammar (CSV cells and every number
 option of every command), tests sharing little displacement, model files with huge integers,
-paths that are not files, broken pipes in each command, file modes. Each case ends in one of:
+paths that are not files, broken pipes in each command, file modes; and the per-stage commands
+over the user's files (each command with the user's file under each name it always writes; the
+outputs' mechanism with generated sets of the user's files), into a folder in use, and into a
+finished run's stage folder. Each case ends in one of:
 
 ``clean``             refused with the project's error (StudyError, DataError, ValueError) whose
                       message is one line;
@@ -83,6 +86,7 @@ def safety_cases(n: int) -> dict[str, list]:
     """The kinds of the results folder, the command line and the value checks."""
     from hypothesis import strategies as st
 
+    import test_command_outputs as tc
     import test_hostile_values as hv
 
     small = max(n // 10, 20)
@@ -103,12 +107,20 @@ def safety_cases(n: int) -> dict[str, list]:
         "not_a_file": [(reader, kind) for reader in range(4) for kind in PATH_KINDS],
         "broken_pipe": [c for c in COMMANDS],
         "file_modes": [0o022, 0o077, 0o002, 0o027],
+        "command_user_files": [(c, name) for c, (_, names) in tc.COMMANDS.items()
+                               for name in names],
+        "command_outputs": generate(st.tuples(st.sets(st.sampled_from(tc.NAMES)),
+                                              st.sets(st.sampled_from(tc.NAMES)),
+                                              st.booleans()), small, 11),
+        "command_in_use": list(tc.COMMANDS),
+        "command_in_run": list(tc.COMMANDS),
     }
 
 
 #: Kinds whose cases start a process of their own (a run to kill, a run holding the lock): their
 #: time limit is this multiple of ``--timeout``.
-SLOW = {"killed_runs": 6, "concurrent_runs": 6, "user_files": 3, "file_modes": 3}
+SLOW = {"killed_runs": 6, "concurrent_runs": 6, "user_files": 3, "file_modes": 3,
+        "command_user_files": 3, "command_in_use": 6, "command_in_run": 3}
 KILL_POINTS = ["stage:field", "stage:doe", "stage:optimise", "swap", "move:1", "move:4",
                "move:9", "move:18"]
 PATH_KINDS = ("loop", "fifo", "folder", "broken-link")
@@ -560,12 +572,101 @@ def _file_modes(tmp: Path, umask) -> tuple[str, str]:
     return "clean", ""
 
 
+def _command_result(code: int, text: str, before: dict, now: dict, *fragments: str
+                    ) -> tuple[str, str]:
+    if code == 1:
+        return "traceback", text[-300:]
+    assert code == 2, f"exit {code}: {text[-300:]}"
+    assert now == before, "a refused command changed the folder"
+    assert text.count("error:") == 1, text[-300:]
+    return _refusal(Exception(text[text.index("error:"):]), *fragments)
+
+
+def _command_user_files(tmp: Path, case) -> tuple[str, str]:
+    import test_command_outputs as tc
+
+    command, name = case
+    out = tmp / "o"
+    before = tc.plant(out, [name])
+    code, text = _main([command, *tc.COMMANDS[command][0], "--out", str(out)])
+    return _command_result(code, text, before, tc.placed(out), f"{out / name} is not magtact's")
+
+
+def _command_outputs(tmp: Path, case) -> tuple[str, str]:
+    import test_command_outputs as tc
+    from magtact import _runfolder
+
+    users, expect, earlier = case
+    if earlier:
+        with _runfolder.command_outputs(tmp, "cmd") as o:
+            tc.write_all(o.folder, "old")
+    before = tc.plant(tmp, sorted(users))
+    try:
+        with _runfolder.command_outputs(tmp, "cmd", expect) as o:
+            tc.write_all(o.folder, "new")
+    except _runfolder.NotMagtactsFile as exc:
+        assert users, "refused with nothing of the user's in the way"
+        assert tc.placed(tmp) == before, "a refused command changed the folder"
+        return _refusal(exc, *(str(tmp / n) for n in (users & expect or users)))
+    assert not users, f"the user's {sorted(users)} replaced"
+    assert all((tmp / n).read_text() == f"new {n}\n" for n in tc.NAMES)
+    return "accepted", ""
+
+
+def _command_in_use(tmp: Path, command) -> tuple[str, str]:
+    import os
+    import subprocess
+    import time
+
+    import test_command_outputs as tc
+    from magtact import _runfolder
+
+    folder, ready = tmp / "R", tmp / "ready"
+    folder.mkdir()
+    proc = subprocess.Popen([sys.executable, "-c", tc.HOLDER, str(folder), str(ready)],
+                            env=os.environ | {"PYTHONPATH": os.pathsep.join(sys.path)})
+    mp_ = _Patch()
+    try:
+        while not ready.exists():
+            assert proc.poll() is None, "the process holding the lock ended"
+            time.sleep(0.05)
+        mp_.setattr(_runfolder, "LOCK_PATIENCE_S", 0.2)
+        before = tc.placed(folder)
+        code, text = _main([command, *tc.COMMANDS[command][0], "--out", str(folder)])
+        return _command_result(code, text, before, tc.placed(folder),
+                               f"in use by another magtact run: process {proc.pid} on ")
+    finally:
+        mp_.undo()
+        proc.kill()
+        proc.wait()
+
+
+def _command_in_run(tmp: Path, command) -> tuple[str, str]:
+    import test_command_outputs as tc
+    import test_runfolder as tr
+
+    folder = tmp / "R"
+    mp_ = _Patch()
+    try:
+        tr.run(folder, "First", mp_)
+    finally:
+        mp_.undo()
+    before = tr.files(folder)
+    code, text = _main([command, *tc.COMMANDS[command][0], "--out", str(folder / "optimise")])
+    outcome = _command_result(code, text, before, tr.files(folder),
+                              "belongs to the results of the magtact run")
+    assert tr.consistent(folder) == "First"
+    return outcome
+
+
 SAFETY = {"user_files": _user_files, "killed_runs": _killed_runs,
           "concurrent_runs": _concurrent_runs, "ordered_settings": _ordered_settings,
           "holdout_paths": _holdout, "csv_numbers": _csv_numbers, "shared_range": _shared_range,
           "option_numbers": _option_numbers, "option_messages": _option_messages,
           "model_files": _model_files, "not_a_file": _not_a_file, "broken_pipe": _broken_pipe,
-          "file_modes": _file_modes}
+          "file_modes": _file_modes, "command_user_files": _command_user_files,
+          "command_outputs": _command_outputs, "command_in_use": _command_in_use,
+          "command_in_run": _command_in_run}
 
 
 def worker(conn) -> None:
@@ -644,7 +745,8 @@ def main() -> None:
     report = {
         "benchmark": "hostile inputs through the study, CSV and expression readers; the user's "
                      "files, killed and concurrent runs, ordered settings, numbers, messages, "
-                     "exits and file modes",
+                     "exits and file modes; the per-stage commands over the user's files, "
+                     "folders in use and finished runs",
         "cases_per_reader": args.n, "hang_timeout_s": args.timeout,
         "generation_time_s": round(gen_time, 1),
         "wall_time_s": round(time.perf_counter() - start, 1),

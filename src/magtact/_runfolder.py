@@ -18,6 +18,13 @@ Three rules, each with its mechanism (docs/method.md §14):
   the way of an output is replaced only when the stamp lists it (every file of a folder) with
   the same content; anything else — the user's own ``study.toml``, a file they added to a stage
   folder or edited — makes the run refuse before it starts, naming the files.
+
+The per-stage commands (``field``, ``doe``, ``fit``, ``optimise``, ...) follow the same rules
+through one context manager, :func:`command_outputs`: the folder's lock; the command writes
+into a staging folder, and its files are put in place one by one (journalled) only when each
+file in the way is one magtact wrote there and nobody changed since; they are then recorded in
+the stamp with the command that wrote them. A command never replaces a file of a run's results
+(the run's record stays true), and a run never replaces a file a command wrote.
 """
 
 from __future__ import annotations
@@ -30,6 +37,7 @@ import platform
 import shutil
 import signal
 import time
+import uuid
 from collections.abc import Iterable, Iterator
 from datetime import UTC, datetime
 from pathlib import Path
@@ -45,6 +53,10 @@ OWNED = ".magtact-files.json"
 STAGING = ".magtact-staging-"
 #: Prefix of the folder the replaced results are moved to during a swap (then deleted).
 OLD = ".magtact-old-"
+#: Prefix of a per-stage command's staging folder (followed by a random id).
+WRITING = ".magtact-writing-"
+#: Prefix of the folder that keeps a command's outputs it could not put in place.
+REFUSED = "magtact-unplaced-"
 #: The journal of a swap in progress.
 JOURNAL = ".magtact-swap.json"
 #: Seconds a run tries for the lock before refusing (covers a report's brief look).
@@ -111,13 +123,21 @@ class RunLock:
     """
 
     def __init__(self, folder: str | os.PathLike, command: str = "",
-                 patience_s: float | None = None):
+                 patience_s: float | None = None, writes: Iterable[str] = ()):
         self.path = Path(folder) / LOCK
         self.command = command
+        self.writes = sorted(set(writes))
         self.patience_s = LOCK_PATIENCE_S if patience_s is None else patience_s
         self.fd: int | None = None
+        self.nested = False
 
     def __enter__(self) -> RunLock:
+        key = os.path.realpath(self.path)
+        if _HELD.get(key, (None, 0))[0] == os.getpid():  # this process holds it already
+            pid, depth = _HELD[key]
+            _HELD[key] = (pid, depth + 1)
+            self.nested = True
+            return self
         deadline = time.monotonic() + self.patience_s
         while True:
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
@@ -136,18 +156,32 @@ class RunLock:
             time.sleep(0.1)
         self.fd = fd
         info = {"pid": os.getpid(), "host": platform.node(), "started": _now(),
-                "command": self.command}
+                "command": self.command, "writes": self.writes}
         os.ftruncate(fd, 0)
         os.lseek(fd, 0, os.SEEK_SET)
         os.write(fd, (json.dumps(info) + "\n").encode())
+        _HELD[key] = (os.getpid(), 1)
         return self
 
     def __exit__(self, *exc) -> None:
+        key = os.path.realpath(self.path)
+        if self.nested:
+            pid, depth = _HELD[key]
+            _HELD[key] = (pid, depth - 1)
+            self.nested = False
+            return
+        _HELD.pop(key, None)
         if self.fd is not None:
             with contextlib.suppress(OSError):
                 self.path.unlink()
             os.close(self.fd)  # closing releases the lock
             self.fd = None
+
+
+#: The locks this process holds (real path of the lock file -> (pid, depth)): a command that
+#: holds its folder's lock may call another part that takes it (``magtact reproduce`` builds the
+#: report), without waiting for itself.
+_HELD: dict[str, tuple[int, int]] = {}
 
 
 def _try_lock(fd: int) -> bool:
@@ -207,28 +241,48 @@ def write_stamp(folder: Path, run_id: str) -> Path:
     return write_json(folder / OWNED, {"run_id": run_id, "files": files}, indent=1)
 
 
-def _stamp(folder: Path) -> dict[str, str]:
-    """The files the stamp of ``folder`` records (empty if none or unreadable)."""
+def _stamp_doc(folder: Path) -> dict:
+    """The stamp of ``folder``: ``run_id``, ``files`` (relative path -> SHA-256) and
+    ``commands`` (relative path -> the per-stage command that wrote it; the other files are a
+    run's or its report's). Empty tables if there is none or it is unreadable."""
+    doc = {"run_id": None, "files": {}, "commands": {}}
     try:
         data = json.loads((folder / OWNED).read_text(encoding="utf-8"))
-        files = data["files"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return {}
-    return {str(k): str(v) for k, v in files.items()} if isinstance(files, dict) else {}
+    except (OSError, ValueError):
+        return doc
+    if not isinstance(data, dict):
+        return doc
+    doc["run_id"] = data.get("run_id") if isinstance(data.get("run_id"), str) else None
+    for key in ("files", "commands"):
+        table = data.get(key)
+        if isinstance(table, dict):
+            doc[key] = {str(k): str(v) for k, v in table.items()}
+    return doc
 
 
-def _is_magtacts(folder: Path, name: str, owned: dict[str, str]) -> bool:
-    """True if ``folder/name`` holds only what magtact wrote there, unchanged."""
+def _stamp(folder: Path) -> dict[str, str]:
+    """The files the stamp of ``folder`` records (empty if none or unreadable)."""
+    return _stamp_doc(folder)["files"]
+
+
+def _is_magtacts(folder: Path, name: str, owned: dict[str, str],
+                 commands: dict[str, str] | None = None) -> bool:
+    """True if ``folder/name`` holds only what a run (or its report) wrote there, unchanged;
+    a file a per-stage command wrote (in ``commands``) is not a run's to replace."""
     path = folder / name
+    commands = commands or {}
     if path.is_symlink() or not (path.is_file() or path.is_dir()):
         return False
     if path.is_file():
+        if name in commands:
+            return False
         if owned.get(name) == sha256(path):
             return True
         return name == "report.html" and _starts_with(path, REPORT_HEAD)
     for p in _files(path):
         rel = p.relative_to(folder).as_posix()
-        if p.is_symlink() or not p.is_file() or owned.get(rel) != sha256(p):
+        if (p.is_symlink() or not p.is_file() or rel in commands
+                or owned.get(rel) != sha256(p)):
             return False
     return True  # an empty folder holds nothing to lose
 
@@ -250,15 +304,20 @@ def check_replaceable(folder: str | os.PathLike, names: Iterable[str]) -> None:
         Naming every such file or folder.
     """
     folder = Path(folder)
-    owned = _stamp(folder)
+    doc = _stamp_doc(folder)
+    owned, commands = doc["files"], doc["commands"]
     bad = [n for n in names if n != OWNED and os.path.lexists(folder / n)
-           and not _is_magtacts(folder, n, owned)]
+           and not _is_magtacts(folder, n, owned, commands)]
     if bad:
         one = len(bad) == 1
         listed = ", ".join(str(folder / n) for n in bad)
+        by = sorted({commands[k] for k in commands if k.split("/", 1)[0] in bad})
         raise NotMagtactsFile(
             f"{listed} {'is' if one else 'are'} not magtact's: not written by an earlier run "
-            f"into {folder}, or changed since, and {'it' if one else 'they'} would be replaced "
+            f"into {folder}, or changed since"
+            + (f", or {'it holds' if one else 'they hold'} the output of {', '.join(by)}"
+               if by else "")
+            + f", and {'it' if one else 'they'} would be replaced "
             f"by this run's output. Give another --out (e.g. {folder / 'results'}), or move "
             f"{'it' if one else 'them'} away")
 
@@ -267,14 +326,17 @@ def claim(folder: Path, name: str, text: str) -> Path:
     """Write ``folder/name`` (if it is absent or magtact's) and record it in the stamp."""
     check_replaceable(folder, [name])
     path = write_text(folder / name, text)
-    data = {"run_id": None, "files": {}}
-    with contextlib.suppress(OSError, ValueError):
-        loaded = json.loads((folder / OWNED).read_text(encoding="utf-8"))
-        if isinstance(loaded, dict) and isinstance(loaded.get("files"), dict):
-            data = loaded
+    data = _stamp_doc(folder)
     data["files"][name] = sha256(path)
-    write_json(folder / OWNED, data, indent=1)
+    data["commands"].pop(name, None)
+    _write_stamp_doc(folder, data)
     return path
+
+
+def _write_stamp_doc(folder: Path, doc: dict) -> Path:
+    if not doc.get("commands"):
+        doc = {k: v for k, v in doc.items() if k != "commands"}
+    return write_json(folder / OWNED, doc, indent=1)
 
 
 # ---- staging and swap ------------------------------------------------------------------------
@@ -303,9 +365,19 @@ def swap(folder: Path, stage: Path, run_id: str) -> None:
         check_replaceable(folder, names)
     except NotMagtactsFile as exc:
         raise NotMagtactsFile(f"{exc}. This run's complete results are in {stage}") from None
-    owned = _stamp(folder)
+    doc = _stamp_doc(folder)
+    owned, commands = doc["files"], doc["commands"]
     earlier = sorted({k.split("/", 1)[0] for k in owned} - set(names) - {OWNED})
-    remove = [n for n in earlier if os.path.lexists(folder / n) and _is_magtacts(folder, n, owned)]
+    remove = [n for n in earlier
+              if os.path.lexists(folder / n) and _is_magtacts(folder, n, owned, commands)]
+    gone = set(names) | set(remove)
+    kept = {k: v for k, v in owned.items()
+            if k.split("/", 1)[0] not in gone and os.path.lexists(folder / k)}
+    if kept:  # what the folder keeps (a command's outputs) stays recorded
+        new = _stamp_doc(stage)
+        new["files"] = kept | new["files"]
+        new["commands"] = {k: c for k, c in commands.items() if k in kept} | new["commands"]
+        _write_stamp_doc(stage, new)
     journal = {"run_id": run_id, "staging": stage.name, "old": f"{OLD}{run_id}",
                "names": names, "remove": remove}
     write_json(folder / JOURNAL, journal, indent=1)
@@ -360,10 +432,12 @@ def _remove(path: Path) -> None:
 
 
 def recover(folder: Path) -> bool:
-    """Finish a swap that a killed run left half done (call with the lock held); True if one
-    was finished."""
+    """Finish a swap that a killed run, or the placing of outputs that a killed command, left
+    half done (call with the lock held); True if one was finished."""
     try:
         journal = json.loads((folder / JOURNAL).read_text(encoding="utf-8"))
+        if isinstance(journal, dict) and journal.get("kind") == "place":
+            return _recover_place(folder, journal)
         ok = all(isinstance(journal.get(k), str) for k in ("staging", "old")) and all(
             isinstance(journal.get(k), list) for k in ("names", "remove"))
     except FileNotFoundError:
@@ -386,7 +460,7 @@ def _plain_names(names: list) -> bool:
 def remove_dead(folder: Path, keep: Path | None = None) -> None:
     """Remove the staging and swap leftovers of earlier runs (call with the lock held)."""
     for p in folder.iterdir():
-        if p.name.startswith((STAGING, OLD)) and p != keep:
+        if p.name.startswith((STAGING, OLD, WRITING)) and p != keep:
             _remove(p)
 
 
@@ -412,3 +486,233 @@ def interrupted_runs(folder: str | os.PathLike, held: bool = False) -> list[dict
         out.append({"staging": p.name, "manifest": manifest if isinstance(manifest, dict)
                     else {}})
     return out
+
+
+# ---- the outputs of a per-stage command ------------------------------------------------------
+def results_root(out: str | os.PathLike) -> Path:
+    """The folder whose lock and stamp govern what a command writes into ``out``.
+
+    ``out`` itself, unless ``out`` lies inside a folder whose stamp records files in the
+    same sub-folder (a stage folder of a finished run, e.g. ``R/optimise`` or
+    ``R/optimise/x``), or inside a folder that
+    a running process is writing and that process writes where ``out`` is (a stage folder of
+    a run in progress); then that folder.
+    """
+    given = Path(out)
+    out = Path(os.path.abspath(out))
+    root = next((parent for parent in out.parents
+                 if _governs(parent, out.relative_to(parent).as_posix())), None)
+    if root is None:
+        return given
+    # the folder as the user would name it: the given path less the levels below the root
+    below = len(out.relative_to(root).parts)
+    if ".." in given.parts or len(given.parts) < below:
+        return root
+    return Path(*given.parts[:len(given.parts) - below]) if len(given.parts) > below else Path()
+
+
+def _governs(parent: Path, rel: str) -> bool:
+    """True if the stamp of ``parent`` records files in the folder of ``parent`` that holds
+    ``rel``, or a process writing ``parent`` writes there."""
+    top = rel.split("/", 1)[0]
+    if os.path.lexists(parent / OWNED) and any(f.startswith(top + "/") for f in _stamp(parent)):
+        return True
+    if os.path.lexists(parent / LOCK) and in_use(parent):
+        try:
+            writes = json.loads((parent / LOCK).read_text(encoding="utf-8"))["writes"]
+        except (OSError, ValueError, KeyError, TypeError):
+            writes = []
+        return isinstance(writes, list) and rel.split("/", 1)[0] in writes
+    return False
+
+
+class CommandOutputs:
+    """Where a per-stage command writes (:func:`command_outputs`).
+
+    Attributes
+    ----------
+    folder : Path
+        The folder the command writes into: inside the staging folder.
+    out : Path
+        The folder the outputs are put in (the command's ``--out``).
+    root : Path
+        The folder whose lock and stamp govern ``out`` (:func:`results_root`).
+    """
+
+    def __init__(self, out: Path, root: Path, stage: Path, command: str):
+        self.out, self.root, self.stage, self.command = out, root, stage, command
+        self.folder = stage / Path(os.path.abspath(out)).relative_to(os.path.abspath(root))
+        self.placed = False
+
+    def final(self, path: str | os.PathLike) -> Path:
+        """The place of a file written into :attr:`folder` once the outputs are in place."""
+        return self.out / Path(path).relative_to(self.folder)
+
+    def place(self) -> list[Path]:
+        """Put the outputs written so far in place and record them (done at the end of the
+        ``with`` block if not called before); return them, as :meth:`final` names them.
+
+        Raises
+        ------
+        NotMagtactsFile
+            If a file in the way is not one magtact wrote there, or is a run's; nothing is put
+            in place then, and the outputs stay complete in a folder the message names.
+        """
+        if self.placed:
+            return []
+        self.placed = True
+        files = sorted(p.relative_to(self.stage).as_posix() for p in _files(self.stage))
+        try:
+            check_placeable(self.root, files)
+        except NotMagtactsFile as exc:
+            kept = self.root / f"{REFUSED}{self.stage.name[len(WRITING):][:12]}"
+            _replace(self.stage, kept)
+            raise NotMagtactsFile(f"{exc}. This command's outputs are in {kept}") from None
+        journal = {"kind": "place", "staging": self.stage.name, "command": self.command,
+                   "files": {f: sha256(self.stage / f) for f in files}}
+        write_json(self.root / JOURNAL, journal, indent=1)
+        with _signals_held():
+            _place_forward(self.root, journal)
+        return [self.final(self.stage / f) for f in files]
+
+
+@contextlib.contextmanager
+def command_outputs(out: str | os.PathLike, command: str,
+                    expect: Iterable[str] = ()) -> Iterator[CommandOutputs]:
+    """The outputs of a per-stage command: nothing of the user's replaced, no two writers mixed.
+
+    On entry: the lock of the folder (:func:`results_root` of ``out``; a run or another
+    command writing it makes this refuse, naming the process), a swap or placing that a killed
+    process left half done is finished, and the files ``expect`` (names in ``out`` the command
+    will write) are checked (:func:`check_placeable`), so that the common refusals come before
+    the work. The command writes into ``.folder`` (a staging folder); on normal exit every file
+    written is checked again and put in place (journalled: a kill completes it at the next
+    command, run or report on the folder), and recorded in the stamp with ``command``. On an
+    exception the staging folder is removed and the outputs in ``out`` stay as they were.
+
+    Parameters
+    ----------
+    out : path
+        The command's output folder (must exist).
+    command : str
+        The command line, recorded with each file and in the lock.
+    expect : iterable of str
+        Names (relative to ``out``) of the files the command always writes.
+
+    Raises
+    ------
+    FolderInUse
+        If another process holds the lock.
+    NotMagtactsFile
+        If a file in the way is not magtact's to replace (see :func:`check_placeable`).
+    """
+    out = Path(out)
+    root = results_root(out)
+    rel = Path(os.path.abspath(out)).relative_to(os.path.abspath(root))
+    expect = [(rel / e).as_posix() for e in expect]
+    writes = {rel.parts[0]} if rel.parts else {e.split("/", 1)[0] for e in expect}
+    with RunLock(root, command, writes=writes):
+        recover(root)
+        for p in root.iterdir():  # staging folders of commands that were killed
+            if p.name.startswith(WRITING):
+                _remove(p)
+        check_placeable(root, expect)
+        stage = root / f"{WRITING}{uuid.uuid4().hex}"
+        stage.mkdir()
+        outputs = CommandOutputs(out, root, stage, command)
+        outputs.folder.mkdir(parents=True, exist_ok=True)
+        try:
+            yield outputs
+        except BaseException:
+            _remove(stage)
+            raise
+        outputs.place()
+
+
+def check_placeable(root: str | os.PathLike, files: Iterable[str]) -> None:
+    """Refuse if a command's file ``root/<file>`` would replace what is not its to replace.
+
+    A file may be replaced only if the stamp of ``root`` records it, with the same content
+    (a file the user edited after magtact wrote it is the user's), as written by a per-stage
+    command. A run's results are not changed by a command: neither its files nor what its
+    stage folders hold. A folder on the way that is a symbolic link or not a folder is
+    refused too.
+
+    Raises
+    ------
+    NotMagtactsFile
+        Naming every such file and what to do.
+    """
+    root = Path(root)
+    doc = _stamp_doc(root)
+    owned, commands = doc["files"], doc["commands"]
+    run_folders = {k.split("/", 1)[0] for k in owned if "/" in k and k not in commands}
+    bad, runs = [], []
+    for rel in files:
+        parts = Path(rel).parts
+        if len(parts) > 1 and parts[0] in run_folders:  # a run's stage folder: the run's alone
+            runs.append(root / parts[0])
+            continue
+        for k in range(1, len(parts)):
+            parent = root.joinpath(*parts[:k])
+            if os.path.lexists(parent) and (parent.is_symlink() or not parent.is_dir()):
+                bad.append(parent)
+                break
+        else:
+            path = root / rel
+            if not os.path.lexists(path):
+                continue
+            if path.is_symlink() or not path.is_file() or owned.get(rel) != sha256(path):
+                bad.append(path)
+            elif rel not in commands:
+                runs.append(path)
+    msgs = []
+    if bad:
+        bad = list(dict.fromkeys(bad))
+        one = len(bad) == 1
+        msgs.append(f"{', '.join(map(str, bad))} {'is' if one else 'are'} not magtact's (not "
+                    f"written by magtact into {root}, or changed since) and would be replaced by "
+                    f"this command's output. Move {'it' if one else 'them'} away, or give "
+                    "another --out")
+    if runs:
+        runs = list(dict.fromkeys(runs))
+        one = len(runs) == 1
+        msgs.append(f"{', '.join(map(str, runs))} {'belongs' if one else 'belong'} to the "
+                    f"results of the magtact run in {root}, which a command does not change. "
+                    "Give another --out, or rerun magtact run")
+    if msgs:
+        raise NotMagtactsFile("; ".join(msgs))
+
+
+def _place_forward(root: Path, journal: dict) -> None:
+    """Carry out (or finish) the placing a journal describes; idempotent."""
+    stage = root / journal["staging"]
+    for rel in journal["files"]:
+        src = stage / rel
+        if os.path.lexists(src):
+            (root / rel).parent.mkdir(parents=True, exist_ok=True)
+            _replace(src, root / rel)
+    doc = _stamp_doc(root)
+    doc["files"].update(journal["files"])
+    doc["commands"].update(dict.fromkeys(journal["files"], journal["command"]))
+    _write_stamp_doc(root, doc)
+    (root / JOURNAL).unlink(missing_ok=True)
+    _remove(stage)
+
+
+def _recover_place(root: Path, journal: dict) -> bool:
+    files = journal.get("files")
+    ok = (isinstance(journal.get("staging"), str) and isinstance(journal.get("command"), str)
+          and isinstance(files, dict) and _plain_names([journal["staging"]])
+          and journal["staging"].startswith(WRITING)
+          and all(isinstance(v, str) and _plain_relative(k) for k, v in files.items()))
+    if not ok:
+        raise MagtactError(f"{root / JOURNAL}: not a journal magtact can finish; remove it "
+                           f"(and any {WRITING}* folder) by hand")
+    _place_forward(root, journal)
+    return True
+
+
+def _plain_relative(rel: str) -> bool:
+    return (isinstance(rel, str) and not rel.startswith("/") and "\\" not in rel
+            and _plain_names(rel.split("/")))

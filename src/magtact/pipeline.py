@@ -168,7 +168,7 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
     start = time.perf_counter()
     run_id = uuid.uuid4().hex
     command = command or "run_study(...)"
-    with RunLock(folder, command):
+    with RunLock(folder, command, writes=outputs()):
         _forget_previous_run(folder)
         stage = staging(folder, run_id)
         ctx = _Context(study=study, folder=stage, recompute=recompute, refit=refit,

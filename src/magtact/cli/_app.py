@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import select
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated
 
@@ -14,6 +16,7 @@ from typer.core import TyperGroup
 
 from .._errors import MagtactError
 from .._numbers import parse_float, parse_int
+from .._runfolder import CommandOutputs, command_outputs
 from ..study import Study, load_study
 
 
@@ -147,3 +150,32 @@ def out_dir(path: Path) -> Path:
     except OSError as exc:
         raise MagtactError(f"--out {path}: cannot write there ({exc.strerror or exc})") from None
     return path
+
+
+@contextlib.contextmanager
+def outputs(command: str, path: Path, *expect: str) -> Iterator[CommandOutputs]:
+    """The output folder of a command, with the rules of a results folder (docs/method.md §14).
+
+    Creates ``path`` (:func:`out_dir`), takes its lock and yields a
+    :class:`magtact._runfolder.CommandOutputs`: the command writes into its ``folder`` (a
+    staging folder) and names files with ``final``; at the end of the block the files are put
+    in ``path``, never replacing a file magtact did not write there (or a run's results).
+    ``command``: the command's name (recorded with its files and in the lock); ``expect``:
+    names in ``path`` the command always writes, checked before the work.
+
+    Raises
+    ------
+    MagtactError
+        If ``path`` cannot be a writable folder, another process is writing it, or an output
+        would replace a file that is not magtact's (the message names the files).
+    """
+    made = [p for p in (path, *path.parents) if not p.exists()]
+    folder = out_dir(path)
+    try:
+        with command_outputs(folder, f"magtact {command} --out {path}", expect) as out:
+            yield out
+    except BaseException:
+        for p in made:  # the folders made for the outputs, if still empty
+            with contextlib.suppress(OSError):
+                p.rmdir()
+        raise

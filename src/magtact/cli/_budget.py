@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 from pathlib import Path
 from typing import Annotated
@@ -13,7 +14,7 @@ from rich.table import Table
 
 from .._errors import MagtactError
 from ..study import checked_si
-from ._app import StudyArg, app, console, get_study, out_dir
+from ._app import StudyArg, app, console, get_study, outputs
 from ._optimise import ModelsOpt, study_models
 
 
@@ -76,18 +77,20 @@ def budget_command(
     G_si = checked_si(G, "kPa", "--G")
     sigma = None if noise is None else parse_noise(noise)
     seed_data = _seeds(seeds)
-    folder = None if out is None else out_dir(out)
-    m, _ = study_models(s, models)
-    dataset = _dataset(s) if models is None else None
-    a = answer(m, s, H_si, G_si)  # the chip at this design's setting
-    b = error_budget(m, s, H_si, G_si, label="design", design=a.design, noise=sigma,
-                     dataset=dataset, seeds=seed_data, chip=a.chip)
+    written = outputs("budget", out, "budget.json") if out is not None else None
+    with written or contextlib.nullcontext() as o:
+        m, _ = study_models(s, models)
+        dataset = _dataset(s) if models is None else None
+        a = answer(m, s, H_si, G_si)  # the chip at this design's setting
+        b = error_budget(m, s, H_si, G_si, label="design", design=a.design, noise=sigma,
+                         dataset=dataset, seeds=seed_data, chip=a.chip)
+        if o is not None:
+            write_budgets([b], s, o.folder, figures=budget_figures)
     print_budget(budget_json(b))
     for name, text in budget_card_rows([b]):
         console.print(f"{escape(name)}: {escape(text)}", highlight=False)
-    if folder is not None:
-        path = write_budgets([b], s, folder, figures=budget_figures)
-        console.print(f"written to {path.parent}", highlight=False)
+    if o is not None:
+        console.print(f"written to {o.out}", highlight=False)
 
 
 def _dataset(study):

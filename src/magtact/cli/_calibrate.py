@@ -10,7 +10,7 @@ import typer
 
 from .._errors import MagtactError
 from ..study import checked_si, from_si
-from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+from ._app import OutOpt, StudyArg, app, console, get_study, outputs
 from ._optimise import ModelsOpt
 
 #: Range of a Hall chip's field noise [T]: 1 nT to 10 mT.
@@ -64,29 +64,31 @@ def calibrate_command(
         checked_si(noise, "uT", "--noise-uT", bounds=NOISE_BOUNDS),) * 2
     units = None if fit is None else tuple(p.strip() for p in fit.split(",") if p.strip())
     data = None if presses is None else read_presses(presses)
-    ms, _, dataset = models_for(s, models=models,
-                                log=lambda m: console.print(m, highlight=False))
-    if H is None:
-        from .. import solve
+    # the folder is checked (writable, nothing of the user's in the way) before the work
+    with outputs("calibrate", out, "force.h", "force_map.json", "force_table.csv",
+                 "calibration.json") as o:
+        ms, _, dataset = models_for(s, models=models,
+                                    log=lambda m: console.print(m, highlight=False))
+        if H is None:
+            from .. import solve
 
-        with console.status("optimising"):
-            a = solve(ms, s).chosen
-        label = "the chosen design"
-    else:
-        from ..designer import answer
+            with console.status("optimising"):
+                a = solve(ms, s).chosen
+            label = "the chosen design"
+        else:
+            from ..designer import answer
 
-        a = answer(ms, s, checked_si(H, "mm", "--H"), checked_si(G, "kPa", "--G"))
-        label = "the given design"
-    H_si, G_si, M_z = a.H, a.G, a.design.M_z
-    console.print(f"calibrating {label}: H = {from_si(H_si, 'mm'):.4g} mm, "
-                  f"G = {from_si(G_si, 'kPa'):.4g} kPa", highlight=False)
-    eps = None if model_error is None else (model_error, model_error)
-    cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
-                    fit=DEFAULT_FIT if units is None else units, model_error=eps,
-                    chip=a.chip,  # the chip at this design's setting
-                    force_source=force_source, dataset=dataset)
-    folder = out_dir(out)
-    write_calibration_outputs(cal, folder, figures=calibration_figures)
+            a = answer(ms, s, checked_si(H, "mm", "--H"), checked_si(G, "kPa", "--G"))
+            label = "the given design"
+        H_si, G_si, M_z = a.H, a.G, a.design.M_z
+        console.print(f"calibrating {label}: H = {from_si(H_si, 'mm'):.4g} mm, "
+                      f"G = {from_si(G_si, 'kPa'):.4g} kPa", highlight=False)
+        eps = None if model_error is None else (model_error, model_error)
+        cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
+                        fit=DEFAULT_FIT if units is None else units, model_error=eps,
+                        chip=a.chip,  # the chip at this design's setting
+                        force_source=force_source, dataset=dataset)
+        write_calibration_outputs(cal, o.folder, figures=calibration_figures)
     a = cal.firmware.chosen
     console.print(
         f"map: round trip F -> B -> F within {cal.round_trip:.2g} of the force range; "
@@ -108,5 +110,5 @@ def calibrate_command(
         field = ", ".join(f"{from_si(v, 'mT'):.4f}" for v in u.field_offset)
         console.print(f"unit: G x {u.G_scale:.4f}, remanence x {u.B_scale:.4f}, chip offset "
                       f"({chip}) mm, field offset ({field}) mT", highlight=False)
-    console.print(f"wrote {folder}/force.h, force_map.json, force_table.csv, calibration.json",
+    console.print(f"wrote {o.out}/force.h, force_map.json, force_table.csv, calibration.json",
                   highlight=False)

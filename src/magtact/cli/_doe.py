@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+from ._app import OutOpt, StudyArg, app, console, get_study, outputs
 
 
 @app.command("doe")
@@ -36,25 +36,30 @@ def doe_command(
                                      "its check).")] = 0,
 ) -> None:
     """Run STUDY's full-factorial DOE; write OUT/doe.nc (netCDF) and OUT/doe.csv (user units)."""
+    from .._files import write_text
     from ..doe import DOEFailed, run_doe, save_dataset, write_csv
 
     s = get_study(study)
-    folder = out_dir(out)
     start = time.perf_counter()
-    try:
-        ds = run_doe(s, cache=None if no_cache else cache, workers=workers, scheduler=scheduler,
-                     console=console, error_paths=error_paths)
-    except DOEFailed as exc:
-        report = folder / "doe_failures.json"
-        report.write_text(json.dumps([{"job": f.label, "error": f.error, "traceback": f.detail}
-                                      for f in exc.failures], indent=1), encoding="utf-8")
-        console.print(f"[bold red]{len(exc.failures)} job(s) failed[/] (tracebacks in {report}); "
+    failed = None
+    with outputs("doe", out, "doe.nc", "doe.csv") as o:
+        try:
+            ds = run_doe(s, cache=None if no_cache else cache, workers=workers,
+                         scheduler=scheduler, console=console, error_paths=error_paths)
+        except DOEFailed as exc:
+            failed = exc.failures
+            report = o.final(write_text(o.folder / "doe_failures.json", json.dumps(
+                [{"job": f.label, "error": f.error, "traceback": f.detail} for f in failed],
+                indent=1)))
+        else:
+            nc = o.final(save_dataset(ds, o.folder / "doe.nc"))
+            csv = o.final(write_csv(ds, o.folder / "doe.csv"))
+    if failed is not None:
+        console.print(f"[bold red]{len(failed)} job(s) failed[/] (tracebacks in {report}); "
                       "the other jobs are cached: re-run to retry only the failed ones.")
-        for f in exc.failures:
+        for f in failed:
             console.print(f"  [red]{f.label}[/]: {f.error}", highlight=False)
         sys.exit(1)
-    nc = save_dataset(ds, folder / "doe.nc")
-    csv = write_csv(ds, folder / "doe.csv")
     a = ds.attrs
     console.print(f"{a['run_paths_total']} structural paths: {a['run_paths_computed']} computed, "
                   f"{a['run_paths_cached']} from the cache"

@@ -8,7 +8,7 @@ from typing import Annotated
 
 import typer
 
-from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+from ._app import OutOpt, StudyArg, app, console, get_study, outputs
 
 
 class Solver(StrEnum):
@@ -33,14 +33,15 @@ def field_command(
     from ..report import field_figures
 
     s = get_study(study)
-    folder = out_dir(out)
     start = time.perf_counter()
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
-                  console=console, transient=True) as bar:
+    with outputs("field", out, "field.csv") as o, Progress(
+            SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
+            console=console, transient=True) as bar:
         task = bar.add_task("field", total=None)
-        files = write_field_outputs(s, folder, solver=None if solver is None else solver.value,
+        files = write_field_outputs(s, o.folder, solver=None if solver is None else solver.value,
                                     progress=lambda text: bar.update(task, description=text),
                                     figures=field_figures)
+        files = [o.final(f) for f in files]
     used = s.magnetics.solver if solver is None else solver.value
     console.print(f"field ({used}) of study '{s.name}': wrote "
                   + ", ".join(str(f) for f in files)

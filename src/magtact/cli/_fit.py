@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+from ._app import OutOpt, StudyArg, app, console, get_study, outputs
 
 
 @app.command()
@@ -41,9 +41,10 @@ def fit(
         s, "compute its own (magtact doe STUDY --out DOE) and give it with --data DOE/doe.nc")
     check_holdout(s, ds.sizes.get("theta", 0), ds.sizes.get("H", 0),
                   str(data) if data is not None else "bundled with magtact", study)
-    result, files = write_fit_outputs(s, ds, out_dir(out), H=H, G=G,
-                                      log=lambda msg: console.print(msg, highlight=False),
-                                      gamma_check=compare_with_data, figures=fit_figures)
+    with outputs("fit", out, "metamodels.md") as o:
+        result, files = write_fit_outputs(s, ds, o.folder, H=H, G=G,
+                                          log=lambda msg: console.print(msg, highlight=False),
+                                          gamma_check=compare_with_data, figures=fit_figures)
     tab = Table(title="held-out accuracy")
     for col in ("model", "R²", "max err / range", "max rel err", "time [s]"):
         tab.add_column(col)

@@ -12,13 +12,18 @@ from rich.table import Table
 
 from .._errors import MagtactError
 from ..study import Study, checked_si, from_si
-from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+from ._app import OutOpt, StudyArg, app, console, get_study, outputs
 
 ModelsOpt = Annotated[
     Path | None,
     typer.Option("--models", help="Folder of metamodel files (B_r.json, B_z.json, f_r.json, "
                                   "f_z.json); default: fit them to the bundled DOE data set."),
 ]
+
+
+#: Files ``magtact optimise`` always writes (:meth:`magtact.Result.write`).
+OPTIMISE_OUTPUTS = ("design.json", "pareto.csv", "reduction.csv", "maps.csv", "card.json",
+                    "chosen.json")
 
 
 def parse_design(text: str, what: str) -> tuple[float, float]:
@@ -78,17 +83,18 @@ def optimise_command(
     Fzc = None if Fzc is None else checked_si(Fzc, "N", "--Fzc")
     reference = (parse_design(constraints_from, "--constraints-from")
                  if constraints_from is not None else None)
-    folder = out_dir(out)  # a folder that cannot be written is refused before the work
     own = s.geometry()
     check_rest_field(s.at(**own) if own else s)  # a chip that reads nothing: before the work
-    m, source = study_models(s, models)
-    constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
-    with console.status("optimising"):
-        result = solve(m, s, constraints, models_source=source)
-    result.write(folder)
+    # the folder is checked (writable, nothing of the user's in the way) before the work
+    with outputs("optimise", out, *OPTIMISE_OUTPUTS) as o:
+        m, source = study_models(s, models)
+        constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
+        with console.status("optimising"):
+            result = solve(m, s, constraints, models_source=source)
+        result.write(o.folder)
     print_choice(result)
     print_card(result.card)
-    console.print(f"written to {folder}", highlight=False)
+    console.print(f"written to {o.out}", highlight=False)
 
 
 def print_card(card: dict | None, stdout: Console | None = None) -> None:

@@ -10,7 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..publication import SEED_GENERATIONS
-from ._app import StudyArg, app, console, get_study, out_dir
+from ._app import StudyArg, app, console, get_study, outputs
 
 
 @app.command("reproduce")
@@ -46,14 +46,19 @@ def reproduce_command(
                 f"unknown sensitivity definition {d!r} ([sensitivity] definition): choose "
                 f"from {', '.join(DEFINITIONS)}", param_hint="--definition")
     s = get_study(study)
-    folder = out_dir(out) / "publication"
-    result = reproduce(s, seeds=seeds, workers=workers, data=data, cache=folder / "fits",
-                       generations=generations,
-                       definitions=tuple(definition) if definition else DEFINITIONS,
-                       log=lambda m: console.print(m, highlight=False, markup=False))
-    files = result.write(folder)
-    files += publication_figures(folder)
-    report = build_report(out)
+    names = ("publication.json", "seeds.csv", "spread.csv", "comparison.csv")
+    with outputs("reproduce", out, *(f"publication/{n}" for n in names)) as o:
+        folder = o.folder / "publication"
+        # the cache of fits stays in place (resumable; its entries are named by their inputs)
+        result = reproduce(s, seeds=seeds, workers=workers, data=data,
+                           cache=out / "publication" / "fits", generations=generations,
+                           definitions=tuple(definition) if definition else DEFINITIONS,
+                           log=lambda m: console.print(m, highlight=False, markup=False))
+        files = result.write(folder)
+        files += publication_figures(folder)
+        o.place()
+        report = build_report(out)  # the folder's lock is this command's
+    folder = out / "publication"
     table = Table(title=f"magtact and the publication ({s.name}; median [min, max] over "
                         f"{seeds} seeds)")
     cols = [k for k in result.comparison[0] if "/" in k]

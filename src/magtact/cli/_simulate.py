@@ -11,7 +11,7 @@ import typer
 from .._errors import MagtactError
 from .._files import write_csv
 from ..study import MESH_DENSITIES
-from ._app import OutOpt, StudyArg, app, console, get_study, out_dir
+from ._app import OutOpt, StudyArg, app, console, get_study, outputs
 
 #: Named mesh densities of the half body (``magtact.study.MESH_DENSITIES``).
 MeshDensity = StrEnum("MeshDensity", {name: name for name in MESH_DENSITIES})
@@ -41,34 +41,35 @@ def simulate_command(
     G_si = None if G is None else checked_si(G, "kPa", "--G")
     if not (math.isfinite(theta) and 0.0 <= theta < math.pi / 2):
         raise MagtactError(f"--theta must be in [0, π/2) rad, got {theta!r}")
-    folder = out_dir(out)
-    vtu = folder / "deformed_t1.vtu"
-    t = s.t_levels
-    with Progress(TextColumn("{task.description}"), BarColumn(),
-                  TextColumn("t = {task.completed:.2f}"), TimeElapsedColumn(), console=console,
-                  transient=True) as bar:
-        task = bar.add_task(f"simulate H = {H:g} mm, θ = {theta:g} rad", total=1.0)
-        try:
-            res = simulate_path(s, H_si, theta, G=G_si, t=t, vtu=vtu,
-                                mesh=None if mesh is None else mesh.value,
-                                progress=lambda tt: bar.update(task, completed=tt))
-        except PathFailed as exc:
-            raise MagtactError(str(exc)) from exc
-    write_csv(folder / "forces.csv", ["t", "u_r_mm", "u_z_mm", "F_r_N", "F_z_N"],
-              zip(res.t, from_si(res.u_r, "mm"), from_si(res.u_z, "mm"), res.F_r, res.F_z,
-                  strict=True),
-              cell=lambda v: f"{v + 0.0:.10g}")  # + 0.0: no "-0"
-    import meshio
+    with outputs("simulate", out, "forces.csv", "deformed_t1.vtu") as o:
+        folder = o.folder
+        vtu = folder / "deformed_t1.vtu"
+        t = s.t_levels
+        with Progress(TextColumn("{task.description}"), BarColumn(),
+                      TextColumn("t = {task.completed:.2f}"), TimeElapsedColumn(),
+                      console=console, transient=True) as bar:
+            task = bar.add_task(f"simulate H = {H:g} mm, θ = {theta:g} rad", total=1.0)
+            try:
+                res = simulate_path(s, H_si, theta, G=G_si, t=t, vtu=vtu,
+                                    mesh=None if mesh is None else mesh.value,
+                                    progress=lambda tt: bar.update(task, completed=tt))
+            except PathFailed as exc:
+                raise MagtactError(str(exc)) from exc
+        write_csv(folder / "forces.csv", ["t", "u_r_mm", "u_z_mm", "F_r_N", "F_z_N"],
+                  zip(res.t, from_si(res.u_r, "mm"), from_si(res.u_z, "mm"), res.F_r, res.F_z,
+                      strict=True),
+                  cell=lambda v: f"{v + 0.0:.10g}")  # + 0.0: no "-0"
+        import meshio
 
-    m = meshio.read(vtu)
-    u = m.point_data["displacement"]
-    fig_files = fig_deformed_body(
-        m.points - u, m.cells_dict["hexahedron"], u, folder / "deformed_body",
-        title=f"H = {H:g} mm, θ = {theta:.3f} rad, t = {res.t[-1]:g}: "
-              f"F_r = {res.F_r[-1]:.3g} N, F_z = {res.F_z[-1]:.3g} N "
-              f"(G = {from_si(res.G, 'kPa'):g} kPa)")
+        m = meshio.read(vtu)
+        u = m.point_data["displacement"]
+        fig_files = fig_deformed_body(
+            m.points - u, m.cells_dict["hexahedron"], u, folder / "deformed_body",
+            title=f"H = {H:g} mm, θ = {theta:.3f} rad, t = {res.t[-1]:g}: "
+                  f"F_r = {res.F_r[-1]:.3g} N, F_z = {res.F_z[-1]:.3g} N "
+                  f"(G = {from_si(res.G, 'kPa'):g} kPa)")
     console.print(
         f"simulate: {res.steps} steps, {res.newton_iterations} Newton iterations, "
         f"{res.cutbacks} cut-backs, {res.n_dofs} DOFs ({res.mesh} mesh), "
-        f"{res.wall_time:.1f} s; wrote {folder / 'forces.csv'}, {vtu}, "
-        + ", ".join(str(f) for f in fig_files), highlight=False)
+        f"{res.wall_time:.1f} s; wrote {o.final(folder / 'forces.csv')}, {o.final(vtu)}, "
+        + ", ".join(str(o.final(f)) for f in fig_files), highlight=False)

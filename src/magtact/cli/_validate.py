@@ -14,7 +14,7 @@ from .._errors import MagtactError
 from .._floor import RELATIVE_FLOOR
 from ..study import MESH_DENSITIES, PRESETS, Study, checked_si, to_si
 from ..validation import MAX_GRID, N_GRID
-from ._app import app, check_out, console, get_study, out_dir
+from ._app import app, check_out, console, get_study, outputs
 
 #: Highest filter cut-off accepted (cycles per mm of u_z; the samples are far coarser).
 MAX_CYCLES_PER_MM = 1e6
@@ -96,6 +96,7 @@ def validate_command(
     from ..report import validation_figures
     from ..validation import (
         FilterSettings,
+        output_stem,
         read_experiment,
         synthetic_files,
         validate,
@@ -127,10 +128,13 @@ def validate_command(
                           f_hi=to_si(f_hi, "per_mm") if f_hi > 0 else None)
     experiment = read_experiment(data)
     H_m, G_pa = experiment.design(H_m, G_pa)
-    folder = out_dir(out)  # a folder that cannot be written is refused before the work
-    model = path_model(study, H_m, G_pa, experiment.theta, models, solver, mesh)
-    result = validate(experiment, model, filter=filt, n_grid=n_grid, floor=floor)
-    written = write_outputs(result, folder, sources=data, figures=validation_figures)
+    stem = output_stem(experiment.synthetic)
+    # the folder is checked (writable, nothing of the user's in the way) before the work
+    with outputs("validate", out, f"{stem}.csv", f"{stem}.json") as o:
+        model = path_model(study, H_m, G_pa, experiment.theta, models, solver, mesh)
+        result = validate(experiment, model, filter=filt, n_grid=n_grid, floor=floor)
+        written = write_outputs(result, o.folder, sources=data, figures=validation_figures)
+        written = [o.final(p) for p in written]
     print_table(result)
     for path in written:
         console.print(f"wrote {path}", highlight=False)

@@ -17,7 +17,7 @@ from ._io import (
     read_table_lines,
 )
 from ._model import PathModel
-from ._outputs import write_outputs
+from ._outputs import output_stem, write_outputs
 from ._stats import MAX_GRID, N_GRID, ResponseStats, Validation, excluded_ranges, validate
 from ._synthetic import SYNTHETIC_DIR, SYNTHETIC_H, synthetic_files
 
@@ -26,7 +26,6 @@ __all__ = [
     "DataError",
     "Experiment",
     "FilterSettings", "PathModel", "ResponseStats", "Validation", "bandpass",
-    "excluded_ranges", "read_cell", "read_experiment", "read_table_lines", "synthetic_files",
-    "validate",
-    "write_outputs",
+    "excluded_ranges", "output_stem", "read_cell", "read_experiment", "read_table_lines",
+    "synthetic_files", "validate", "write_outputs",
 ]

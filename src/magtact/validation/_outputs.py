@@ -11,6 +11,12 @@ from ..study import from_si, mm
 from ._stats import Validation
 
 
+def output_stem(synthetic: bool) -> str:
+    """The name (without suffix) of a validation's files: ``validation_synthetic`` for the
+    shipped SYNTHETIC example, else ``validation``."""
+    return "validation_synthetic" if synthetic else "validation"
+
+
 def write_outputs(validation: Validation, out: str | Path, *, sources=(),
                   figures: Callable[..., list[Path]] | None = None) -> list[Path]:
     """Write ``validation[_synthetic].csv``, ``.json`` and, with ``figures``, the figure into
@@ -39,7 +45,7 @@ def write_outputs(validation: Validation, out: str | Path, *, sources=(),
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    stem = "validation_synthetic" if validation.synthetic else "validation"
+    stem = output_stem(validation.synthetic)
     written = [validation.write_csv(out / f"{stem}.csv")]
     summary = {
         "title": validation.title,
