@@ -100,3 +100,23 @@ def test_resolution_range_lines_pass_through_the_origin(records, tmp_path, monke
                                    sweep["gamma_z_max"][i] / sweep["f_z_max"][i], rtol=1e-12)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert labels == ["H = 3 mm", "H = 5 mm", "H = 7 mm"]
+
+
+def test_figures_draw_records_whose_nan_were_written_as_null(records, tmp_path, monkeypatch):
+    """JSON writes NaN as null: an infeasible height is a gap in the lines, not an error."""
+    from magtact.report import _fig_publication as fp
+
+    r = json.loads(json.dumps(records[0]))
+    r["conditioning"]["dF_z_rel"][3] = None
+    r["conditioning"]["t_tol"][4] = None
+    r["sweep"]["gamma_z_max"][2] = None
+    seen = []
+    monkeypatch.setattr(fp, "save", lambda fig, path: seen.append(fig) or [])
+    fp.fig_conditioning(r["conditioning"], tmp_path / "c")
+    fp.fig_gamma_over_H([r], 29.4e3, tmp_path / "g")
+    fp.fig_resolution_range(r["sweep"], (10e3, 50e3), tmp_path / "rr", n_lines=11)
+    drop = seen[0].axes[1].lines[0].get_ydata()
+    assert np.isnan(drop[3]) and np.allclose(np.delete(drop, 3), 10.0)
+    assert np.isnan(seen[0].axes[0].lines[1].get_ydata()[4])
+    gz = seen[1].axes[1].lines[0].get_ydata()
+    assert np.isnan(gz[2]) and gz[1] == pytest.approx(29.4e3 * 4e-3 / 3.4)

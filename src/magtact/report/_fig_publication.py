@@ -14,6 +14,11 @@ from ._style import colormap, save, style, subplots
 LOOK = {"jacobian": ("C0", "o"), "published": ("C3", "s")}
 
 
+def _floats(values) -> np.ndarray:
+    """A JSON list of numbers as floats; null (how the records write NaN) becomes NaN."""
+    return np.asarray(values, dtype=float)
+
+
 def _by_definition(records: list[dict]) -> dict[str, list[dict]]:
     out: dict[str, list[dict]] = {}
     for r in records:
@@ -55,7 +60,7 @@ def fig_gamma_z_along_t(records: list[dict], path: str | Path) -> list[Path]:
             color, _ = LOOK.get(d, ("k", "x"))
             for r in recs:
                 c = r["gamma_z_curve"]
-                ax.plot(c["t"], c["Gamma_z"], color=color, lw=0.9, alpha=0.8)
+                ax.plot(_floats(c["t"]), _floats(c["Gamma_z"]), color=color, lw=0.9, alpha=0.8)
             c = recs[0]["gamma_z_curve"]
             ax.set(xlabel="t [-]", ylabel=r"$\Gamma_z$ [N/T]",
                    title=f"{d}: H = {c['H_mm']:.3g} mm, θ = {c['theta_rad']:.3g} rad, "
@@ -73,8 +78,8 @@ def fig_gamma_over_H(records: list[dict], G: float, path: str | Path) -> list[Pa
             for n, r in enumerate(recs):
                 s = r["sweep"]
                 for ax, key in zip(axes, ("gamma_r_max", "gamma_z_max"), strict=True):
-                    ax.plot(s["H_mm"], G * np.asarray(s[key]), color=color, lw=0.8, alpha=0.8,
-                            label=d if n == 0 else None)
+                    ax.plot(_floats(s["H_mm"]), G * _floats(s[key]), color=color, lw=0.8,
+                            alpha=0.8, label=d if n == 0 else None)
         axes[0].set(xlabel="H [mm]", ylabel=r"$\Gamma_{r,\max}$ [N/T]", yscale="log")
         axes[1].set(xlabel="H [mm]", ylabel=r"$\Gamma_{z,\max}$ [N/T]", yscale="log")
         axes[0].legend(frameon=False)
@@ -90,7 +95,8 @@ def fig_resolution_range(sweep: dict, G_range: tuple[float, float], path: str | 
     line through the origin of slope γ(H) / f(H). Solid over the G bounds, dotted to the
     origin. Left: Γ_z,max against F_z,max; right: Γ_r,max against |F_r,min|.
     """
-    H = np.asarray(sweep["H_mm"])
+    sweep = {k: _floats(v) for k, v in sweep.items()}
+    H = sweep["H_mm"]
     idx = np.unique(np.linspace(0, H.size - 1, n_lines).round().astype(int))
     G = np.linspace(0.0, G_range[1], 50)
     inside = G >= G_range[0]
@@ -116,13 +122,13 @@ def fig_conditioning(cond: dict, path: str | Path) -> list[Path]:
     """t_m and t_tol over H, and the relative drop of F_z,max between them."""
     with style():
         fig, axes = subplots(1, 2, figsize=(7.0, 2.5))
-        H = cond["H_mm"]
-        axes[0].plot(H, cond["t_m"], "C0-", label=r"$t_m$ (minimum of $F_r$)")
-        axes[0].plot(H, cond["t_tol"], "C1--",
+        H = _floats(cond["H_mm"])
+        axes[0].plot(H, _floats(cond["t_m"]), "C0-", label=r"$t_m$ (minimum of $F_r$)")
+        axes[0].plot(H, _floats(cond["t_tol"]), "C1--",
                      label=f"smallest t within {cond['tol']:.0%} of the range")
         axes[0].set(xlabel="H [mm]", ylabel="t [-]")
         axes[0].legend(frameon=False, fontsize=7)
-        axes[1].plot(H, 100 * np.asarray(cond["dF_z_rel"]), "C3-")
+        axes[1].plot(H, 100 * _floats(cond["dF_z_rel"]), "C3-")
         axes[1].set(xlabel="H [mm]", ylabel=r"drop of $F_{z,\max}$ [%]")
         return save(fig, path)
 
