@@ -227,3 +227,15 @@ def test_error_paths_on_a_mesh_without_a_finer_one_is_refused_before_any_work(tm
     res = magtact("doe", str(study), "--out", str(tmp_path / "o"), "--error-paths", "3",
                   "--no-cache", "-j", "0")
     one_line_error(res, "mechanics.mesh = 'fine' has no finer mesh", "'default'")
+
+
+def test_study_write_keeps_an_existing_file(tmp_path):
+    mine = tmp_path / "study.toml"
+    mine.write_text("# my notes\n[body]\nH_mm = 4\n")
+    one_line_error(magtact("study", "--write", str(mine)),
+                   f"--write {mine}: the file exists and magtact does not replace it")
+    assert mine.read_text() == "# my notes\n[body]\nH_mm = 4\n"
+    new = tmp_path / "full.toml"
+    assert magtact("study", "--write", str(new)).returncode == 0
+    assert magtact("study", "--write", str(new)).returncode == 0  # the same text again
+    assert new.read_text().strip() in magtact("study").stdout

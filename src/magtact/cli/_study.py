@@ -7,6 +7,8 @@ from typing import Annotated
 
 import typer
 
+from .._errors import MagtactError
+from .._files import write_text
 from ._app import StudyArg, app, get_study
 
 
@@ -18,6 +20,13 @@ def study_command(
 ) -> None:
     """Validate STUDY and print every setting (mm, kPa, N), defaults filled in."""
     text = get_study(study).to_toml()
+    if write is not None and write.is_dir():
+        raise MagtactError(f"--write {write}: Is a directory")
+    # an existing file is the user's (its comments, its order): never replaced
+    same = write is not None and write.is_file() and write.read_bytes() == text.encode()
+    if write is not None and not same and (write.exists() or write.is_symlink()):
+        raise MagtactError(f"--write {write}: the file exists and magtact does not replace it; "
+                           "remove it or name another file")
     typer.echo(text)
-    if write is not None:
-        write.write_text(text, encoding="utf-8")
+    if write is not None and not same:
+        write_text(write, text)
