@@ -203,3 +203,19 @@ def test_the_result_carries_the_chosen_designs_sensor_map(magone):
     back = result.sensor.force(B)
     np.testing.assert_allclose(back.F, F, atol=1e-9 * np.abs(F).max())
     assert (result.sensor.H, result.sensor.G) == (result.chosen.H, result.chosen.G)
+
+
+def test_result_write_keeps_the_users_files_and_replaces_its_own(tmp_path, magone):
+    """``Result.write`` follows the results folder's rules: its own files are written again,
+    a user's file of an output's name is kept byte for byte and named in the refusal."""
+    _, result = magone
+    folder = tmp_path / "design"
+    files = result.write(folder, figures=False, budget=False)
+    assert {p.parent for p in files} == {folder} and all(p.is_file() for p in files)
+    card = folder / "card.json"
+    assert json.loads(card.read_text())["rows"]
+    assert result.write(folder, figures=False, budget=False)  # its own files: replaced
+    card.write_text("my notes\n")
+    with pytest.raises(magtact.MagtactError, match=r"card\.json"):
+        result.write(folder, figures=False, budget=False)
+    assert card.read_text() == "my notes\n"

@@ -273,7 +273,30 @@ class Result:
     def write(self, out: str | Path, figures: bool = True, budget: bool = True) -> list[Path]:
         """Write the optimisation's tables, the design card (``card.json``), with ``budget``
         the error budgets (``budget.json``) and, with ``figures``, the figures into ``out``;
-        return the files written."""
+        return the files written.
+
+        ``out`` is a results folder with the rules of ``magtact`` commands (docs/method.md
+        §14): its lock is held while writing, the files appear only once all are complete,
+        and a file there that magtact did not write is never replaced.
+
+        Raises
+        ------
+        MagtactError
+            If another process is writing ``out``, or an output would replace a file that is
+            not magtact's (the message names the files).
+        """
+        from ._runfolder import command_outputs
+
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        with command_outputs(out, "magtact.Result.write") as o:
+            files = self.write_into(o.folder, figures=figures, budget=budget)
+        return [o.final(p) for p in files]
+
+    def write_into(self, out: str | Path, figures: bool = True, budget: bool = True
+                   ) -> list[Path]:
+        """:meth:`write` straight into ``out``, for a caller that already holds the folder
+        (a command's or a run's staging folder): no lock, no check of what is there."""
         from .budget import write_budgets
         from .optimise import write_geometry_outputs, write_optimise_outputs
         from .report import budget_figures, fig_geometry_pareto, optimise_figures, write_card

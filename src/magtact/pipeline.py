@@ -336,7 +336,7 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
             ctx.log(f"      WARNING: {w.message}")
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    result.write(ctx.folder / "optimise", budget=False)  # the budget is a stage of its own
+    result.write_into(ctx.folder / "optimise", budget=False)  # the budget is a stage of its own
     ctx.result = result
     if ctx.study.geometric_variables:
         r = result.optimisation

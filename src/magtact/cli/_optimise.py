@@ -91,7 +91,7 @@ def optimise_command(
         constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
         with console.status("optimising"):
             result = solve(m, s, constraints, models_source=source)
-        result.write(o.folder)
+        result.write_into(o.folder)
     print_choice(result)
     print_card(result.card)
     console.print(f"written to {o.out}", highlight=False)
