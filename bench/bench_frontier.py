@@ -62,6 +62,7 @@ CLEAN_ORDER = (0.5, 4.0)
 SEQUENCES = {
     "hex8": [("coarse", 2.0), ("default", 2.0), ("fine", None)],
     "hex27": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
+    "hex20": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
 }
 
 
@@ -399,7 +400,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run")
-    r.add_argument("--route", choices=("hex8", "hex27"), required=True)
+    r.add_argument("--route", choices=("hex8", "hex20", "hex27"), required=True)
     r.add_argument("--mesh", required=True)
     r.add_argument("--H", type=float, required=True, help="base height [mm]")
     r.add_argument("--reuse-ratio", type=float, default=0.0,

@@ -1,4 +1,4 @@
-"""The 27-node (hex27) structural route: where its time goes and why its Newton iterations stalled.
+"""The quadratic structural routes (hex27, hex20): where the time goes, why Newton stalled.
 
 Three parts, each writing a section of ``bench/results/quadratic.json``:
 
@@ -10,11 +10,12 @@ Three parts, each writing a section of ``bench/results/quadratic.json``:
   state), of the whole tangent assembly with FElupe's solid and with one using those products,
   and of one PARDISO factorisation, on the hex8 ``default`` mesh and the
   hex27 ``coarse_x0.67`` and ``coarse`` meshes (H = 3 mm).
-- ``newton``: one path at θ_max with every Newton iteration logged (residual, line-search factor,
-  contact points per plate and node class, points that changed contact, the nodes with the
-  largest residual). ``--tol-cycling`` sets ``Stepping.tol_cycling`` (1e-6: the tolerance
-  of the cycling mode equals the plain one, i.e. the model before that mode had its own);
-  ``--penalty`` the contact penalty.
+- ``newton``: one path at θ_max (``--element hex27`` or ``hex20``) with every Newton iteration
+  logged (residual, line-search factor, contact points per plate and node class, points that
+  changed contact, sliding points and those that switched between sticking and sliding, the
+  nodes with the largest residual). ``--tol-cycling`` sets ``Stepping.tol_cycling`` (1e-6: the
+  tolerance of the cycling mode equals the plain one, i.e. the model before that mode had its
+  own); ``--penalty`` the contact penalty.
 
     python bench/bench_quadratic.py tangent --repeat 4
     python bench/bench_quadratic.py penalty
@@ -193,13 +194,14 @@ def penalty_scale() -> dict:
     return {"cases": out}
 
 
-def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None) -> dict:
+def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None,
+           element: str = "hex27") -> dict:
     from magtact.geometry import loading_path
     from magtact.mechanics import build_model
     from magtact.mechanics._model import NewtonFailed
     from magtact.mechanics._simulate import stepping_of
 
-    study = _study("hex27", penalty)
+    study = _study(element, penalty)
     H, theta = H_mm * 1e-3, study.loading.theta_max
     m = build_model(study, H, mesh=mesh)
     bm = m.bmesh
@@ -226,6 +228,12 @@ def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None) ->
                 rec[f"{name}_changed_gaps_um"] = [
                     round(float(g) * 1e6, 4) for g in c._kinematics(c._gap_vectors())[0][ch][:8]]
             state[name] = act.copy()
+            slip = np.asarray(c.results.slip, dtype=bool) & act  # sliding, not sticking
+            rec[f"{name}_sliding"] = int(slip.sum())
+            prev = state.get(f"{name}_slip")
+            if prev is not None and np.any(slip != prev):
+                rec[f"{name}_slip_changed_nodes"] = [int(n) for n in c.points[slip != prev][:8]]
+            state[f"{name}_slip"] = slip.copy()
         r = np.zeros(m.n_dofs)
         r[m.dof1] = f[m.dof1]
         node = np.abs(r.reshape(-1, 3)).max(axis=1)
@@ -258,7 +266,7 @@ def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None) ->
         status, forces = str(exc), {}
     for s, (ta, tb, _) in zip(steps, m.log, strict=True):
         s["t"] = [ta, tb]
-    return {"mesh": mesh, "H_mm": H_mm, "tol_cycling": tol_cycling,
+    return {"element": element, "mesh": mesh, "H_mm": H_mm, "tol_cycling": tol_cycling,
             "contact_penalty": study.mechanics.contact_penalty, "status": status,
             "wall_time_s": time.perf_counter() - t0, "load_average_at_start": load,
             "load_average_at_end": os.getloadavg(), "n_dofs": m.n_dofs,
@@ -277,6 +285,7 @@ def main() -> None:
     n.add_argument("--H", type=float, default=3.0)
     n.add_argument("--tol-cycling", type=float, default=1e-5)
     n.add_argument("--penalty", type=float, default=None)
+    n.add_argument("--element", choices=("hex20", "hex27"), default="hex27")
     args = ap.parse_args()
     data = json.loads(OUT.read_text()) if OUT.is_file() else {}
     if args.cmd == "tangent":
@@ -284,8 +293,9 @@ def main() -> None:
     elif args.cmd == "penalty":
         data["penalty_scale"] = penalty_scale()
     else:
-        rec = newton(args.mesh, args.H, args.tol_cycling, args.penalty)
-        key = f"newton_{args.mesh}_H{args.H:g}_tolcycling{args.tol_cycling:g}" + (
+        rec = newton(args.mesh, args.H, args.tol_cycling, args.penalty, args.element)
+        key = ("" if args.element == "hex27" else f"{args.element}_") + (
+            f"newton_{args.mesh}_H{args.H:g}_tolcycling{args.tol_cycling:g}") + (
             f"_penalty{args.penalty:g}" if args.penalty is not None else "")
         data[key] = rec
         print({k: v for k, v in rec.items() if k != "steps"})

@@ -325,7 +325,8 @@ def quadratic_section(r: Results) -> list[str]:
     if "quadratic" not in r.files:
         return []
     q = r["quadratic"]
-    out = ["### The 27-node route: where its time goes, why its Newton iterations stalled", "",
+    out = ["### The quadratic routes: where their time goes, why their Newton iterations "
+           "stalled", "",
            f"Source: {r.source('quadratic')} (`bench/bench_quadratic.py`), docs/method.md §3.",
            ""]
     if "tangent" in q:
@@ -362,12 +363,13 @@ def quadratic_section(r: Results) -> list[str]:
                       "λ_n / shear diagonal"], rows)
     runs = {k: v for k, v in q.items() if k.startswith("newton_")}
     if runs:
-        out += ["**Newton iterations logged along one path** (hex27, θ_max, the study's 21 "
+        out += ["**Newton iterations logged along one path** (θ_max, the study's 21 "
                 "load levels):", ""]
         rows = []
         for v in runs.values():
             tail = next((s for s in reversed(v["steps"]) if not s["converged"]), None)
-            rows.append([f"`{v['mesh']}`", f"{v['H_mm']:g}", f"{v['tol_cycling']:g}",
+            rows.append([v.get("element", "hex27"), f"`{v['mesh']}`", f"{v['H_mm']:g}",
+                         f"{v['tol_cycling']:g}",
                          f"{v['contact_penalty']:g}",
                          "completed" if v["status"] == "completed" else "failed: " + v["status"],
                          f"{v['F_z_t1_N']:.4f}" if "F_z_t1_N" in v else "—",
@@ -375,7 +377,8 @@ def quadratic_section(r: Results) -> list[str]:
                          f"{v['load_average_at_start'][0]:.1f}",
                          "—" if tail is None else
                          f"{len([s for s in v['steps'] if not s['converged']])}"])
-        out += table(["mesh", "H [mm]", "tol_cycling", "penalty", "status", "F_z(t=1) [N]",
+        out += table(["element", "mesh", "H [mm]", "tol_cycling", "penalty", "status",
+                      "F_z(t=1) [N]",
                       "iterations", "s", "load", "failed steps"], rows)
         for v in runs.values():
             if v["status"] == "completed":
@@ -391,7 +394,8 @@ def quadratic_section(r: Results) -> list[str]:
                      "residual when in contact)"
                      if kinds == {((worst["class"], 1),)} else f"nodes changed: {sorted(kinds)}")
             largest = [i["largest_residual_nodes"][0]["class"] for i in last["iterations"]]
-            out += [f"Last step tried on `{v['mesh']}` at H = {v['H_mm']:g} mm (t = "
+            out += [f"Last step tried with {v.get('element', 'hex27')} on `{v['mesh']}` at "
+                    f"H = {v['H_mm']:g} mm (t = "
                     f"{last['t'][0]:.5f} → {last['t'][1]:.5f}): residuals {res}. The lower "
                     f"plate's contact set changes in {len(moved)} of "
                     f"{len(last['iterations'])} iterations, {which}, at gaps of "
