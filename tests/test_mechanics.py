@@ -114,6 +114,16 @@ def test_serendipity_mesh_is_the_triquadratic_one_without_mid_face_and_mid_cell_
         np.testing.assert_array_equal(getattr(q20, name), big[big < n])
 
 
+@pytest.mark.parametrize(("element", "nodes"), [("hex8", 8), ("hex20", 20), ("hex27", 27)])
+def test_the_study_element_chooses_the_cells_of_the_model(study, element, nodes):
+    from magtact.mechanics import build_model
+
+    model = build_model(_with(study, "mechanics", element=element), 3e-3, mesh="coarse")
+    assert model.bmesh.cells.shape[1] == nodes
+    assert model.field[0].region.element.points.shape == (nodes, 3)
+    assert model.n_dofs == 3 * (model.bmesh.n_points + 2)  # and the two plates
+
+
 def test_mesh_bad_inputs(study):
     with pytest.raises(ValueError, match="unknown mesh density 'medium'"):
         body_mesh(study, 3e-3, "medium")
@@ -529,6 +539,20 @@ def test_27_node_block_dragged_over_a_plate_slides_at_the_coulomb_limit():
     R, h, G, mu = 6e-3, 6e-3, 10e3, 0.2
     model = HalfBodyModel(half_cylinder_mesh(R, h, R_h=1e-3, density="coarse", order=2), G,
                           5000.0, mu)
+
+    def path(t):  # press (t ≤ 1/2), then drag (t > 1/2)
+        return 0.6 * h * max(2 * t - 1, 0.0), -0.2 * h * min(2 * t, 1.0)
+
+    F = model.solve_path(path, [0.5, 1.0])["upper"]
+    assert abs(F[0, 0]) < 1e-9 * abs(F[0, 2])
+    assert abs(F[-1, 0] / F[-1, 2]) == pytest.approx(mu, rel=0.01)
+
+
+@pytest.mark.long
+def test_20_node_block_dragged_over_a_plate_slides_at_the_coulomb_limit():
+    R, h, G, mu = 6e-3, 6e-3, 10e3, 0.2
+    model = HalfBodyModel(half_cylinder_mesh(R, h, R_h=1e-3, density="coarse", order=2,
+                                             serendipity=True), G, 5000.0, mu)
 
     def path(t):  # press (t ≤ 1/2), then drag (t > 1/2)
         return 0.6 * h * max(2 * t - 1, 0.0), -0.2 * h * min(2 * t, 1.0)
