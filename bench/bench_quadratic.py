@@ -1,6 +1,6 @@
 """The quadratic structural routes (hex27, hex20): where the time goes, why Newton stalled.
 
-Three parts, each writing a section of ``bench/results/quadratic.json``:
+Four parts, each writing a section of ``bench/results/quadratic.json``:
 
 - ``penalty``: the normal contact multiplier λ_n against the mean diagonal stiffness of the
   contact nodes, with and without the volumetric term (hex8 ``coarse``/``default``, hex27
@@ -16,10 +16,14 @@ Three parts, each writing a section of ``bench/results/quadratic.json``:
   nodes with the largest residual). ``--tol-cycling`` sets ``Stepping.tol_cycling`` (1e-6: the
   tolerance of the cycling mode equals the plain one, i.e. the model before that mode had its
   own); ``--penalty`` the contact penalty.
+- ``uniaxial``: 20-node cells against the uniaxial closed form, with the gaps of the top face's
+  corner and mid-edge nodes to the plate (serendipity faces: node-wise contact lifts the
+  corners).
 
     python bench/bench_quadratic.py tangent --repeat 4
     python bench/bench_quadratic.py penalty
     python bench/bench_quadratic.py newton --mesh coarse_x0.67 --H 3 --tol-cycling 1e-6
+    python bench/bench_quadratic.py uniaxial
 
 Wall times on a shared machine: the load average is recorded beside each.
 """
@@ -274,12 +278,59 @@ def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None,
             "timings_s": dict(m.timings), **forces, "steps": steps}
 
 
+def uniaxial() -> dict:
+    """hex20 against the uniaxial closed form F = G A0 (λ⁻² − λ): a plain cylinder (R = h = 6 mm)
+    between frictionless plates, base sliding, with the gaps of the top face's corner and
+    mid-edge nodes to the upper plate at the end (negative: off the plate)."""
+    import math
+
+    from magtact.geometry import half_cylinder_mesh
+    from magtact.mechanics import HalfBodyModel
+    from magtact.mechanics._model import StepFailure, Stepping
+
+    R = h = 6e-3
+    G = 10e3
+    cases = []
+    for density, lam in (("coarse", 0.9), ("default", 0.9), ("coarse", 0.7)):
+        bm = half_cylinder_mesh(R, h, density=density, order=2, serendipity=True)
+        model = HalfBodyModel(bm, G, 5000.0, 0.0, base="sliding")
+        rec = {"density": density, "lambda": lam, "n_dofs": model.n_dofs,
+               "load_average_at_start": os.getloadavg()}
+        t0 = time.perf_counter()
+        try:
+            out = model.solve_path(lambda t, lam=lam: (0.0, -(1 - lam) * h * t), [1.0],
+                                   stepping=Stepping(dt_initial=1.0 if lam > 0.85 else 0.25,
+                                                     dt_max=1.0))
+            F = 2 * out["lower"][-1, 2]
+            rec |= {"completed": True,
+                    "relative_error": F / (G * math.pi * R**2 * (lam**-2 - lam)) - 1}
+            t_end = 1.0
+        except StepFailure as exc:
+            rec |= {"completed": False, "failed_at_t": exc.t, "error": exc.reason}
+            t_end = exc.t_converged
+        rec["wall_time_s"] = time.perf_counter() - t0
+        z = bm.points[:, 2] + model.displacement[:, 2]
+        plate = h - (1 - lam) * h * t_end
+        top = bm.surface[np.isclose(bm.points[bm.surface, 2], h)]
+        for name, nodes in (("corner", top[top < bm.n_corners]),
+                            ("mid_edge", top[top >= bm.n_corners])):
+            gap = plate - z[nodes]  # > 0: below the upper plate, i.e. off it
+            rec[f"top_{name}_gap_um"] = {"min": -1e6 * float(gap.max()),
+                                         "mean": -1e6 * float(gap.mean()),
+                                         "max": -1e6 * float(gap.min())}
+        cases.append(rec)
+        print(rec)
+    return {"element": "hex20", "cases": cases,
+            "note": "gap sign: negative = off the plate, positive = into it"}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     t = sub.add_parser("tangent")
     t.add_argument("--repeat", type=int, default=4)
     sub.add_parser("penalty")
+    sub.add_parser("uniaxial")
     n = sub.add_parser("newton")
     n.add_argument("--mesh", default="coarse_x0.67")
     n.add_argument("--H", type=float, default=3.0)
@@ -292,6 +343,8 @@ def main() -> None:
         data["tangent"] = tangent(args.repeat)
     elif args.cmd == "penalty":
         data["penalty_scale"] = penalty_scale()
+    elif args.cmd == "uniaxial":
+        data["uniaxial_hex20"] = uniaxial()
     else:
         rec = newton(args.mesh, args.H, args.tol_cycling, args.penalty, args.element)
         key = ("" if args.element == "hex27" else f"{args.element}_") + (
