@@ -100,14 +100,16 @@ def _save(path: Path, data) -> None:
 
 
 def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
-        penalty_per_class: bool = False, tol_cycling: float | None = None) -> dict:
+        penalty_per_class: bool = False, tol_cycling: float | None = None,
+        elastic_slip_mm: float | None = None) -> dict:
     """Solve one path at θ_max and add its record to ``frontier_runs.json``.
 
     ``reuse_ratio`` > 0 runs the Newton iterations with tangents kept while they contract the
     residual by that factor (``Stepping.reuse_ratio``); the record is then a variant of the
     route (``"variant": "reuse_<ratio>"``), kept beside the plain one; so is
     ``penalty_per_class`` (``HalfBodyModel(penalty_per_node_class=True)``) and
-    ``tol_cycling`` (``Stepping.tol_cycling`` instead of its default).
+    ``tol_cycling`` (``Stepping.tol_cycling`` instead of its default) and ``elastic_slip_mm``
+    (``mechanics.elastic_slip_mm`` instead of the study's).
     """
     from dataclasses import replace
 
@@ -117,6 +119,10 @@ def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
     study = load_study("magone")
     study = replace(study, mechanics=replace(study.mechanics, element=route, threads=1))
     variant = f"reuse_{reuse_ratio:g}" if reuse_ratio > 0 else ""
+    if elastic_slip_mm is not None:
+        variant = "+".join(v for v in (variant, f"elastic_slip_{elastic_slip_mm:g}mm") if v)
+        study = replace(study, mechanics=replace(study.mechanics,
+                                                 elastic_slip=elastic_slip_mm * 1e-3))
     if reuse_ratio > 0:
         plain = _simulate.stepping_of
         _simulate.stepping_of = lambda s: replace(plain(s), reuse_ratio=reuse_ratio)
@@ -417,13 +423,15 @@ def main() -> None:
                    help="keep a tangent while it contracts the residual by this factor")
     r.add_argument("--penalty-per-class", action="store_true",
                    help="contact penalty per class of surface node (27-node cells)")
+    r.add_argument("--elastic-slip-mm", type=float, default=None,
+                   help="allowable elastic slip of sticking contact points [mm]")
     r.add_argument("--tol-cycling", type=float, default=None,
                    help="Newton tolerance once the contact state cycles (Stepping.tol_cycling)")
     sub.add_parser("assemble")
     args = ap.parse_args()
     if args.cmd == "run":
         print(json.dumps(run(args.route, args.mesh, args.H, args.reuse_ratio,
-                             args.penalty_per_class, args.tol_cycling)))
+                             args.penalty_per_class, args.tol_cycling, args.elastic_slip_mm)))
     else:
         print(json.dumps(assemble(), indent=1)[:4000])
 
