@@ -308,19 +308,22 @@ def test_model_bad_inputs(study, tmp_path):
         write_vtu(tmp_path / "x.vtu", mesh, np.zeros((3, 3)))
 
 
-def test_vtu_round_trip(study, tmp_path):
+@pytest.mark.parametrize(("kwargs", "cell_type"), [
+    ({}, "hexahedron"), ({"order": 2, "serendipity": True}, "hexahedron20"),
+    ({"order": 2}, "hexahedron27")])
+def test_vtu_round_trip(study, tmp_path, kwargs, cell_type):
     import meshio
 
     from magtact.mechanics import write_vtu
 
-    mesh = body_mesh(study, 3e-3, "coarse")
+    mesh = body_mesh(study, 3e-3, "coarse", **kwargs)
     u = np.zeros_like(mesh.points)
     u[:, 0] = 1e-4
     path = write_vtu(tmp_path / "sub" / "body.vtu", mesh, u)
     back = meshio.read(path)
     np.testing.assert_allclose(back.points, mesh.points + u)
     np.testing.assert_allclose(back.point_data["displacement_magnitude"], 1e-4)
-    np.testing.assert_array_equal(back.cells_dict["hexahedron"], mesh.cells)
+    np.testing.assert_array_equal(back.cells_dict[cell_type], mesh.cells)
 
 
 def test_magnet_edge_is_rounded(study):
