@@ -61,6 +61,8 @@ DENSITIES.setdefault("coarse_x1.5", {"m": 5, "radial": (3, 5, 3), "h_z": 0.8e-3,
 #: The coarse mesh with 2 instead of 3 cells along a quarter of the half circle (the direction
 #: in which the hex8 error was smallest at H = 3 mm).
 DENSITIES.setdefault("coarse_m2", DENSITIES["coarse"] | {"m": 2})
+#: ... and one cell across the rounded top edge instead of 2.
+DENSITIES.setdefault("coarse_m2_c1", DENSITIES["coarse"] | {"m": 2, "n_corner": 1})
 #: Observed orders taken as clean enough to extrapolate with.
 CLEAN_ORDER = (0.5, 4.0)
 #: Mesh sequence of each route, coarse to fine, with the refinement to the next mesh.
