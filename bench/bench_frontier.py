@@ -13,6 +13,8 @@ Routes:
 - ``hex27``: triquadratic Q2/P0 hexahedra (``mechanics.element = "hex27"``) on
   ``coarse_x0.67``, ``coarse`` and ``coarse_x1.5`` (refinement 1.5 per direction; the two
   densities exist only in this benchmark).
+- ``hex20``: 20-node serendipity Q2s/P0 hexahedra (``mechanics.element = "hex20"``) on the same
+  three meshes.
 - ``richardson``: hex8 forces extrapolated from a pair of meshes with the observed order 1,
   F ≈ (r F(h/r) − F(h)) / (r − 1); its cost is that of both meshes, its change is against the
   extrapolation of the next finer pair.
@@ -56,12 +58,18 @@ DENSITIES.setdefault("coarse_x0.67", {"m": 2, "radial": (1, 2, 1), "h_z": 1.8e-3
                                       "n_corner": 1} | _GRADING)
 DENSITIES.setdefault("coarse_x1.5", {"m": 5, "radial": (3, 5, 3), "h_z": 0.8e-3,
                                      "n_corner": 3} | _GRADING)
+#: The coarse mesh with 2 instead of 3 cells along a quarter of the half circle (the direction
+#: in which the hex8 error was smallest at H = 3 mm).
+DENSITIES.setdefault("coarse_m2", DENSITIES["coarse"] | {"m": 2})
+#: ... and one cell across the rounded top edge instead of 2.
+DENSITIES.setdefault("coarse_m2_c1", DENSITIES["coarse"] | {"m": 2, "n_corner": 1})
 #: Observed orders taken as clean enough to extrapolate with.
 CLEAN_ORDER = (0.5, 4.0)
 #: Mesh sequence of each route, coarse to fine, with the refinement to the next mesh.
 SEQUENCES = {
     "hex8": [("coarse", 2.0), ("default", 2.0), ("fine", None)],
     "hex27": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
+    "hex20": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
 }
 
 
@@ -94,13 +102,16 @@ def _save(path: Path, data) -> None:
 
 
 def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
-        penalty_per_class: bool = False) -> dict:
+        penalty_per_class: bool = False, tol_cycling: float | None = None,
+        elastic_slip_mm: float | None = None) -> dict:
     """Solve one path at θ_max and add its record to ``frontier_runs.json``.
 
     ``reuse_ratio`` > 0 runs the Newton iterations with tangents kept while they contract the
     residual by that factor (``Stepping.reuse_ratio``); the record is then a variant of the
     route (``"variant": "reuse_<ratio>"``), kept beside the plain one; so is
-    ``penalty_per_class`` (``HalfBodyModel(penalty_per_node_class=True)``).
+    ``penalty_per_class`` (``HalfBodyModel(penalty_per_node_class=True)``) and
+    ``tol_cycling`` (``Stepping.tol_cycling`` instead of its default) and ``elastic_slip_mm``
+    (``mechanics.elastic_slip_mm`` instead of the study's).
     """
     from dataclasses import replace
 
@@ -110,9 +121,17 @@ def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
     study = load_study("magone")
     study = replace(study, mechanics=replace(study.mechanics, element=route, threads=1))
     variant = f"reuse_{reuse_ratio:g}" if reuse_ratio > 0 else ""
+    if elastic_slip_mm is not None:
+        variant = "+".join(v for v in (variant, f"elastic_slip_{elastic_slip_mm:g}mm") if v)
+        study = replace(study, mechanics=replace(study.mechanics,
+                                                 elastic_slip=elastic_slip_mm * 1e-3))
     if reuse_ratio > 0:
         plain = _simulate.stepping_of
         _simulate.stepping_of = lambda s: replace(plain(s), reuse_ratio=reuse_ratio)
+    if tol_cycling is not None:
+        variant = "+".join(v for v in (variant, f"tol_cycling_{tol_cycling:g}") if v)
+        plain_stepping = _simulate.stepping_of
+        _simulate.stepping_of = lambda s: replace(plain_stepping(s), tol_cycling=tol_cycling)
     if penalty_per_class:
         from functools import partial
 
@@ -358,8 +377,8 @@ def _figure(data: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.5), sharex=True)
-    style = {"hex8": ("o", "C0"), "hex27": ("s", "C1"), "richardson": ("^", "C2"),
-             "multi-fidelity": ("D", "C3")}
+    style = {"hex8": ("o", "C0"), "hex27": ("s", "C1"), "hex20": ("v", "C4"),
+             "richardson": ("^", "C2"), "multi-fidelity": ("D", "C3")}
     limits = {o["H_mm"]: o["vs_limit"] for o in data["orders"] if "vs_limit" in o}
     for col, (key, target) in enumerate((("change_F_z_t1", 0.01), ("change_F_r_min", 0.02))):
         for row in range(2):
@@ -399,18 +418,22 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run")
-    r.add_argument("--route", choices=("hex8", "hex27"), required=True)
+    r.add_argument("--route", choices=("hex8", "hex20", "hex27"), required=True)
     r.add_argument("--mesh", required=True)
     r.add_argument("--H", type=float, required=True, help="base height [mm]")
     r.add_argument("--reuse-ratio", type=float, default=0.0,
                    help="keep a tangent while it contracts the residual by this factor")
     r.add_argument("--penalty-per-class", action="store_true",
                    help="contact penalty per class of surface node (27-node cells)")
+    r.add_argument("--elastic-slip-mm", type=float, default=None,
+                   help="allowable elastic slip of sticking contact points [mm]")
+    r.add_argument("--tol-cycling", type=float, default=None,
+                   help="Newton tolerance once the contact state cycles (Stepping.tol_cycling)")
     sub.add_parser("assemble")
     args = ap.parse_args()
     if args.cmd == "run":
         print(json.dumps(run(args.route, args.mesh, args.H, args.reuse_ratio,
-                             args.penalty_per_class)))
+                             args.penalty_per_class, args.tol_cycling, args.elastic_slip_mm)))
     else:
         print(json.dumps(assemble(), indent=1)[:4000])
 

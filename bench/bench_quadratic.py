@@ -1,6 +1,6 @@
-"""The 27-node (hex27) structural route: where its time goes and why its Newton iterations stalled.
+"""The quadratic structural routes (hex27, hex20): where the time goes, why Newton stalled.
 
-Three parts, each writing a section of ``bench/results/quadratic.json``:
+Four parts, each writing a section of ``bench/results/quadratic.json``:
 
 - ``penalty``: the normal contact multiplier λ_n against the mean diagonal stiffness of the
   contact nodes, with and without the volumetric term (hex8 ``coarse``/``default``, hex27
@@ -10,15 +10,20 @@ Three parts, each writing a section of ``bench/results/quadratic.json``:
   state), of the whole tangent assembly with FElupe's solid and with one using those products,
   and of one PARDISO factorisation, on the hex8 ``default`` mesh and the
   hex27 ``coarse_x0.67`` and ``coarse`` meshes (H = 3 mm).
-- ``newton``: one path at θ_max with every Newton iteration logged (residual, line-search factor,
-  contact points per plate and node class, points that changed contact, the nodes with the
-  largest residual). ``--tol-cycling`` sets ``Stepping.tol_cycling`` (1e-6: the tolerance
-  of the cycling mode equals the plain one, i.e. the model before that mode had its own);
-  ``--penalty`` the contact penalty.
+- ``newton``: one path at θ_max (``--element hex27`` or ``hex20``) with every Newton iteration
+  logged (residual, line-search factor, contact points per plate and node class, points that
+  changed contact, sliding points and those that switched between sticking and sliding, the
+  nodes with the largest residual). ``--tol-cycling`` sets ``Stepping.tol_cycling`` (1e-6: the
+  tolerance of the cycling mode equals the plain one, i.e. the model before that mode had its
+  own); ``--penalty`` the contact penalty.
+- ``uniaxial``: 20-node cells against the uniaxial closed form, with the gaps of the top face's
+  corner and mid-edge nodes to the plate (serendipity faces: node-wise contact lifts the
+  corners).
 
     python bench/bench_quadratic.py tangent --repeat 4
     python bench/bench_quadratic.py penalty
     python bench/bench_quadratic.py newton --mesh coarse_x0.67 --H 3 --tol-cycling 1e-6
+    python bench/bench_quadratic.py uniaxial
 
 Wall times on a shared machine: the load average is recorded beside each.
 """
@@ -193,13 +198,14 @@ def penalty_scale() -> dict:
     return {"cases": out}
 
 
-def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None) -> dict:
+def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None,
+           element: str = "hex27") -> dict:
     from magtact.geometry import loading_path
     from magtact.mechanics import build_model
     from magtact.mechanics._model import NewtonFailed
     from magtact.mechanics._simulate import stepping_of
 
-    study = _study("hex27", penalty)
+    study = _study(element, penalty)
     H, theta = H_mm * 1e-3, study.loading.theta_max
     m = build_model(study, H, mesh=mesh)
     bm = m.bmesh
@@ -226,6 +232,12 @@ def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None) ->
                 rec[f"{name}_changed_gaps_um"] = [
                     round(float(g) * 1e6, 4) for g in c._kinematics(c._gap_vectors())[0][ch][:8]]
             state[name] = act.copy()
+            slip = np.asarray(c.results.slip, dtype=bool) & act  # sliding, not sticking
+            rec[f"{name}_sliding"] = int(slip.sum())
+            prev = state.get(f"{name}_slip")
+            if prev is not None and np.any(slip != prev):
+                rec[f"{name}_slip_changed_nodes"] = [int(n) for n in c.points[slip != prev][:8]]
+            state[f"{name}_slip"] = slip.copy()
         r = np.zeros(m.n_dofs)
         r[m.dof1] = f[m.dof1]
         node = np.abs(r.reshape(-1, 3)).max(axis=1)
@@ -258,12 +270,58 @@ def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None) ->
         status, forces = str(exc), {}
     for s, (ta, tb, _) in zip(steps, m.log, strict=True):
         s["t"] = [ta, tb]
-    return {"mesh": mesh, "H_mm": H_mm, "tol_cycling": tol_cycling,
+    return {"element": element, "mesh": mesh, "H_mm": H_mm, "tol_cycling": tol_cycling,
             "contact_penalty": study.mechanics.contact_penalty, "status": status,
             "wall_time_s": time.perf_counter() - t0, "load_average_at_start": load,
             "load_average_at_end": os.getloadavg(), "n_dofs": m.n_dofs,
             "newton_iterations": m.iterations, "jacobians": m.jacobians,
             "timings_s": dict(m.timings), **forces, "steps": steps}
+
+
+def uniaxial() -> dict:
+    """hex20 against the uniaxial closed form F = G A0 (λ⁻² − λ): a plain cylinder (R = h = 6 mm)
+    between frictionless plates, base sliding, with the gaps of the top face's corner and
+    mid-edge nodes to the upper plate at the end (negative: off the plate)."""
+    import math
+
+    from magtact.geometry import half_cylinder_mesh
+    from magtact.mechanics import HalfBodyModel
+    from magtact.mechanics._model import StepFailure, Stepping
+
+    R = h = 6e-3
+    G = 10e3
+    cases = []
+    for density, lam in (("coarse", 0.9), ("default", 0.9), ("coarse", 0.7)):
+        bm = half_cylinder_mesh(R, h, density=density, order=2, serendipity=True)
+        model = HalfBodyModel(bm, G, 5000.0, 0.0, base="sliding")
+        rec = {"density": density, "lambda": lam, "n_dofs": model.n_dofs,
+               "load_average_at_start": os.getloadavg()}
+        t0 = time.perf_counter()
+        try:
+            out = model.solve_path(lambda t, lam=lam: (0.0, -(1 - lam) * h * t), [1.0],
+                                   stepping=Stepping(dt_initial=1.0 if lam > 0.85 else 0.25,
+                                                     dt_max=1.0))
+            F = 2 * out["lower"][-1, 2]
+            rec |= {"completed": True,
+                    "relative_error": F / (G * math.pi * R**2 * (lam**-2 - lam)) - 1}
+            t_end = 1.0
+        except StepFailure as exc:
+            rec |= {"completed": False, "failed_at_t": exc.t, "error": exc.reason}
+            t_end = exc.t_converged
+        rec["wall_time_s"] = time.perf_counter() - t0
+        z = bm.points[:, 2] + model.displacement[:, 2]
+        plate = h - (1 - lam) * h * t_end
+        top = bm.surface[np.isclose(bm.points[bm.surface, 2], h)]
+        for name, nodes in (("corner", top[top < bm.n_corners]),
+                            ("mid_edge", top[top >= bm.n_corners])):
+            gap = plate - z[nodes]  # > 0: below the upper plate, i.e. off it
+            rec[f"top_{name}_gap_um"] = {"min": -1e6 * float(gap.max()),
+                                         "mean": -1e6 * float(gap.mean()),
+                                         "max": -1e6 * float(gap.min())}
+        cases.append(rec)
+        print(rec)
+    return {"element": "hex20", "cases": cases,
+            "note": "gap sign: negative = off the plate, positive = into it"}
 
 
 def main() -> None:
@@ -272,20 +330,25 @@ def main() -> None:
     t = sub.add_parser("tangent")
     t.add_argument("--repeat", type=int, default=4)
     sub.add_parser("penalty")
+    sub.add_parser("uniaxial")
     n = sub.add_parser("newton")
     n.add_argument("--mesh", default="coarse_x0.67")
     n.add_argument("--H", type=float, default=3.0)
     n.add_argument("--tol-cycling", type=float, default=1e-5)
     n.add_argument("--penalty", type=float, default=None)
+    n.add_argument("--element", choices=("hex20", "hex27"), default="hex27")
     args = ap.parse_args()
     data = json.loads(OUT.read_text()) if OUT.is_file() else {}
     if args.cmd == "tangent":
         data["tangent"] = tangent(args.repeat)
     elif args.cmd == "penalty":
         data["penalty_scale"] = penalty_scale()
+    elif args.cmd == "uniaxial":
+        data["uniaxial_hex20"] = uniaxial()
     else:
-        rec = newton(args.mesh, args.H, args.tol_cycling, args.penalty)
-        key = f"newton_{args.mesh}_H{args.H:g}_tolcycling{args.tol_cycling:g}" + (
+        rec = newton(args.mesh, args.H, args.tol_cycling, args.penalty, args.element)
+        key = ("" if args.element == "hex27" else f"{args.element}_") + (
+            f"newton_{args.mesh}_H{args.H:g}_tolcycling{args.tol_cycling:g}") + (
             f"_penalty{args.penalty:g}" if args.penalty is not None else "")
         data[key] = rec
         print({k: v for k, v in rec.items() if k != "steps"})

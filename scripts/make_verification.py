@@ -314,6 +314,16 @@ def frontier_section(r: Results) -> list[str]:
                                    "clean", best.get("F_z_t1_and_F_r_min_observed_order")))]
         out += [f"Cheapest within the target of the converged value at H = {h} mm: "
                 + "; ".join(words) + ".", ""]
+    if limits:  # a DOE needs one discretisation for every H
+        def within(p):
+            return all(p.get(f"change_{k}_vs_observed_order", p[f"change_{k}"])
+                       <= tgt[f"change_{k}"] for k in ("F_z_t1", "F_r_min"))
+
+        ok = [{(p["route"], p["mesh"]) for p in o["vs_limit"] if within(p)} for o in limits]
+        both = sorted(set.intersection(*ok)) if ok else []
+        out += ["Within the target at every height measured (the same route and mesh; against "
+                "the observed-order limits where clean): "
+                + (", ".join(f"{r} `{m}`" for r, m in both) if both else "none") + ".", ""]
     for run in f["failed_runs"]:
         variant = f" ({run['variant']})" if run.get("variant") else ""
         out += [f"Not completed: {run['route']}{variant} on `{run['mesh']}` at "
@@ -325,7 +335,8 @@ def quadratic_section(r: Results) -> list[str]:
     if "quadratic" not in r.files:
         return []
     q = r["quadratic"]
-    out = ["### The 27-node route: where its time goes, why its Newton iterations stalled", "",
+    out = ["### The quadratic routes: where their time goes, why their Newton iterations "
+           "stalled", "",
            f"Source: {r.source('quadratic')} (`bench/bench_quadratic.py`), docs/method.md §3.",
            ""]
     if "tangent" in q:
@@ -360,14 +371,31 @@ def quadratic_section(r: Results) -> list[str]:
                 for c in q["penalty_scale"]["cases"]]
         out += table(["element", "mesh", "penalty", "diagonal / shear diagonal",
                       "λ_n / shear diagonal"], rows)
-    runs = {k: v for k, v in q.items() if k.startswith("newton_")}
+    if "uniaxial_hex20" in q:
+        out += ["**20-node cells against the uniaxial closed form** F = G A₀ (λ⁻² − λ) (a plain "
+                "cylinder, R = h = 6 mm, between frictionless plates): contact acts node by "
+                "node, and a serendipity face's consistent nodal forces under a uniform "
+                "pressure are negative at its corners, so its corners lift off the plate "
+                "(gaps of the top face's nodes at the end; negative: off the plate).", ""]
+        rows = [[f"`{c['density']}`", f"{c['lambda']:g}", f"{c['n_dofs']:,}",
+                 spct(c["relative_error"], 2) if c["completed"]
+                 else f"failed at t = {c['failed_at_t']:.3f}",
+                 "{min:.1f} to {max:.1f}".format(**c["top_corner_gap_um"]),
+                 "{min:.3f} to {max:.3f}".format(**c["top_mid_edge_gap_um"]),
+                 f"{c['wall_time_s']:.0f}"]
+                for c in q["uniaxial_hex20"]["cases"]]
+        out += table(["mesh", "λ", "DOFs", "F vs closed form", "corner gaps [µm]",
+                      "mid-edge gaps [µm]", "s"], rows)
+    runs = {k: v for k, v in q.items()
+            if k.startswith("newton_") or k.startswith("hex20_newton_")}
     if runs:
-        out += ["**Newton iterations logged along one path** (hex27, θ_max, the study's 21 "
+        out += ["**Newton iterations logged along one path** (θ_max, the study's 21 "
                 "load levels):", ""]
         rows = []
         for v in runs.values():
             tail = next((s for s in reversed(v["steps"]) if not s["converged"]), None)
-            rows.append([f"`{v['mesh']}`", f"{v['H_mm']:g}", f"{v['tol_cycling']:g}",
+            rows.append([v.get("element", "hex27"), f"`{v['mesh']}`", f"{v['H_mm']:g}",
+                         f"{v['tol_cycling']:g}",
                          f"{v['contact_penalty']:g}",
                          "completed" if v["status"] == "completed" else "failed: " + v["status"],
                          f"{v['F_z_t1_N']:.4f}" if "F_z_t1_N" in v else "—",
@@ -375,7 +403,8 @@ def quadratic_section(r: Results) -> list[str]:
                          f"{v['load_average_at_start'][0]:.1f}",
                          "—" if tail is None else
                          f"{len([s for s in v['steps'] if not s['converged']])}"])
-        out += table(["mesh", "H [mm]", "tol_cycling", "penalty", "status", "F_z(t=1) [N]",
+        out += table(["element", "mesh", "H [mm]", "tol_cycling", "penalty", "status",
+                      "F_z(t=1) [N]",
                       "iterations", "s", "load", "failed steps"], rows)
         for v in runs.values():
             if v["status"] == "completed":
@@ -391,12 +420,27 @@ def quadratic_section(r: Results) -> list[str]:
                      "residual when in contact)"
                      if kinds == {((worst["class"], 1),)} else f"nodes changed: {sorted(kinds)}")
             largest = [i["largest_residual_nodes"][0]["class"] for i in last["iterations"]]
-            out += [f"Last step tried on `{v['mesh']}` at H = {v['H_mm']:g} mm (t = "
-                    f"{last['t'][0]:.5f} → {last['t'][1]:.5f}): residuals {res}. The lower "
-                    f"plate's contact set changes in {len(moved)} of "
-                    f"{len(last['iterations'])} iterations, {which}, at gaps of "
-                    f"{', '.join(f'{g:g}' for g in gaps)} µm; the largest residual sits at a "
-                    f"node of class {', '.join(largest)} in successive iterations.", ""]
+            head = (f"Last step tried with {v.get('element', 'hex27')} on `{v['mesh']}` at "
+                    f"H = {v['H_mm']:g} mm (t = {last['t'][0]:.5f} → {last['t'][1]:.5f}): "
+                    f"residuals {res}.")
+            if moved:
+                body = (f" The lower plate's contact set changes in {len(moved)} of "
+                        f"{len(last['iterations'])} iterations, {which}, at gaps of "
+                        f"{', '.join(f'{g:g}' for g in gaps)} µm;")
+            else:
+                body = " The contact sets do not change;"
+                for plate in ("lower", "upper"):
+                    key = f"{plate}_slip_changed_nodes"
+                    slips = [i for i in last["iterations"] if key in i]
+                    if slips:
+                        nodes = sorted({n for i in slips for n in i[key]})
+                        body += (f" on the {plate} plate {'node' if len(nodes) == 1 else 'nodes'}"
+                                 f" {', '.join(str(n) for n in nodes)} switch"
+                                 f"{'es' if len(nodes) == 1 else ''} between sticking and "
+                                 f"sliding in {len(slips)} of {len(last['iterations'])} "
+                                 "iterations;")
+            out += [head + body + " the largest residual sits at a node of class "
+                    f"{', '.join(largest)} in successive iterations.", ""]
     return out
 
 

@@ -121,7 +121,7 @@ def test_edge_radius_refused_by_the_study_in_mm():
 
 def test_unknown_element_refused_with_the_choices():
     refused({"mechanics": {"element": "tet10"}}, "mechanics.element", "'tet10'",
-            "'hex8', 'hex27'")
+            "'hex8', 'hex20', 'hex27'")
 
 
 def test_every_number_has_physical_bounds_that_hold_the_presets():

@@ -68,10 +68,11 @@ class BodyMesh:
     ----------
     points : (n_points, 3) ndarray
         Node coordinates [m]; base at z = 0, axis x = y = 0.
-    cells : (n_cells, 8) or (n_cells, 27) ndarray of int
-        Hexahedra, VTK node order, positive volume: trilinear (8 nodes) or triquadratic
-        (27 nodes; the corner nodes are numbered before the mid-edge, mid-face and mid-cell
-        nodes, so the first ``n_corners`` points carry a trilinear field of the same cells).
+    cells : (n_cells, 8), (n_cells, 20) or (n_cells, 27) ndarray of int
+        Hexahedra, VTK node order, positive volume: trilinear (8 nodes), serendipity quadratic
+        (20 nodes: corners and mid-edge nodes) or triquadratic (27 nodes: also mid-face and
+        mid-cell nodes); the corner nodes are numbered before the others, so the first
+        ``n_corners`` points carry a trilinear field of the same cells.
     base, symmetry, cavity, surface : ndarray of int
         Node indices on the base z = 0; on the symmetry plane y = 0; on the magnet's cavity
         surface (empty without a magnet); on the free outer surface (side, rounded edge and top
@@ -93,7 +94,7 @@ class BodyMesh:
 
     @property
     def order(self) -> int:
-        """Polynomial order of the cells: 1 (8 nodes) or 2 (27 nodes)."""
+        """Polynomial order of the cells: 1 (8 nodes) or 2 (20 or 27 nodes)."""
         return 1 if self.cells.shape[1] == 8 else 2
 
     @property
@@ -116,7 +117,8 @@ class BodyMesh:
         return float(np.sum(_cell_volumes(self.points, self.cells[:, :8])))
 
 
-def body_mesh(study: Study, H: float, mesh: str | None = None, order: int = 1) -> BodyMesh:
+def body_mesh(study: Study, H: float, mesh: str | None = None, order: int = 1,
+              serendipity: bool = False) -> BodyMesh:
     """Hexahedral mesh of the half sensor body y ≥ 0 for the base height ``H`` [m].
 
     Parameters
@@ -128,7 +130,9 @@ def body_mesh(study: Study, H: float, mesh: str | None = None, order: int = 1) -
     mesh : {"coarse", "default", "accurate", "fine"} or None
         Mesh density; ``None`` takes ``study.mechanics.mesh``.
     order : {1, 2}
-        Trilinear (8-node) or triquadratic (27-node) hexahedra on the same cells.
+        Trilinear (8-node) or quadratic hexahedra on the same cells.
+    serendipity : bool
+        With ``order=2``: 20-node (serendipity) instead of 27-node (triquadratic) hexahedra.
 
     Returns
     -------
@@ -146,6 +150,7 @@ def body_mesh(study: Study, H: float, mesh: str | None = None, order: int = 1) -
         density=name,
         edge_radius=study.mechanics.magnet_edge_radius,
         order=order,
+        serendipity=serendipity,
     )
 
 
@@ -159,6 +164,7 @@ def half_cylinder_mesh(
     r_ring: float | None = None,
     edge_radius: float = 0.0,
     order: int = 1,
+    serendipity: bool = False,
 ) -> BodyMesh:
     """Hexahedral mesh of a half cylinder y ≥ 0 with a rounded top edge and an optional cavity.
 
@@ -184,6 +190,9 @@ def half_cylinder_mesh(
         The mid-edge, mid-face and mid-cell nodes are added to the straight extruded blocks
         and then go through the same maps as the corners (rounded edges), so they lie on the
         curved surfaces.
+    serendipity : bool
+        With ``order=2``: 20-node hexahedra (corners and mid-edge nodes only) instead of
+        27-node ones.
 
     Returns
     -------
@@ -218,7 +227,7 @@ def half_cylinder_mesh(
     z_levels = _z_levels(height, R_h, cavity, dens)
     points, cells = _extrude(xy, quads, z_levels)
     if order == 2:
-        points, cells = _triquadratic(points, cells)
+        points, cells = _quadratic(points, cells, serendipity)
 
     # round the top outer edge: elliptical map of the corner square onto the quarter disc
     if R_h > 0:
@@ -403,12 +412,15 @@ def _extrude(xy: np.ndarray, quads: np.ndarray, z: np.ndarray) -> tuple[np.ndarr
     return points, cells
 
 
-def _triquadratic(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """27-node hexahedra from trilinear ones (FElupe's conversion: new nodes appended)."""
+def _quadratic(points: np.ndarray, cells: np.ndarray,
+               serendipity: bool) -> tuple[np.ndarray, np.ndarray]:
+    """27-node, or with ``serendipity`` 20-node, hexahedra from trilinear ones (FElupe's
+    conversion: new nodes appended)."""
     import felupe as fem
 
     points, cells, _ = fem.mesh.convert(points, cells, "hexahedron", order=2,
-                                        calc_midfaces=True, calc_midvolumes=True)
+                                        calc_midfaces=not serendipity,
+                                        calc_midvolumes=not serendipity)
     return np.asarray(points, dtype=float), np.asarray(cells)
 
 
@@ -430,11 +442,11 @@ def _cell_volumes(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
 
 
 def _face_nodes(n_nodes: int) -> np.ndarray:
-    """Local node numbers of the 6 faces of an 8- or 27-node hexahedron (VTK order), corners
-    first: the nodes whose reference coordinate along one axis is −1 or +1."""
-    from felupe.element import Hexahedron, TriQuadraticHexahedron
+    """Local node numbers of the 6 faces of an 8-, 20- or 27-node hexahedron (VTK order),
+    corners first: the nodes whose reference coordinate along one axis is −1 or +1."""
+    from felupe.element import Hexahedron, QuadraticHexahedron, TriQuadraticHexahedron
 
-    ref = (Hexahedron if n_nodes == 8 else TriQuadraticHexahedron)().points
+    ref = {8: Hexahedron, 20: QuadraticHexahedron, 27: TriQuadraticHexahedron}[n_nodes]().points
     faces = []
     for axis in range(3):
         for side in (-1.0, 1.0):

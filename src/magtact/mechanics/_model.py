@@ -117,13 +117,20 @@ def _linear_solver(name: str, threads: int):
 
 def _node_classes(bmesh: BodyMesh) -> list[np.ndarray]:
     """The free-surface nodes of ``bmesh`` split into cell corners, mid-edge and mid-face nodes
-    (one group for 8-node cells)."""
+    (one group for 8-node cells, two for 20-node cells)."""
     if bmesh.order == 1:
         return [bmesh.surface]
     groups = []
-    for lo, hi in ((0, 8), (8, 20), (20, 26)):
+    for lo, hi in ((0, 8), (8, 20), (20, 26))[: 2 if bmesh.cells.shape[1] == 20 else 3]:
         groups.append(np.intersect1d(bmesh.surface, np.unique(bmesh.cells[:, lo:hi])))
     return groups
+
+
+#: FElupe cell type and region of the hexahedra with 8, 20 and 27 nodes; each region's default
+#: quadrature: 2 × 2 × 2 Gauss points for 8 nodes, 3 × 3 × 3 for 20 and 27.
+_CELLS = {8: ("hexahedron", fem.RegionHexahedron),
+          20: ("hexahedron20", fem.RegionQuadraticHexahedron),
+          27: ("hexahedron27", fem.RegionTriQuadraticHexahedron)}
 
 
 class StepFailure(Exception):
@@ -215,9 +222,10 @@ class HalfBodyModel:
     -----
     Material: the isochoric neo-Hookean energy W = G/2 (J^(-2/3) I_1 − 3) with a volumetric
     penalty K/2 (J̄ − 1)², K = bulk_ratio · G, in FElupe's ``SolidBodyNearlyIncompressible``:
-    the pressure and the volume ratio are constant per cell and condensed, on trilinear (Q1/P0)
-    or, for a mesh of 27-node cells, triquadratic (Q2/P0) hexahedra. Contact acts on every
-    node of the outer surface, mid-edge and mid-face nodes included.
+    the pressure and the volume ratio are constant per cell and condensed, on trilinear (Q1/P0),
+    20-node serendipity (Q2s/P0) or 27-node triquadratic (Q2/P0) hexahedra, after the cells of
+    ``bmesh``. Contact acts on every node of the outer surface, mid-edge and mid-face nodes
+    included.
     """
 
     def __init__(self, bmesh: BodyMesh, G: float, bulk_ratio: float, mu_f: float, *,
@@ -232,12 +240,11 @@ class HalfBodyModel:
         self._linear = _linear_solver(solver, threads)
 
         n = bmesh.n_points
-        quadratic = bmesh.order == 2
-        mesh = fem.Mesh(bmesh.points.copy(), bmesh.cells.copy(),
-                        "hexahedron27" if quadratic else "hexahedron")
+        cell_type, region_type = _CELLS[bmesh.cells.shape[1]]
+        mesh = fem.Mesh(bmesh.points.copy(), bmesh.cells.copy(), cell_type)
         mesh.update(points=np.vstack([mesh.points, [[0.0, 0.0, 0.0], [0.0, 0.0, bmesh.z_top]]]))
         self.lower, self.upper = n, n + 1
-        region = (fem.RegionTriQuadraticHexahedron if quadratic else fem.RegionHexahedron)(mesh)
+        region = region_type(mesh)
         self.field = fem.FieldContainer([fem.Field(region, dim=3)])
         self.solid = fem.SolidBodyNearlyIncompressible(
             fem.NeoHooke(mu=self.G), self.field, bulk=bulk_ratio * self.G)

@@ -29,9 +29,10 @@ def build_model(study: Study, H: float, *, G: float | None = None,
     ``G`` [Pa] (default ``study.material.G_ref``), with the hexahedra of
     ``study.mechanics.element``."""
     m = study.mechanics
-    order = 2 if m.element == "hex27" else 1
+    order = 1 if m.element == "hex8" else 2
     return HalfBodyModel(
-        body_mesh(study, H, mesh, order=order), study.material.G_ref if G is None else G,
+        body_mesh(study, H, mesh, order=order, serendipity=m.element == "hex20"),
+        study.material.G_ref if G is None else G,
         study.material.bulk_ratio, study.loading.mu_f, penalty=m.contact_penalty,
         elastic_slip=m.elastic_slip, solver=m.solver, threads=m.threads,
     )

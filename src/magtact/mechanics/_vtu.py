@@ -34,8 +34,9 @@ def write_vtu(path: str | Path, bmesh: BodyMesh, displacement: np.ndarray) -> Pa
     u = np.asarray(displacement, dtype=float)
     if u.shape != bmesh.points.shape:
         raise ValueError(f"displacement must have shape {bmesh.points.shape}, got {u.shape}")
+    cell_type = {8: "hexahedron", 20: "hexahedron20", 27: "hexahedron27"}[bmesh.cells.shape[1]]
     meshio.Mesh(
-        bmesh.points + u, [("hexahedron", bmesh.cells)],
+        bmesh.points + u, [(cell_type, bmesh.cells)],
         point_data={"displacement": u, "displacement_magnitude": np.linalg.norm(u, axis=1)},
     ).write(path)
     return path

@@ -174,9 +174,10 @@ class Mechanics:
 
     mesh: str = setting("default", choices=MESH_DENSITIES,
                         doc="named mesh density of the hexahedral half body")
-    element: str = setting("hex8", choices=("hex8", "hex27"),
-                           doc="hexahedra of the body: trilinear (hex8, Q1/P0) or triquadratic "
-                               "(hex27, Q2/P0) on the cells of the mesh density")
+    element: str = setting("hex8", choices=("hex8", "hex20", "hex27"),
+                           doc="hexahedra of the body: trilinear (hex8, Q1/P0), 20-node "
+                               "serendipity (hex20, Q2s/P0) or triquadratic (hex27, Q2/P0) on "
+                               "the cells of the mesh density")
     scale_in_G: bool = setting(True, doc="solve at G_ref and scale forces by G/G_ref")
     solver: str = setting("pardiso", choices=("pardiso", "superlu"),
                           doc="sparse direct solver of the Newton systems")
