@@ -99,7 +99,8 @@ app = typer.Typer(
     # rich's markup would read as a style tag and drop.
     rich_markup_mode=None,
 )
-console = Console(stderr=True)
+#: Messages keep their lines whole (paths can be copied from a log); a terminal wraps them.
+console = Console(stderr=True, soft_wrap=True)
 
 
 @app.callback()
