@@ -339,9 +339,9 @@ def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware, d
     a = firmware.chosen
     assert f"{a.kind} ({a.bytes} bytes, {a.multiplies} multiplications)" in section
     assert "3e-12 of the force range" in section and "reached" in section
-    assert ("Forces from models; what limits them: metamodels against the DOE&#x27;s FE "
-            "forces at H") in section
-    assert f"F_z {limit['F_z_mN']:.6g} mN" in section
+    assert ("Forces from the metamodels; what limits them: metamodels against the DOE&#x27;s "
+            "FE forces at H") in section
+    assert f"F_z {limit['F_z_mN']:.3g} mN" in section
 
 
 # ---- hostile press files ---------------------------------------------------------------------

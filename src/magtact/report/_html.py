@@ -480,8 +480,12 @@ def _calibration(folder: Path) -> str:
         err = d.get("force_model_error")
         if isinstance(err, dict):
             limit = ("not measured" if err.get("F_r_mN") is None else
-                     f"F_r {_fmt(err.get('F_r_mN'))} mN, F_z {_fmt(err.get('F_z_mN'))} mN")
-            out.append(f"<p>Forces from {_e(d.get('force_source'))}; what limits them: "
+                     f"F_r {_e(_sig3(err.get('F_r_mN')))} mN, "
+                     f"F_z {_e(_sig3(err.get('F_z_mN')))} mN")
+            source = {"models": "the metamodels",
+                      "fe": "the DOE's FE paths at H, interpolated"}.get(d.get("force_source"),
+                                                                         d.get("force_source"))
+            out.append(f"<p>Forces from {_e(source)}; what limits them: "
                        f"{_e(err.get('kind'))}: {limit} (docs/method.md §13.4).</p>")
         if isinstance(d.get("unit"), dict):
             out.append("<h3>Built unit</h3>" + _dict_table(d["unit"]))
@@ -683,6 +687,11 @@ def _num(cell: str) -> str:
         return f"{float(cell):.6g}"
     except ValueError:
         return cell
+
+
+def _sig3(v) -> str:
+    """A measured error to three significant figures (its own precision is no better)."""
+    return f"{v:.3g}" if isinstance(v, (int, float)) else str(v)
 
 
 def _fmt_time(seconds) -> str:
