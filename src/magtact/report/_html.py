@@ -466,22 +466,23 @@ def _calibration(folder: Path) -> str:
             continue
         design, fw = d.get("design") or {}, d.get("firmware") or {}
         out.append(
-            f"<p>Design H = {_fmt(design.get('H_mm'))} mm, G = {_fmt(design.get('G_kPa'))} kPa; "
-            f"stable region t ≤ {_fmt(design.get('t_m'))}, θ ≤ "
-            f"{_fmt(design.get('theta_m_rad'))} rad. Round trip F → B → F: largest error "
-            f"{_fmt(d.get('round_trip_rel'))} of the force range. Firmware map: "
+            f"<p>Design H = {_sig(design.get('H_mm'), 4)} mm, "
+            f"G = {_sig(design.get('G_kPa'), 4)} kPa; "
+            f"stable region t ≤ {_sig(design.get('t_m'))}, θ ≤ "
+            f"{_sig(design.get('theta_m_rad'))} rad. Round trip F → B → F: largest error "
+            f"{_sig(d.get('round_trip_rel'), 2)} of the force range. Firmware map: "
             f"{_e(fw.get('kind'))} ({_fmt(fw.get('bytes'))} bytes, "
             f"{_fmt(fw.get('multiplies'))} multiplications), largest error over the region "
-            f"F_r {_fmt(fw.get('max_error_F_r_mN'))} mN, F_z {_fmt(fw.get('max_error_F_z_mN'))}"
-            f" mN against σ_F {_fmt(d.get('sigma_F_r_mN'))} / {_fmt(d.get('sigma_F_z_mN'))} mN "
-            f"(field noise {_e(', '.join(_fmt(v) for v in d.get('noise_B_uT') or []))} µT from "
+            f"F_r {_sig(fw.get('max_error_F_r_mN'))} mN, F_z {_sig(fw.get('max_error_F_z_mN'))}"
+            f" mN against σ_F {_sig(d.get('sigma_F_r_mN'))} / {_sig(d.get('sigma_F_z_mN'))} mN "
+            f"(field noise {_e(', '.join(_sig(v) for v in d.get('noise_B_uT') or []))} µT from "
             f"{_e(d.get('noise_source'))}): "
             f"{'reached' if fw.get('reached') else 'not reached'}, {_e(fw.get('rule'))}.</p>")
         err = d.get("force_model_error")
         if isinstance(err, dict):
             limit = ("not measured" if err.get("F_r_mN") is None else
-                     f"F_r {_e(_sig3(err.get('F_r_mN')))} mN, "
-                     f"F_z {_e(_sig3(err.get('F_z_mN')))} mN")
+                     f"F_r {_sig(err.get('F_r_mN'))} mN, "
+                     f"F_z {_sig(err.get('F_z_mN'))} mN")
             source = {"models": "the metamodels",
                       "fe": "the DOE's FE paths at H, interpolated"}.get(d.get("force_source"),
                                                                          d.get("force_source"))
@@ -689,9 +690,9 @@ def _num(cell: str) -> str:
         return cell
 
 
-def _sig3(v) -> str:
-    """A measured error to three significant figures (its own precision is no better)."""
-    return f"{v:.3g}" if isinstance(v, (int, float)) else str(v)
+def _sig(v, digits: int = 3) -> str:
+    """A measured number to ``digits`` significant figures, escaped (text stays text)."""
+    return f"{v:.{digits}g}" if isinstance(v, (int, float)) else _e(_plain(v))
 
 
 def _fmt_time(seconds) -> str:
