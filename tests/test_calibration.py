@@ -10,7 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from matplotlib.figure import Figure
 
@@ -546,3 +546,28 @@ def test_calibrate_fits_a_unit_to_the_fe_forces_where_the_data_hold_H(models, st
     with pytest.raises(MagtactError, match="no FE paths at H = 3.5 mm"):
         calibrate(models, study, 3.5e-3, G_CHOSEN, noise=(NOISE, NOISE),
                   presses=Presses(B[k], F[k]), dataset=doe, force_source="fe")
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(0.0, 1.0), min_size=2, max_size=7, unique=True),
+       st.lists(st.floats(-5.0, 5.0), min_size=7, max_size=7), st.integers(0, 2**31 - 1))
+def test_vectorised_pchip_equals_scipys(nodes, values, seed):
+    """The map's row-wise PCHIP equals scipy's PchipInterpolator inside the nodes, and continues
+    with the end slopes outside them."""
+    from scipy.interpolate import PchipInterpolator
+
+    from magtact.calibration._fe import _pchip
+
+    x = np.sort(np.asarray(nodes))
+    assume(np.diff(x).min() > 1e-3)
+    y = np.asarray(values[:len(x)])
+    rng = np.random.default_rng(seed)
+    xq = rng.uniform(x[0] - 0.2, x[-1] + 0.2, 50)
+    got = _pchip(x, np.tile(y, (xq.size, 1)), xq)
+    ref = PchipInterpolator(x, y)
+    inside = (xq >= x[0]) & (xq <= x[-1])
+    np.testing.assert_allclose(got[inside], ref(xq[inside]), rtol=1e-12, atol=1e-12)
+    d = ref.derivative()
+    lo, hi = xq < x[0], xq > x[-1]
+    np.testing.assert_allclose(got[lo], y[0] + (xq[lo] - x[0]) * d(x[0]), atol=1e-10)
+    np.testing.assert_allclose(got[hi], y[-1] + (xq[hi] - x[-1]) * d(x[-1]), atol=1e-10)
