@@ -73,6 +73,21 @@ def sigma_F(models, study, design):
     return r.sigma_r_worst, r.sigma_z_worst
 
 
+
+def unit_readings(ds, smap, n_azimuths: int):
+    """Readings of the FE-made unit TRUE: all (B, F) with their loads L, the presses' indices
+    k, and the other FE points, each at ``n_azimuths`` random azimuths (Bo, Fo)."""
+    B, F, L = fe_readings(ds, smap, TRUE, seed=3)
+    k = pick(L, PRESSES)
+    others = np.setdiff1d(np.arange(len(B)), k)
+    Bo, Fo = [], []
+    for s in range(n_azimuths):
+        b, f, _ = fe_readings(ds, smap, TRUE, seed=100 + s)
+        Bo.append(b[others])
+        Fo.append(f[others])
+    return B, F, L, k, np.concatenate(Bo), np.concatenate(Fo)
+
+
 def pick(L, presses):
     th = np.unique(L[:, 1])
     return np.array([np.flatnonzero(np.isclose(L[:, 0], t) & (L[:, 1] == th[k]))[0]
@@ -200,15 +215,7 @@ def fe_source(models, study, ds, design, sig) -> dict:
     print("scatter", json.dumps(res["fe_scatter_every_H"]))
 
     # FE-made units fitted with the FE source
-    B, F, Lfe = fe_readings(ds, fmap, TRUE, seed=3)
-    k = pick(Lfe, PRESSES)
-    others = np.setdiff1d(np.arange(len(B)), k)
-    Bo, Fo = [], []
-    for s in range(11):  # the other FE points, each at 11 random azimuths
-        b, f, _ = fe_readings(ds, fmap, TRUE, seed=100 + s)
-        Bo.append(b[others])
-        Fo.append(f[others])
-    Bo, Fo = np.concatenate(Bo), np.concatenate(Fo)
+    B, F, Lfe, k, Bo, Fo = unit_readings(ds, fmap, 11)
     rng = np.random.default_rng(17)
     units = []
     for nB, nF in ((0.0, 0.0), (0.1e-6, 0.05e-3), (1e-6, 1e-3), (5e-6, 2e-3)):
@@ -353,15 +360,7 @@ def main() -> None:
         print("model unit", json.dumps(model_units[-1]))
     out["unit_from_models"] = model_units
 
-    B, F, Lfe = fe_readings(ds, smap, TRUE, seed=3)
-    k = pick(Lfe, PRESSES)
-    others = np.setdiff1d(np.arange(len(B)), k)
-    Bo, Fo = [], []
-    for s in range(10):  # the other FE points, each at 10 random azimuths
-        b, f, _ = fe_readings(ds, smap, TRUE, seed=100 + s)
-        Bo.append(b[others])
-        Fo.append(f[others])
-    Bo, Fo = np.concatenate(Bo), np.concatenate(Fo)
+    B, F, Lfe, k, Bo, Fo = unit_readings(ds, smap, 10)
     fe_units = []
     for nB, nF in ((5e-6, 2e-3), (1e-6, 1e-3)):
         cal = calibrate_unit(smap, Presses(B[k], F[k], sigma_B=nB, sigma_F=nF))

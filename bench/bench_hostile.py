@@ -267,26 +267,9 @@ def _refusal(exc: Exception, *fragments: str) -> tuple[str, str]:
 
 def _main(args: list[str]) -> tuple[int, str]:
     """Exit status and output of the command line's entry point (in this process)."""
-    import contextlib
-    import io
-    import signal
+    from test_command_outputs import cli
 
-    from magtact.cli import main
-
-    err = io.StringIO()
-    handler = signal.getsignal(signal.SIGTERM)
-    old = sys.argv
-    sys.argv = ["magtact", *args]
-    try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(err):
-            main()
-        code = 0
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-    finally:
-        sys.argv = old
-        signal.signal(signal.SIGTERM, handler)
-    return code, " ".join(err.getvalue().split())
+    return cli(*args)
 
 
 def _user_files(tmp: Path, case) -> tuple[str, str]:
