@@ -70,7 +70,12 @@ SEQUENCES = {
     "hex8": [("coarse", 2.0), ("default", 2.0), ("fine", None)],
     "hex27": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
     "hex20": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
+    "hex20-faces": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
+    "hex27-faces": [("coarse_x0.67", 1.5), ("coarse", 1.5), ("coarse_x1.5", None)],
 }
+#: Routes: the element, and "-faces" for contact integrated at the faces' Gauss points
+#: (``mechanics.contact = "faces"``; node-wise otherwise).
+ROUTES = ("hex8", "hex20", "hex27", "hex8-faces", "hex20-faces", "hex27-faces")
 
 
 def _git_commit() -> str:
@@ -119,7 +124,9 @@ def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
     from magtact.study import load_study
 
     study = load_study("magone")
-    study = replace(study, mechanics=replace(study.mechanics, element=route, threads=1))
+    element, _, contact = route.partition("-")
+    study = replace(study, mechanics=replace(study.mechanics, element=element,
+                                             contact=contact or "nodes", threads=1))
     variant = f"reuse_{reuse_ratio:g}" if reuse_ratio > 0 else ""
     if elastic_slip_mm is not None:
         variant = "+".join(v for v in (variant, f"elastic_slip_{elastic_slip_mm:g}mm") if v)
@@ -378,6 +385,7 @@ def _figure(data: dict, path: Path) -> None:
 
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.5), sharex=True)
     style = {"hex8": ("o", "C0"), "hex27": ("s", "C1"), "hex20": ("v", "C4"),
+             "hex20-faces": ("P", "C5"), "hex27-faces": ("X", "C6"), "hex8-faces": ("*", "C7"),
              "richardson": ("^", "C2"), "multi-fidelity": ("D", "C3")}
     limits = {o["H_mm"]: o["vs_limit"] for o in data["orders"] if "vs_limit" in o}
     for col, (key, target) in enumerate((("change_F_z_t1", 0.01), ("change_F_r_min", 0.02))):
@@ -418,7 +426,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run")
-    r.add_argument("--route", choices=("hex8", "hex20", "hex27"), required=True)
+    r.add_argument("--route", choices=ROUTES, required=True)
     r.add_argument("--mesh", required=True)
     r.add_argument("--H", type=float, required=True, help="base height [mm]")
     r.add_argument("--reuse-ratio", type=float, default=0.0,

@@ -14,9 +14,15 @@ import numpy as np
 
 from ..geometry import BodyMesh
 from ..study import Mechanics
+from ._face_contact import FaceContactRigidPlane
 
 #: Default settings of the structural model: the study's (``magtact.study.Mechanics``).
 _DEFAULT = Mechanics()
+
+#: Contact of the body with the plates (the choices of the study's ``mechanics.contact``):
+#: node-wise, or integrated at the faces' Gauss points.
+CONTACTS: tuple[str, ...] = tuple(
+    next(f for f in fields(Mechanics) if f.name == "contact").metadata["choices"])
 
 #: Sparse direct solvers of the (unsymmetric) Newton systems (the choices of the study's
 #: ``mechanics.solver``).
@@ -126,6 +132,23 @@ def _node_classes(bmesh: BodyMesh) -> list[np.ndarray]:
     return groups
 
 
+def _contact_faces(bmesh: BodyMesh, n_points: int):
+    """Point mask and face filter of the faces that can touch a plate: the outer surface's
+    faces, those next to the base included (a side folding onto the lower plate there), without
+    the base, the symmetry plane and the cavity."""
+    mask = np.zeros(n_points, dtype=bool)
+    mask[np.union1d(bmesh.surface, bmesh.base)] = True
+    on_base = np.zeros(n_points, dtype=bool)
+    on_base[bmesh.base] = True
+    y = np.abs(np.append(bmesh.points[:, 1], [0.0, 0.0]))
+    tol = 1e-9 * bmesh.z_top
+
+    def exclude(faces: np.ndarray) -> np.ndarray:
+        return np.all(on_base[faces], axis=1) | np.all(y[faces] < tol, axis=1)
+
+    return mask, exclude
+
+
 #: FElupe cell type and region of the hexahedra with 8, 20 and 27 nodes; each region's default
 #: quadrature: 2 × 2 × 2 Gauss points for 8 nodes, 3 × 3 × 3 for 20 and 27.
 _CELLS = {8: ("hexahedron", fem.RegionHexahedron),
@@ -231,9 +254,12 @@ class HalfBodyModel:
     def __init__(self, bmesh: BodyMesh, G: float, bulk_ratio: float, mu_f: float, *,
                  base: str = "clamped", penalty: float = _DEFAULT.contact_penalty,
                  elastic_slip: float = _DEFAULT.elastic_slip, solver: str = _DEFAULT.solver,
-                 threads: int = _DEFAULT.threads, penalty_per_node_class: bool = False):
+                 threads: int = _DEFAULT.threads, penalty_per_node_class: bool = False,
+                 contact: str = _DEFAULT.contact):
         if base not in ("clamped", "sliding"):
             raise ValueError(f"base must be 'clamped' or 'sliding', got {base!r}")
+        if contact not in CONTACTS:
+            raise ValueError(f"contact must be one of {CONTACTS}, got {contact!r}")
         self.bmesh = bmesh
         self.G = float(G)
         self.timings = {"solid": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0}
@@ -248,14 +274,21 @@ class HalfBodyModel:
         self.field = fem.FieldContainer([fem.Field(region, dim=3)])
         self.solid = fem.SolidBodyNearlyIncompressible(
             fem.NeoHooke(mu=self.G), self.field, bulk=bulk_ratio * self.G)
-        kw = {"friction": mu_f, "multiplier": penalty, "items": [self.solid]}
-        if mu_f > 0:
-            kw["elastic_slip"] = elastic_slip
-        groups = _node_classes(bmesh) if penalty_per_node_class else [bmesh.surface]
-        self.contacts = [  # all lower-plate items first, then the upper plate's
-            fem.ContactRigidPlane(self.field, nodes, centre, normal, **kw)
-            for centre, normal in ((self.lower, [0, 0, 1.0]), (self.upper, [0, 0, -1.0]))
-            for nodes in groups if len(nodes)]
+        plates = ((self.lower, [0, 0, 1.0]), (self.upper, [0, 0, -1.0]))
+        if contact == "faces":
+            self.contacts = [  # the lower plate first, then the upper one
+                FaceContactRigidPlane(self.field, *_contact_faces(bmesh, n + 2), centre, normal,
+                                      friction=mu_f, elastic_slip=elastic_slip,
+                                      multiplier=penalty, solid=self.solid)
+                for centre, normal in plates]
+        else:
+            kw = {"friction": mu_f, "multiplier": penalty, "items": [self.solid]}
+            if mu_f > 0:
+                kw["elastic_slip"] = elastic_slip
+            groups = _node_classes(bmesh) if penalty_per_node_class else [bmesh.surface]
+            self.contacts = [  # all lower-plate items first, then the upper plate's
+                fem.ContactRigidPlane(self.field, nodes, centre, normal, **kw)
+                for centre, normal in plates for nodes in groups if len(nodes)]
         self.items = [self.solid, *self.contacts]
         self._timing_keys = ["solid"] + ["contact"] * len(self.contacts)
 

@@ -34,7 +34,7 @@ def build_model(study: Study, H: float, *, G: float | None = None,
         body_mesh(study, H, mesh, order=order, serendipity=m.element == "hex20"),
         study.material.G_ref if G is None else G,
         study.material.bulk_ratio, study.loading.mu_f, penalty=m.contact_penalty,
-        elastic_slip=m.elastic_slip, solver=m.solver, threads=m.threads,
+        elastic_slip=m.elastic_slip, solver=m.solver, threads=m.threads, contact=m.contact,
     )
 
 

@@ -178,6 +178,9 @@ class Mechanics:
                            doc="hexahedra of the body: trilinear (hex8, Q1/P0), 20-node "
                                "serendipity (hex20, Q2s/P0) or triquadratic (hex27, Q2/P0) on "
                                "the cells of the mesh density")
+    contact: str = setting("nodes", choices=("nodes", "faces"),
+                           doc="contact of the body with the plates: at the nodes of its outer "
+                               "surface, or integrated at the Gauss points of its faces")
     scale_in_G: bool = setting(True, doc="solve at G_ref and scale forces by G/G_ref")
     solver: str = setting("pardiso", choices=("pardiso", "superlu"),
                           doc="sparse direct solver of the Newton systems")
