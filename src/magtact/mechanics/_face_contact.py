@@ -34,18 +34,22 @@ class FaceContactRigidPlane:
         g_q = Δx_q · n, \quad p_q = −ε\, w_q\, g_q \ (g_q < 0), \quad
         \boldsymbol f_a = Σ_q N_a(ξ_q) \left(−p_q\, \boldsymbol n + \boldsymbol t_q\right),
 
-    w_q the Gauss weight times the face's reference area element; ε [Pa/m] is the penalty per
-    unit area, ``multiplier`` times the solid's mean diagonal normal stiffness of the face nodes
-    divided by the mean of Σ_q N_a² w_q (so a node feels about ``multiplier`` times its own
-    stiffness, as with node-wise contact), evaluated once, in the undeformed state: a penalty
-    updated per increment from the stiffness of the last iterate changes every contact force
-    between increments, and after a failed increment it would follow the failed iterate. Friction: an elastic
-    stick with the tangential penalty μ p_q / γ (γ the allowable elastic slip) and a return
-    mapping onto the Coulomb limit |t_q| ≤ μ p_q; the stick reference of a point coming into
-    contact within the increment is the point of first contact (interpolated to zero gap), the
-    law FElupe's node-wise ``ContactRigidPlane`` applies at nodes. The tangent is consistent
-    (unsymmetric when sliding). Forces are residual contributions: the plane acts on the body
-    with −f_a and on its centre point with Σ_a f_a.
+    w_q the Gauss weight times the face's reference area element, on 2 × 2 Gauss points per
+    face (3 × 3 points over-constrain an 8-node face pressed onto a plate: the grazing contact of
+    the top face then made Newton's iterations chatter at the first step of a path). ε [Pa/m]
+    is the penalty per unit area: ``multiplier`` times the solid's mean diagonal normal
+    stiffness of the face nodes, divided by the mean of Σ_q N_a² w_q, so a node feels about
+    ``multiplier`` times its own stiffness, as with node-wise contact. It is evaluated once, in
+    the undeformed state: a penalty updated per increment changes every contact force between
+    increments, and after a failed increment it would follow the failed iterate.
+
+    Friction: an elastic stick with the tangential penalty μ p_q / γ (γ the allowable elastic
+    slip) and a return mapping onto the Coulomb limit |t_q| ≤ μ p_q; the stick reference of a
+    point that comes into contact within the increment is its point of first contact
+    (interpolated to zero gap): the law FElupe's node-wise ``ContactRigidPlane`` applies at
+    nodes, here at Gauss points. The tangent is consistent (unsymmetric when sliding). Forces
+    are residual contributions: the plane acts on the body with −f_a and on its centre point
+    with Σ_a f_a.
 
     Parameters
     ----------
