@@ -43,12 +43,13 @@ def _residual(c) -> np.ndarray:
 def test_a_uniform_penetration_gives_the_faces_consistent_nodal_forces(nodes, corner, edge,
                                                                        middle):
     """The plate 1 µm into the top face: the face's consistent loads of a uniform pressure
-    (the 20-node face's corners pull, −1/12), ε δ A in all, the plate's reaction opposite."""
+    (the 20-node face's corners pull, −1/12), ε (g − δ/2) A in all (the C¹ penalty), the
+    plate's reaction opposite."""
     mesh, field, solid, top = _cell(nodes)
     c = _contact(field, solid, top)
     field[0].values[-1, 2] = -1e-6
     f = _residual(c).reshape(-1, 3)
-    total = c._eps * 1e-6 * 1.0  # ε δ A, the face's area is 1
+    total = c._eps * (1e-6 - c.smoothing / 2) * 1.0  # ε (g − δ/2) A, the face's area is 1
     assert f[top, 2].sum() == pytest.approx(total, rel=1e-9)
     assert f[-1, 2] == pytest.approx(-total, rel=1e-9)
     assert np.abs(f[:, :2]).max() < 1e-12 * total  # frictionless: no tangential force

@@ -72,10 +72,14 @@ class FaceContactRigidPlane:
         Penalty relative to the solid's nodal stiffness.
     solid : object
         The solid body (FElupe item) whose stiffness scales the penalty.
+    smoothing : float
+        Penetration δ [m] over which the penalty stiffness rises from 0 to ε w_q (0: the
+        plain penalty).
     """
 
     def __init__(self, field, mask, exclude, centre: int, normal, *, friction: float = 0.0,
-                 elastic_slip: float = 5e-8, multiplier: float = 5.0, solid=None):
+                 elastic_slip: float = 5e-8, multiplier: float = 5.0, solid=None,
+                 smoothing: float = 1e-7):
         mesh = field.region.mesh
         self.field = field
         self.centre = int(centre)
@@ -83,6 +87,7 @@ class FaceContactRigidPlane:
         self.friction = float(friction)
         self.elastic_slip = float(elastic_slip)
         self.multiplier = float(multiplier)
+        self.smoothing = float(smoothing)
         self.solid = solid
 
         region = _BOUNDARY[mesh.cells.shape[1]](
@@ -138,8 +143,13 @@ class FaceContactRigidPlane:
         lam = self._eps * self.w.reshape(-1)[idx]  # penalty per point [N/m]
         gc = g[idx]
         nn = np.outer(n, n)
-        force = lam[:, None] * gc[:, None] * n
-        stiff = lam[:, None, None] * nn
+        # C¹ penalty: f_n = λ g²/(2δ) for −δ < g < 0, λ (−g − δ/2) beyond; k_n = ∂f_n/∂(−g)
+        d = self.smoothing
+        soft = gc > -d
+        fn = np.where(soft, lam * gc**2 / (2 * d) if d > 0 else 0.0, -lam * (gc + d / 2))
+        kn = np.where(soft, -lam * gc / d if d > 0 else 0.0, lam)
+        force = -fn[:, None] * n
+        stiff = kn[:, None, None] * nn
         dx_ref = dx.copy()
         sliding = np.zeros(len(dx), dtype=bool)
         if self.friction > 0 and len(idx):
@@ -160,12 +170,11 @@ class FaceContactRigidPlane:
                 e[new] = s[:, None] * delta
                 E[new] = s[:, None, None] * Pt + ds[:, None, None] * np.einsum(
                     "pi,j->pij", delta, n)
-            fn = -lam * gc  # normal force of each point [N]
             lam_t = mu * fn / gamma
             e_norm = np.linalg.norm(e, axis=1)
             slide = e_norm > gamma * (1 + 1e-9)
             ft = lam_t[:, None] * e
-            Kt = lam_t[:, None, None] * E - (mu * lam / gamma)[:, None, None] * np.einsum(
+            Kt = lam_t[:, None, None] * E - (mu * kn / gamma)[:, None, None] * np.einsum(
                 "pi,j->pij", e, n)
             e_ref = e.copy()
             if np.any(slide):
@@ -174,7 +183,7 @@ class FaceContactRigidPlane:
                 e_ref[slide] = gamma * th
                 proj = (np.eye(3) - np.einsum("pi,pj->pij", th, th)) / e_norm[slide, None, None]
                 Kt[slide] = mu * (fn[slide, None, None] * proj @ E[slide]
-                                  - lam[slide, None, None] * np.einsum("pi,j->pij", th, n))
+                                  - kn[slide, None, None] * np.einsum("pi,j->pij", th, n))
             force += ft
             stiff += Kt
             dx_ref[idx] = dxc - e_ref
