@@ -16,7 +16,8 @@ Four parts, each writing a section of ``bench/results/quadratic.json``:
   nodes with the largest residual). ``--tol-cycling`` sets ``Stepping.tol_cycling`` (1e-6: the
   tolerance of the cycling mode equals the plain one, i.e. the model before that mode had its
   own); ``--penalty`` the contact penalty.
-- ``uniaxial``: 20-node cells against the uniaxial closed form, with the gaps of the top face's
+- ``uniaxial``: 20-node cells against the uniaxial closed form (contact at the nodes and over the
+  faces), with the gaps of the top face's
   corner and mid-edge nodes to the plate (serendipity faces: node-wise contact lifts the
   corners).
 
@@ -281,7 +282,8 @@ def newton(mesh: str, H_mm: float, tol_cycling: float, penalty: float | None,
 def uniaxial() -> dict:
     """hex20 against the uniaxial closed form F = G A0 (λ⁻² − λ): a plain cylinder (R = h = 6 mm)
     between frictionless plates, base sliding, with the gaps of the top face's corner and
-    mid-edge nodes to the upper plate at the end (negative: off the plate)."""
+    mid-edge nodes to the upper plate at the end (negative: off the plate); contact node-wise and
+    integrated over the faces."""
     import math
 
     from magtact.geometry import half_cylinder_mesh
@@ -291,10 +293,12 @@ def uniaxial() -> dict:
     R = h = 6e-3
     G = 10e3
     cases = []
-    for density, lam in (("coarse", 0.9), ("default", 0.9), ("coarse", 0.7)):
+    for contact, density, lam in (("nodes", "coarse", 0.9), ("nodes", "default", 0.9),
+                                  ("nodes", "coarse", 0.7), ("faces", "coarse", 0.9),
+                                  ("faces", "default", 0.9), ("faces", "coarse", 0.7)):
         bm = half_cylinder_mesh(R, h, density=density, order=2, serendipity=True)
-        model = HalfBodyModel(bm, G, 5000.0, 0.0, base="sliding")
-        rec = {"density": density, "lambda": lam, "n_dofs": model.n_dofs,
+        model = HalfBodyModel(bm, G, 5000.0, 0.0, base="sliding", contact=contact)
+        rec = {"contact": contact, "density": density, "lambda": lam, "n_dofs": model.n_dofs,
                "load_average_at_start": os.getloadavg()}
         t0 = time.perf_counter()
         try:
