@@ -75,11 +75,14 @@ class FaceContactRigidPlane:
     smoothing : float
         Penetration δ [m] over which the penalty stiffness rises from 0 to ε w_q (0: the
         plain penalty).
+    slip_blend : float
+        κ: the friction traction turns from sticking to sliding over elastic slips of
+        (1 ± κ) γ along a parabola (C¹; 0: the kink of the plain return mapping).
     """
 
     def __init__(self, field, mask, exclude, centre: int, normal, *, friction: float = 0.0,
                  elastic_slip: float = 5e-8, multiplier: float = 5.0, solid=None,
-                 smoothing: float = 1e-7):
+                 smoothing: float = 1e-7, slip_blend: float = 0.5):
         mesh = field.region.mesh
         self.field = field
         self.centre = int(centre)
@@ -88,6 +91,7 @@ class FaceContactRigidPlane:
         self.elastic_slip = float(elastic_slip)
         self.multiplier = float(multiplier)
         self.smoothing = float(smoothing)
+        self.slip_blend = float(slip_blend)
         self.solid = solid
 
         region = _BOUNDARY[mesh.cells.shape[1]](
@@ -170,20 +174,30 @@ class FaceContactRigidPlane:
                 e[new] = s[:, None] * delta
                 E[new] = s[:, None, None] * Pt + ds[:, None, None] * np.einsum(
                     "pi,j->pij", delta, n)
-            lam_t = mu * fn / gamma
+            # |f_t| = μ f_n ψ(|e|/γ): ψ(x) = x (stick) up to 1 − κ, 1 (slide) from 1 + κ and
+            # the C¹ parabola between; f_t = μ f_n a e with a = ψ/|e|
+            kappa = self.slip_blend
             e_norm = np.linalg.norm(e, axis=1)
-            slide = e_norm > gamma * (1 + 1e-9)
-            ft = lam_t[:, None] * e
-            Kt = lam_t[:, None, None] * E - (mu * kn / gamma)[:, None, None] * np.einsum(
-                "pi,j->pij", e, n)
+            x = e_norm / gamma
+            lo, hi = 1 - kappa, 1 + kappa
+            blend = (x > lo) & (x < hi)
+            slide = x >= hi
+            psi = np.where(x <= lo, x, 1.0)
+            dpsi = np.where(x <= lo, 1.0, 0.0)
+            if kappa > 0:
+                psi[blend] = x[blend] - (x[blend] - lo) ** 2 / (4 * kappa)
+                dpsi[blend] = 1 - (x[blend] - lo) / (2 * kappa)
+            inner = x <= lo
+            safe = np.where(inner, 1.0, e_norm)
+            a = np.where(inner, 1 / gamma, psi / safe)
+            da = np.where(inner, 0.0, dpsi / (gamma * safe) - psi / safe**2)  # ∂a/∂|e|
+            eh = e / safe[:, None]
+            ft = (mu * fn * a)[:, None] * e
+            Kt = mu * (fn[:, None, None] * (a[:, None, None] * E + da[:, None, None]
+                                            * np.einsum("pi,pj,pjk->pik", e, eh, E))
+                       - (kn * a)[:, None, None] * np.einsum("pi,j->pij", e, n))
             e_ref = e.copy()
-            if np.any(slide):
-                th = e[slide] / e_norm[slide, None]
-                ft[slide] = (mu * fn[slide])[:, None] * th
-                e_ref[slide] = gamma * th
-                proj = (np.eye(3) - np.einsum("pi,pj->pij", th, th)) / e_norm[slide, None, None]
-                Kt[slide] = mu * (fn[slide, None, None] * proj @ E[slide]
-                                  - kn[slide, None, None] * np.einsum("pi,j->pij", th, n))
+            e_ref[slide] = hi * gamma * eh[slide]  # the reference follows a sliding point
             force += ft
             stiff += Kt
             dx_ref[idx] = dxc - e_ref
