@@ -324,6 +324,18 @@ def frontier_section(r: Results) -> list[str]:
         out += ["Within the target at every height measured (the same route and mesh; against "
                 "the observed-order limits where clean): "
                 + (", ".join(f"{r} `{m}`" for r, m in both) if both else "none") + ".", ""]
+    if limits:  # the same element and mesh with contact over the faces and node by node
+        pairs = [(o["H_mm"], p, q) for o in limits for p in o["vs_limit"]
+                 for q in o["vs_limit"] if p["route"].endswith("-faces")
+                 and q["route"] == p["route"].removesuffix("-faces") and q["mesh"] == p["mesh"]]
+        if pairs:
+            out += ["Contact over the faces against contact node by node (the same element and "
+                    "mesh; differences from the hex8 limit of the table above, where clean):", ""]
+            out += table(["element", "mesh", "H [mm]", "ΔF_z(t=1), nodes", "ΔF_z(t=1), faces",
+                          "Δ min F_r, nodes", "Δ min F_r, faces"],
+                         [[q["route"], q["mesh"], f"{H:g}", own(q, "F_z_t1", 2),
+                           own(p, "F_z_t1", 2), own(q, "F_r_min", 2), own(p, "F_r_min", 2)]
+                          for H, p, q in pairs])
     for run in f["failed_runs"]:
         variant = f" ({run['variant']})" if run.get("variant") else ""
         out += [f"Not completed: {run['route']}{variant} on `{run['mesh']}` at "
