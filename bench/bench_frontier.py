@@ -108,15 +108,16 @@ def _save(path: Path, data) -> None:
 
 def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
         penalty_per_class: bool = False, tol_cycling: float | None = None,
-        elastic_slip_mm: float | None = None) -> dict:
+        elastic_slip_mm: float | None = None, contact_penalty: float | None = None) -> dict:
     """Solve one path at θ_max and add its record to ``frontier_runs.json``.
 
     ``reuse_ratio`` > 0 runs the Newton iterations with tangents kept while they contract the
     residual by that factor (``Stepping.reuse_ratio``); the record is then a variant of the
     route (``"variant": "reuse_<ratio>"``), kept beside the plain one; so is
     ``penalty_per_class`` (``HalfBodyModel(penalty_per_node_class=True)``) and
-    ``tol_cycling`` (``Stepping.tol_cycling`` instead of its default) and ``elastic_slip_mm``
-    (``mechanics.elastic_slip_mm`` instead of the study's).
+    ``tol_cycling`` (``Stepping.tol_cycling`` instead of its default), ``elastic_slip_mm``
+    (``mechanics.elastic_slip_mm`` instead of the study's) and ``contact_penalty``
+    (``mechanics.contact_penalty`` instead of the study's).
     """
     from dataclasses import replace
 
@@ -132,6 +133,10 @@ def run(route: str, mesh: str, H_mm: float, reuse_ratio: float = 0.0,
         variant = "+".join(v for v in (variant, f"elastic_slip_{elastic_slip_mm:g}mm") if v)
         study = replace(study, mechanics=replace(study.mechanics,
                                                  elastic_slip=elastic_slip_mm * 1e-3))
+    if contact_penalty is not None:
+        variant = "+".join(v for v in (variant, f"penalty_{contact_penalty:g}") if v)
+        study = replace(study, mechanics=replace(study.mechanics,
+                                                 contact_penalty=contact_penalty))
     if reuse_ratio > 0:
         plain = _simulate.stepping_of
         _simulate.stepping_of = lambda s: replace(plain(s), reuse_ratio=reuse_ratio)
@@ -437,11 +442,14 @@ def main() -> None:
                    help="allowable elastic slip of sticking contact points [mm]")
     r.add_argument("--tol-cycling", type=float, default=None,
                    help="Newton tolerance once the contact state cycles (Stepping.tol_cycling)")
+    r.add_argument("--contact-penalty", type=float, default=None,
+                   help="contact penalty relative to the solid's nodal stiffness")
     sub.add_parser("assemble")
     args = ap.parse_args()
     if args.cmd == "run":
         print(json.dumps(run(args.route, args.mesh, args.H, args.reuse_ratio,
-                             args.penalty_per_class, args.tol_cycling, args.elastic_slip_mm)))
+                             args.penalty_per_class, args.tol_cycling, args.elastic_slip_mm,
+                             args.contact_penalty)))
     else:
         print(json.dumps(assemble(), indent=1)[:4000])
 

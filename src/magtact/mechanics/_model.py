@@ -209,9 +209,9 @@ class HalfBodyModel:
     line x = 0, in x (``base="sliding"``: a frictionless support); symmetry u_y = 0 on y = 0;
     cavity nodes move with the rigid magnet by (u_r, 0, u_z); the upper plate (initially at the
     top face) moves by the same (u_r, 0, u_z); the lower plate is the plane z = 0. Both plates
-    act on every node of the free outer surface by penalty contact (FElupe ``ContactRigidPlane``)
-    with Coulomb friction μ_f; the penalty multipliers are relative to the solid's stiffness,
-    so every force is proportional to G.
+    act on every node of the free outer surface by penalty contact (FElupe ``ContactRigidPlane``;
+    or on its faces, ``contact="faces"``) with Coulomb friction μ_f; the penalty multipliers are
+    relative to the solid's stiffness, so every force is proportional to G.
 
     Parameters
     ----------
@@ -235,6 +235,10 @@ class HalfBodyModel:
         Sparse direct solver of the (unsymmetric) Newton systems.
     threads : int
         Threads of the PARDISO solver (0: the library default).
+    contact : {"nodes", "faces"}
+        Contact at the nodes of the outer surface (FElupe ``ContactRigidPlane``) or integrated
+        at the Gauss points of its faces (:class:`FaceContactRigidPlane`; what 20-node cells
+        need, docs/method.md §3).
     penalty_per_node_class : bool
         Contact items per class of surface node (cell corners, mid-edge, mid-face nodes of
         27-node cells), each with its penalty relative to the mean diagonal stiffness of its own
