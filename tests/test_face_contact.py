@@ -129,3 +129,20 @@ def test_the_tangent_is_the_derivative_of_the_residual(nodes, slide, seed, start
     scale = np.linalg.norm(fd)
     assume(idx0.size > 0 and scale > 0)
     assert np.linalg.norm(K @ d.ravel() - fd) <= 1e-5 * scale
+
+
+def test_an_unknown_contact_is_refused_naming_the_choices():
+    from magtact.geometry import half_cylinder_mesh
+    from magtact.mechanics import HalfBodyModel
+
+    with pytest.raises(ValueError, match=r"contact must be one of \('nodes', 'faces'\), "
+                                         r"got 'edges'"):
+        HalfBodyModel(half_cylinder_mesh(6e-3, 6e-3, density="coarse"), 10e3, 5000.0, 0.0,
+                      contact="edges")
+
+
+def test_the_study_refuses_an_unknown_contact_naming_the_key():
+    from magtact.study import StudyError, study_from_dict
+
+    with pytest.raises(StudyError, match=r"mechanics\.contact.*'nodes', 'faces'"):
+        study_from_dict({"mechanics": {"contact": "edges"}}, "test")

@@ -31,12 +31,15 @@ class FaceContactRigidPlane:
 
     .. math::
 
-        g_q = Δx_q · n, \quad p_q = −ε\, w_q\, g_q \ (g_q < 0), \quad
+        g_q = Δx_q · n, \quad p_q = ε\, w_q\, φ(g_q), \quad
         \boldsymbol f_a = Σ_q N_a(ξ_q) \left(−p_q\, \boldsymbol n + \boldsymbol t_q\right),
 
-    w_q the Gauss weight times the face's reference area element, on 2 × 2 Gauss points per
-    face (3 × 3 points over-constrain an 8-node face pressed onto a plate: the grazing contact of
-    the top face then made Newton's iterations chatter at the first step of a path). ε [Pa/m]
+    φ(g) = g²/(2δ) for −δ < g < 0, −g − δ/2 beyond, 0 off the plane (a C¹ penalty: with the
+    kink of the plain one a point grazing the plane makes Newton's iterations alternate between
+    holding and releasing it); w_q the Gauss weight times the face's reference area element,
+    on 2 × 2 Gauss points per face (3 × 3 points over-constrain an 8-node face pressed onto a
+    plate: the grazing contact of the top face then made Newton's iterations chatter at the
+    first step of a path). ε [Pa/m]
     is the penalty per unit area: ``multiplier`` times the solid's mean diagonal normal
     stiffness of the face nodes, divided by the mean of Σ_q N_a² w_q, so a node feels about
     ``multiplier`` times its own stiffness, as with node-wise contact. It is evaluated once, in
@@ -44,7 +47,8 @@ class FaceContactRigidPlane:
     increments, and after a failed increment it would follow the failed iterate.
 
     Friction: an elastic stick with the tangential penalty μ p_q / γ (γ the allowable elastic
-    slip) and a return mapping onto the Coulomb limit |t_q| ≤ μ p_q; the stick reference of a
+    slip) and a return mapping onto the Coulomb limit |t_q| ≤ μ p_q, the corner between them
+    rounded (``slip_blend``); the stick reference of a
     point that comes into contact within the increment is its point of first contact
     (interpolated to zero gap): the law FElupe's node-wise ``ContactRigidPlane`` applies at
     nodes, here at Gauss points. The tangent is consistent (unsymmetric when sliding). Forces
