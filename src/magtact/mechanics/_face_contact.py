@@ -132,8 +132,10 @@ class FaceContactRigidPlane:
 
     def _penalty(self) -> float:
         """ε [Pa/m]: the solid's mean diagonal normal stiffness at the face nodes × multiplier,
-        per unit of a node's share Σ_q N_a² w_q."""
-        K = self.solid.assemble.matrix(self.field)
+        per unit of a node's share Σ_q N_a² w_q (called once, before any load step)."""
+        K = self.solid.results.stiffness  # the undeformed solid's, if another item assembled it
+        if K is None:
+            K = self.solid.assemble.matrix(self.field)
         dof = 3 * self.nodes[:, None] + np.arange(3)[None, :]
         diag = K.diagonal()[dof]  # (n, 3)
         k_normal = float(np.mean(diag @ self.normal**2))
