@@ -88,3 +88,38 @@ def test_bad_height_is_a_clean_error(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert res.returncode == 2
     assert "--H must be between 0.001 and 1000 mm" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_the_figure_draws_quadratic_cells_by_their_corners(tmp_path):
+    """20- and 27-node cells (``mechanics.element``) give the picture of their 8 corners: the
+    same pixels as the same points with the corner hexahedra only."""
+    from matplotlib.image import imread
+
+    from magtact.geometry import body_mesh
+    from magtact.report import fig_deformed_body
+    from magtact.study import load_study
+
+    study = load_study(None)
+    for i, kw in enumerate(({"order": 2, "serendipity": True}, {"order": 2})):
+        m = body_mesh(study, 3e-3, "coarse", **kw)
+        u = 0.1 * m.points * [1.0, 0.0, -1.0]
+        pictures = []
+        for j, cells in enumerate((m.cells, m.cells[:, :8])):
+            files = fig_deformed_body(m.points, cells, u, tmp_path / f"body{i}{j}")
+            pictures.append(imread(next(f for f in files if f.suffix == ".png")))
+        np.testing.assert_array_equal(pictures[0], pictures[1])
+
+
+@pytest.mark.long
+def test_simulate_with_20_node_cells_writes_its_files(tmp_path):
+    """``mechanics.element = "hex20"`` with contact over the faces: the VTU holds 20-node cells
+    and the figure is drawn (the command read 8-node cells only)."""
+    study = tmp_path / "hex20.toml"
+    study.write_text(SMALL + 'element = "hex20"\ncontact = "faces"\n')
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["simulate", str(study), "--H", "4", "--theta", "0",
+                                      "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    mesh = meshio.read(out / "deformed_t1.vtu")
+    assert [c.type for c in mesh.cells] == ["hexahedron20"]
+    assert (out / "deformed_body.png").stat().st_size > 10_000

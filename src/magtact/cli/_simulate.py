@@ -64,7 +64,7 @@ def simulate_command(
         m = meshio.read(vtu)
         u = m.point_data["displacement"]
         fig_files = fig_deformed_body(
-            m.points - u, m.cells_dict["hexahedron"], u, folder / "deformed_body",
+            m.points - u, m.cells[0].data, u, folder / "deformed_body",
             title=f"H = {H:g} mm, θ = {theta:.3f} rad, t = {res.t[-1]:g}: "
                   f"F_r = {res.F_r[-1]:.3g} N, F_z = {res.F_z[-1]:.3g} N "
                   f"(G = {from_si(res.G, 'kPa'):g} kPa)")

@@ -35,8 +35,8 @@ def fig_deformed_body(points: np.ndarray, cells: np.ndarray, displacement: np.nd
     ----------
     points : (n_points, 3) ndarray
         Undeformed node coordinates [m].
-    cells : (n_cells, 8) ndarray of int
-        Hexahedra (VTK order).
+    cells : (n_cells, 8 | 20 | 27) ndarray of int
+        Hexahedra (VTK order, corners first); quadratic cells are drawn by their corners.
     displacement : (n_points, 3) ndarray
         Nodal displacement [m].
     path : path
