@@ -254,8 +254,3 @@ class FaceContactRigidPlane:
         """Go back to a :meth:`checkpoint` (a failed increment is retried from there)."""
         self.state = {k: v.copy() for k, v in checkpoint.items()}
         self._trial = None
-
-    @property
-    def n_points(self) -> int:
-        """Gauss points of the contact faces."""
-        return self.w.size
