@@ -23,7 +23,13 @@ def run(tmp_path_factory):
     result = CliRunner().invoke(app, ["simulate", str(study), "--H", "4", "--theta", "0",
                                       "--G", "20", "--out", str(out)])
     assert result.exit_code == 0, result.output
+    (root / "stdout.txt").write_text(result.output)
     return out
+
+
+def test_the_summary_names_the_discretisation(run):
+    text = " ".join((run.parent / "stdout.txt").read_text().split())
+    assert re.search(r"\d+ DOFs \(coarse mesh, hex8 cells, contact node by node\)", text), text
 
 
 def test_forces_csv(run):
@@ -120,6 +126,7 @@ def test_simulate_with_20_node_cells_writes_its_files(tmp_path):
     result = CliRunner().invoke(app, ["simulate", str(study), "--H", "4", "--theta", "0",
                                       "--out", str(out)])
     assert result.exit_code == 0, result.output
+    assert "hex20 cells, contact over the faces" in " ".join(result.output.split())
     mesh = meshio.read(out / "deformed_t1.vtu")
     assert [c.type for c in mesh.cells] == ["hexahedron20"]
     assert (out / "deformed_body.png").stat().st_size > 10_000

@@ -70,6 +70,8 @@ def simulate_command(
                   f"(G = {from_si(res.G, 'kPa'):g} kPa)")
     console.print(
         f"simulate: {res.steps} steps, {res.newton_iterations} Newton iterations, "
-        f"{res.cutbacks} cut-backs, {res.n_dofs} DOFs ({res.mesh} mesh), "
+        f"{res.cutbacks} cut-backs, {res.n_dofs} DOFs ({res.mesh} mesh, "
+        f"{s.mechanics.element} cells, contact "
+        f"{'over the faces' if s.mechanics.contact == 'faces' else 'node by node'}), "
         f"{res.wall_time:.1f} s; wrote {o.final(folder / 'forces.csv')}, {o.final(vtu)}, "
         + ", ".join(str(o.final(f)) for f in fig_files), highlight=False)
