@@ -324,6 +324,7 @@ def frontier_section(r: Results) -> list[str]:
         out += ["Within the target at every height measured (the same route and mesh; against "
                 "the observed-order limits where clean): "
                 + (", ".join(f"{r} `{m}`" for r, m in both) if both else "none") + ".", ""]
+        out += _other_height(limits, f["failed_runs"], within)
     if limits:  # the same element and mesh with contact over the faces and node by node
         pairs = [(o["H_mm"], p, q) for o in limits for p in o["vs_limit"]
                  for q in o["vs_limit"] if p["route"].endswith("-faces")
@@ -341,6 +342,41 @@ def frontier_section(r: Results) -> list[str]:
         out += [f"Not completed: {run['route']}{variant} on `{run['mesh']}` at "
                 f"H = {run['H_mm']:g} mm ({run['error']}).", ""]
     return out + quadratic_section(r)
+
+
+def _other_height(limits: list[dict], failed: list[dict], within) -> list[str]:
+    """The cost of the target at both heights: each route and mesh within it at the lowest
+    height, cheapest first, with what the same route and mesh gave at the others."""
+    by_h = {o["H_mm"]: {(p["route"], p["mesh"]): p for p in o["vs_limit"]} for o in limits}
+    stalls = {(r["route"] + (f" ({r['variant']})" if r.get("variant") else ""), r["mesh"],
+               r["H_mm"]): r["error"] for r in failed}
+    low, *others = sorted(by_h)
+    rows = []
+    for key, p in sorted(by_h[low].items(), key=lambda kv: kv[1]["wall_time_s"]):
+        if not within(p):
+            continue
+        row = [key[0], key[1], f"{p['wall_time_s']:.0f}"]
+        for H in others:
+            q = by_h[H].get(key)
+            if q is not None:
+                changes = ", ".join(
+                    pct(q.get(f"change_{k}_vs_observed_order", q[f"change_{k}"]), 2)
+                    for k in ("F_z_t1", "F_r_min"))
+                row.append(f"{q['wall_time_s']:.0f} s, " + ("within" if within(q) else "outside")
+                           + f" ({changes})")
+            elif (err := stalls.get((*key, H))) is not None:
+                t = float(err.split("failed at t = ")[1].split(" ")[0])
+                row.append(f"stalls at t = {t:.3f}")
+            else:
+                row.append("not run")
+        rows.append(row)
+    if not rows:
+        return []
+    return ([f"The target at both heights: each route and mesh within it at H = {low:g} mm "
+             "(cheapest first) and what the same route and mesh gave at the other height "
+             "(ΔF_z(t = 1), Δ min F_r as in the table above):", ""]
+            + table(["route", "mesh", f"s per path, H = {low:g} mm"]
+                    + [f"H = {H:g} mm" for H in others], rows) + [""])
 
 
 def quadratic_section(r: Results) -> list[str]:
