@@ -376,7 +376,7 @@ def _other_height(limits: list[dict], failed: list[dict], within) -> list[str]:
              "(cheapest first) and what the same route and mesh gave at the other height "
              "(ΔF_z(t = 1), Δ min F_r as in the table above):", ""]
             + table(["route", "mesh", f"s per path, H = {low:g} mm"]
-                    + [f"H = {H:g} mm" for H in others], rows) + [""])
+                    + [f"H = {H:g} mm" for H in others], rows))
 
 
 def quadratic_section(r: Results) -> list[str]:
