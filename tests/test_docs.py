@@ -210,3 +210,34 @@ def test_the_bundled_data_readme_lists_the_data_sets_attributes():
     assert {a for a in actual if not any(a.startswith(p) for p in prefixes)} <= named
     for var in ds.data_vars:
         assert f"`{var}" in text or f" {var}`" in text or f", {var}" in text, var
+
+
+def test_the_both_heights_table_follows_each_route_to_the_other_height():
+    """Routes within the target at the lowest height, cheapest first, and what each gave at
+    the other: within, outside (its changes), a stall (its t) or not run; a route outside the
+    target at the lowest height is left out."""
+    mv = _script("make_verification")
+
+    def point(route, mesh, s, fz, fr):
+        return {"route": route, "mesh": mesh, "wall_time_s": s, "change_F_z_t1": fz,
+                "change_F_r_min": fr}
+
+    limits = [
+        {"H_mm": 3.0, "vs_limit": [point("a", "m", 50, 0.005, 0.01),
+                                   point("b", "m", 20, 0.005, 0.01),
+                                   point("c", "m", 10, 0.02, 0.01),
+                                   point("d", "m", 70, 0.001, 0.001)]},
+        {"H_mm": 7.0, "vs_limit": [point("a", "m", 150, 0.002, 0.03),
+                                   point("d", "m", 90, 0.001, 0.001)]}]
+    failed = [{"route": "b", "variant": "", "mesh": "m", "H_mm": 7.0,
+               "error": "structural path failed at t = 0.34091 (theta = 0.4 rad)"}]
+
+    def within(p):
+        return p["change_F_z_t1"] <= 0.01 and p["change_F_r_min"] <= 0.02
+
+    rows = [line for line in mv._other_height(limits, failed, within) if line.startswith("| ")]
+    assert rows[1:] == ["| b | m | 20 | stalls at t = 0.341 |",
+                        "| a | m | 50 | 150 s, outside (0.20 %, 3.00 %) |",
+                        "| d | m | 70 | 90 s, within (0.10 %, 0.10 %) |"]
+    assert mv._other_height(limits[:1] + [{"H_mm": 7.0, "vs_limit": []}], [],
+                            lambda p: False) == []
