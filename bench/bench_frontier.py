@@ -207,7 +207,8 @@ def _change(a: float, b: float) -> float:
 
 
 def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
-    """Frontier points of the mesh routes and of Richardson extrapolation, and observed orders."""
+    """Frontier points of the mesh routes and of Richardson extrapolation, and observed orders
+    (of a route's variants too where all three of its meshes completed)."""
     by = {(r["route"], r["mesh"], r["H_mm"]): r for r in records
           if r.get("completed") and not r.get("variant")}
     points, orders = [], []
@@ -223,10 +224,18 @@ def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
                         "F_z_t1_N": a["F_z_t1_N"], "F_r_min_N": a["F_r_min_N"],
                         "change_F_z_t1": _change(a["F_z_t1_N"], b["F_z_t1_N"]),
                         "change_F_r_min": _change(a["F_r_min_N"], b["F_r_min_N"])})
-            trio = [by.get((route, m, H)) for m, _ in seq]
-            if all(trio):
+            trios = {"": [by.get((route, m, H)) for m, _ in seq]}
+            for variant in sorted({r.get("variant") for r in records if r.get("route") == route
+                                   and r.get("variant") and r.get("completed")}):
+                trios[variant] = [next((r for r in records if r.get("completed")
+                                        and _key(r) == (route, m, H, variant)), None)
+                                  for m, _ in seq]
+            for variant, trio in trios.items():
+                if not all(trio):
+                    continue
                 r = seq[0][1]
-                rec = {"route": route, "H_mm": H, "meshes": [m for m, _ in seq]}
+                rec = {"route": route + (f" ({variant})" if variant else ""), "H_mm": H,
+                       "meshes": [m for m, _ in seq]}
                 for key in ("F_z_t1_N", "F_r_min_N"):
                     f1, f2, f3 = (t[key] for t in trio)
                     q = (f1 - f2) / (f2 - f3)
