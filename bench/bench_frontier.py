@@ -211,6 +211,7 @@ def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
     (of a route's variants too where all three of its meshes completed)."""
     by = {(r["route"], r["mesh"], r["H_mm"]): r for r in records
           if r.get("completed") and not r.get("variant")}
+    done = {_key(r): r for r in records if r.get("completed")}
     points, orders = [], []
     for route, seq in SEQUENCES.items():
         for H in (3.0, 7.0):
@@ -224,13 +225,8 @@ def _mesh_points(records: list[dict]) -> tuple[list[dict], list[dict]]:
                         "F_z_t1_N": a["F_z_t1_N"], "F_r_min_N": a["F_r_min_N"],
                         "change_F_z_t1": _change(a["F_z_t1_N"], b["F_z_t1_N"]),
                         "change_F_r_min": _change(a["F_r_min_N"], b["F_r_min_N"])})
-            trios = {"": [by.get((route, m, H)) for m, _ in seq]}
-            for variant in sorted({r.get("variant") for r in records if r.get("route") == route
-                                   and r.get("variant") and r.get("completed")}):
-                trios[variant] = [next((r for r in records if r.get("completed")
-                                        and _key(r) == (route, m, H, variant)), None)
-                                  for m, _ in seq]
-            for variant, trio in trios.items():
+            for variant in sorted({k[3] for k in done if k[0] == route}):
+                trio = [done.get((route, m, H, variant)) for m, _ in seq]
                 if not all(trio):
                     continue
                 r = seq[0][1]
