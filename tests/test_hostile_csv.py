@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import subprocess
 import sys
 import tempfile
@@ -85,10 +86,14 @@ def test_folder_and_unreadable_files(tmp_path, monkeypatch):
     refused([good(tmp_path, "a.csv", 1), tmp_path], f"{tmp_path}: not a file: it is a folder")
     locked = good(tmp_path, "locked.csv", 2)
 
-    def deny(self, *args, **kwargs):
-        raise PermissionError(13, "Permission denied", str(self))
+    real_open = os.open
 
-    monkeypatch.setattr(Path, "read_bytes", deny)
+    def deny(path, *args, **kwargs):
+        if str(path) == str(locked):
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", deny)
     refused([locked], "locked.csv: cannot be read: Permission denied")
 
 

@@ -9,6 +9,7 @@ nothing else may escape and nothing may take long.
 from __future__ import annotations
 
 import math
+import os
 import tempfile
 from dataclasses import fields
 from pathlib import Path
@@ -68,10 +69,14 @@ def test_folder_unreadable_and_oversized_files(tmp_path, monkeypatch):
     refused(big, "file", f"at most {MAX_FILE_BYTES:,}")
     locked = write(tmp_path, 'name = "x"\n', "locked.toml")
 
-    def deny(self):
-        raise PermissionError(13, "Permission denied", str(self))
+    real_open = os.open
 
-    monkeypatch.setattr(Path, "read_bytes", deny)
+    def deny(path, *args, **kwargs):
+        if str(path) == str(locked):
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", deny)
     msg = refused(locked, "file", "cannot be read: Permission denied")
     assert msg.startswith(str(locked))
 

@@ -96,7 +96,7 @@ def test_holdout_larger_than_the_study_doe_is_refused_before_any_work(tmp_path):
 
 
 def test_holdout_larger_than_the_data_set_names_file_and_setting():
-    from magtact.study._load import check_holdout
+    from magtact.study import check_holdout
 
     check_holdout(load_study(None), 2, 6, "ok.nc", "s.toml")  # 8 interior paths: 4 can go
     with pytest.raises(StudyError, match=r"s.toml: \[metamodel.holdout_paths\] 4 held-out "

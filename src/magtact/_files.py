@@ -1,7 +1,8 @@
 """Reading the files a user hands in, and writing result files.
 
-A user's file is read by :func:`read_text_capped`: UTF-8 (with or without a byte-order mark),
-at most a stated number of bytes, every failure one :class:`UnreadableFile` with the reason.
+A user's file is read by :func:`read_bytes_capped` (or :func:`read_text_capped`,
+:func:`read_json_capped` on top of it): a regular file only, at most a stated number of bytes,
+every failure one :class:`UnreadableFile` with the reason.
 
 Result files appear whole or not at all.
 A file is written to a temporary sibling and renamed over the target (``os.replace`` is atomic
@@ -128,29 +129,89 @@ class UnreadableFile(Exception):
     (the caller names the file in its own error)."""
 
 
-def read_text_capped(path: str | os.PathLike, max_bytes: int) -> str:
-    """The text of the file ``path``: UTF-8 with or without a byte-order mark, at most
-    ``max_bytes`` bytes (checked before reading).
+def read_bytes_capped(path: str | os.PathLike, max_bytes: int) -> bytes:
+    """The bytes of the regular file ``path``, at most ``max_bytes`` of them.
+
+    The file is opened without blocking (a FIFO never holds the reader) and checked on the open
+    descriptor, so a path swapped between the check and the read still reads a regular file,
+    and at most ``max_bytes + 1`` bytes are read whatever the file claims (a file growing while
+    read, or a device reporting size 0).
 
     Raises
     ------
     UnreadableFile
-        If ``path`` is not a file, is larger than ``max_bytes``, cannot be read, or is not
-        UTF-8 text (the message gives the first offending byte and its offset).
+        If ``path`` is not a regular file, is larger than ``max_bytes`` or cannot be read.
     """
     path = Path(path)
+    problem = file_problem(path)
+    if problem is not None:
+        raise UnreadableFile("not found" if problem == "not found" else f"is {problem}")
     try:
-        problem = file_problem(path)
-        if problem is not None:
-            raise UnreadableFile("not found" if problem == "not found" else f"is {problem}")
-        size = path.stat().st_size
-        if size > max_bytes:
-            raise UnreadableFile(f"has {size:,} bytes; at most {max_bytes:,} are read")
-        data = path.read_bytes()
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)
+                     | getattr(os, "O_NOCTTY", 0))
     except OSError as exc:
         raise UnreadableFile(f"cannot be read: {exc.strerror or exc}") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise UnreadableFile("is not a regular file (it changed while it was opened)")
+        if st.st_size > max_bytes:
+            raise UnreadableFile(f"has {st.st_size:,} bytes; at most {max_bytes:,} are read")
+        chunks, total = [], 0
+        while total <= max_bytes:
+            chunk = os.read(fd, min(1 << 20, max_bytes + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+        if total > max_bytes:
+            raise UnreadableFile(f"has more than {max_bytes:,} bytes; at most {max_bytes:,} "
+                                 "are read")
+        return b"".join(chunks)
+    except OSError as exc:
+        raise UnreadableFile(f"cannot be read: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+
+
+def read_text_capped(path: str | os.PathLike, max_bytes: int) -> str:
+    """The text of the file ``path``: UTF-8 with or without a byte-order mark, at most
+    ``max_bytes`` bytes (read by :func:`read_bytes_capped`).
+
+    Raises
+    ------
+    UnreadableFile
+        If ``path`` is not a regular file, is larger than ``max_bytes``, cannot be read, or is
+        not UTF-8 text (the message gives the first offending byte and its offset).
+    """
+    data = read_bytes_capped(path, max_bytes)
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise UnreadableFile(f"is not UTF-8 text (byte {data[exc.start]:#04x} at offset "
                              f"{exc.start}); save it as UTF-8") from None
+
+
+def read_json_capped(path: str | os.PathLike, max_bytes: int):
+    """The JSON document of the file ``path`` (read by :func:`read_text_capped`); constants
+    such as ``NaN`` and ``Infinity``, which are not JSON, are refused.
+
+    Raises
+    ------
+    UnreadableFile
+        If the file is unreadable (as :func:`read_text_capped`) or is not JSON (the message
+        gives the line and column).
+    """
+    text = read_text_capped(path, max_bytes)
+
+    def constant(name):
+        raise ValueError(f"{name} is not a JSON number")
+
+    try:
+        return json.loads(text, parse_constant=constant)
+    except json.JSONDecodeError as exc:
+        raise UnreadableFile(f"is not JSON: {exc.msg} at line {exc.lineno}, column "
+                             f"{exc.colno}") from None
+    except (ValueError, RecursionError) as exc:
+        what = "nests too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise UnreadableFile(f"is not JSON: {what}") from None

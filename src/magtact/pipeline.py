@@ -39,7 +39,7 @@ from ._runfolder import (
     write_stamp,
 )
 from ._versions import RUN, package_versions
-from .study import Study, check_holdout
+from .study import Study, check_study
 
 #: File in each stage folder naming the run (``run.json``'s ``run_id``) that wrote the folder.
 RUN_STAMP = ".magtact-run"
@@ -162,7 +162,7 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
     """
     if evidence is not None and not Path(evidence).is_dir():
         raise MissingFileError(f"{evidence}: no such folder of benchmark results")
-    check_holdout(study)  # before the DOE, which may take hours
+    check_study(study)  # the rules of magtact study, before the DOE, which may take hours
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()

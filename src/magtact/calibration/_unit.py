@@ -27,7 +27,7 @@ from scipy.optimize import least_squares
 from .._errors import MagtactError
 from .._numbers import parse_float
 from ..study import from_si, mm, to_si
-from ..validation import DataError, read_cell, read_table_lines
+from ..validation import DataError, read_cell, read_row, read_table_lines
 from ._map import SensorMap, UnitParameters, _check_readings
 
 #: Parameter names in the order of :meth:`UnitParameters.vector`, with the unit they are shown in.
@@ -53,6 +53,16 @@ _SCALE = np.array([1.0, 1.0, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4])
 
 #: Columns of a press file, with their units.
 PRESS_COLUMNS = ("B_x_T", "B_y_T", "B_z_T", "F_x_N", "F_y_N", "F_z_N")
+#: Most presses of one unit (a calibration uses tens; the fit's memory grows with their number).
+MAX_PRESSES = 10_000
+#: Largest field component of a press [T]: above the remanence of any permanent magnet (the
+#: strongest sintered NdFeB grades stay below 1.5 T), so a larger value is a unit mistake.
+MAX_FIELD = 2.0
+#: Largest force component of a press [N]: a soft tactile body of centimetres carries far less
+#: (1 kN on 1 cm² is 10 MPa, beyond any silicone), so a larger value is a unit mistake.
+MAX_FORCE = 1000.0
+#: Range of a press's noise figures [SI]: σ_B 1 nT to 10 mT, σ_F 1 µN to 100 N.
+SIGMA_BOUNDS = {"sigma_B": (1e-9, 1e-2), "sigma_F": (1e-6, 100.0)}
 
 
 @dataclass(frozen=True)
@@ -72,9 +82,23 @@ class Presses:
         if B.ndim != 2 or B.shape != F.shape:
             raise MagtactError(f"presses: B and F must both be (n, 3), got {B.shape} and "
                                f"{F.shape}")
-        if not (self.sigma_B > 0 and self.sigma_F > 0):
-            raise MagtactError(f"presses: the noise sigma_B, sigma_F must be positive, got "
-                               f"{self.sigma_B} T, {self.sigma_F} N")
+        if len(B) > MAX_PRESSES:
+            raise MagtactError(f"presses: {len(B):,} presses; at most {MAX_PRESSES:,} (a unit "
+                               "is calibrated from tens)")
+        for values, top, what in ((B, MAX_FIELD, "B"), (F, MAX_FORCE, "F")):
+            big = np.abs(values) > top
+            if big.any():
+                i, a = (int(v) for v in np.argwhere(big)[0])
+                raise MagtactError(f"presses {what}: press {i} component {'xyz'[a]} is "
+                                   f"{values[i, a]:.6g} {'T' if what == 'B' else 'N'}; a "
+                                   f"press's {what} is within ±{top:g} "
+                                   f"{'T' if what == 'B' else 'N'}")
+        for name in ("sigma_B", "sigma_F"):
+            lo, hi = SIGMA_BOUNDS[name]
+            v = getattr(self, name)
+            if not (isinstance(v, int | float | np.floating) and lo <= v <= hi):
+                raise MagtactError(f"presses: the noise {name} must be between {lo:g} and "
+                                   f"{hi:g} {'T' if name == 'sigma_B' else 'N'}, got {v!r}")
 
     def __len__(self) -> int:
         return len(self.B)
@@ -96,7 +120,7 @@ def read_presses(path) -> Presses:
     lines, meta, meta_line, i = read_table_lines(path, "press file",
                                                  "give one CSV file of presses")
     header_no = i + 1
-    header = [h.strip() for h in next(csv.reader([lines[i]]), [])]
+    header = [h.strip() for h in read_row(path, lines[i], header_no)]
     for c in PRESS_COLUMNS:
         if c not in header:
             raise DataError(f"{path}: line {header_no}: missing column {c!r} (the header has "
@@ -104,33 +128,57 @@ def read_presses(path) -> Presses:
         if header.count(c) > 1:
             raise DataError(f"{path}: line {header_no}, column {c!r}: column name appears "
                             "twice")
+    where = [header.index(c) for c in PRESS_COLUMNS]
     rows = []
     for j in range(i + 1, len(lines)):
         if not lines[j].strip() or lines[j].lstrip().startswith("#"):
             continue
-        cells = [c.strip() for c in next(csv.reader([lines[j]]), [])]
+        if len(rows) == MAX_PRESSES:
+            raise DataError(f"{path}: line {j + 1}: more than {MAX_PRESSES:,} presses (a unit "
+                            "is calibrated from tens)")
+        cells = [c.strip() for c in read_row(path, lines[j], j + 1)]
         if len(cells) != len(header):
             raise DataError(f"{path}: line {j + 1}: {len(cells)} cells, the header on line "
                             f"{header_no} has {len(header)} columns")
-        rows.append([read_cell(path, j + 1, c, cells[header.index(c)]) for c in PRESS_COLUMNS])
+        row = []
+        for c, k in zip(PRESS_COLUMNS, where, strict=True):
+            v = read_cell(path, j + 1, c, cells[k])
+            top = MAX_FIELD if c.startswith("B") else MAX_FORCE
+            if abs(v) > top:
+                raise DataError(f"{path}: line {j + 1}, column {c!r}: {cells[k]} is outside "
+                                f"±{top:g} {c[-1]}{_unit_hint(c, v)}")
+            row.append(v)
+        rows.append(row)
     if not rows:
         raise DataError(f"{path}: line {header_no}: header but no presses")
     data = np.asarray(rows)
 
-    def noise(key, unit, default):
+    def noise(key, unit, default, name):
         if key not in meta:
             return default
+        where = f"{path}: line {meta_line[key]}: {key} = {meta[key]!r}"
         try:
             v = to_si(parse_float(meta[key]), unit)
         except ValueError:
-            raise DataError(f"{path}: line {meta_line[key]}: {key} = {meta[key]!r} is not a "
-                            "number") from None
-        if not (math.isfinite(v) and v > 0):
-            raise DataError(f"{path}: line {meta_line[key]}: {key} must be positive")
+            raise DataError(f"{where} is not a number") from None
+        lo, hi = SIGMA_BOUNDS[name]
+        if not (math.isfinite(v) and lo <= v <= hi):
+            raise DataError(f"{where} must be between {from_si(lo, unit):g} and "
+                            f"{from_si(hi, unit):g}")
         return v
 
-    return Presses(data[:, :3], data[:, 3:], str(path), noise("sigma_b_ut", "uT", SIGMA_B),
-                   noise("sigma_f_mn", "mN", SIGMA_F))
+    return Presses(data[:, :3], data[:, 3:], str(path),
+                   noise("sigma_b_ut", "uT", SIGMA_B, "sigma_B"),
+                   noise("sigma_f_mn", "mN", SIGMA_F, "sigma_F"))
+
+
+def _unit_hint(column: str, value: float) -> str:
+    """"; did you give mT?" where the value would be a plausible press in a smaller unit."""
+    for unit, factor in (("mT", 1e-3), ("µT", 1e-6)) if column.startswith("B") else (
+            ("mN", 1e-3),):
+        if abs(value) * factor <= (MAX_FIELD if column.startswith("B") else MAX_FORCE):
+            return f"; did you give {unit}? The column is in {column[-1]}"
+    return ""
 
 
 def write_presses(presses: Presses, path) -> Path:
@@ -227,24 +275,69 @@ class _Problem:
         return np.concatenate([((B - p.B) / p.sigma_B).reshape(lead + (-1,)),
                                ((F - p.F) / self.sigma_F).reshape(lead + (-1,))], axis=-1)
 
-    def jac(self, x):
+    def blocks(self, x) -> tuple[np.ndarray, np.ndarray]:
+        """The Jacobian of the residuals by central differences, in its two blocks: J_θ
+        (6n, k) of the parameters, and J_w (n, 6, 3) of each press's residuals (B then F) with
+        respect to its own features (a press's residuals depend on no other press's features).
+        2k + 6 batched evaluations; memory linear in the number of presses."""
         x = np.asarray(x, dtype=float)
+        n, k = self.n, self.k
         h = 1e-6 * np.maximum(1.0, np.abs(x))
-        E = np.diag(h)
-        r = self(np.concatenate([x + E, x - E]))
-        return ((r[:x.size] - r[x.size:]) / (2 * h[:, None])).T
+        steps = np.zeros((2 * k + 6, x.size))
+        for j in range(k):
+            steps[j, j], steps[k + j, j] = h[j], -h[j]
+        hw = h[k:].reshape(n, 3)
+        for d in range(3):
+            col = k + 3 * np.arange(n) + d
+            steps[2 * k + d, col], steps[2 * k + 3 + d, col] = hw[:, d], -hw[:, d]
+        r = self(x + steps)
+        J_theta = ((r[:k] - r[k:2 * k]) / (2 * h[:k, None])).T
+        dw = (r[2 * k:2 * k + 3] - r[2 * k + 3:]).reshape(3, 2, n, 3)  # d, (B|F), press, axis
+        J_w = (dw / (2 * hw.T[:, None, :, None])).transpose(2, 1, 3, 0).reshape(n, 6, 3)
+        return J_theta, J_w
+
+    def sparse(self, J_theta: np.ndarray, J_w: np.ndarray):
+        """The blocks as one sparse Jacobian (6n, k + 3n), rows and columns as the residuals
+        and the solver's variables."""
+        from scipy.sparse import coo_matrix, csr_matrix, hstack
+
+        n = self.n
+        press = np.repeat(np.arange(n), 18)
+        half = np.tile(np.repeat(np.arange(2), 9), n)
+        axis = np.tile(np.repeat(np.arange(3), 3), 2 * n)
+        d = np.tile(np.arange(3), 6 * n)
+        rows = half * 3 * n + 3 * press + axis
+        cols = 3 * press + d
+        W = coo_matrix((J_w.reshape(-1), (rows, cols)), shape=(6 * n, 3 * n))
+        return hstack([csr_matrix(J_theta), W], format="csr")
+
+    def jac(self, x):
+        return self.sparse(*self.blocks(x))
 
 
-def _std(J: np.ndarray, k: int) -> np.ndarray:
-    """Standard deviations of the first k variables from the whitened Jacobian J: the square
-    roots of the diagonal of (JᵀJ)⁻¹; infinite along directions the presses do not see."""
-    info = J.T @ J
-    s, U = np.linalg.eigh(info)
+def _std(J_theta: np.ndarray, J_w: np.ndarray) -> np.ndarray:
+    """Standard deviations of the k parameters from the whitened Jacobian's blocks: the
+    square roots of the diagonal of (JᵀJ)⁻¹ restricted to them, by the Schur complement over
+    the presses' features (each press's 3 × 3 block inverted on its own; directions of a
+    press's features that move no residual are left out by the pseudo-inverse); infinite along
+    directions the presses do not see. Memory linear in the number of presses."""
+    n, k = len(J_w), J_theta.shape[1]
+    Jt = J_theta.reshape(2, n, 3, k).transpose(1, 0, 2, 3).reshape(n, 6, k)
+    A = J_theta.T @ J_theta
+    Bm = np.einsum("nrk,nrd->nkd", Jt, J_w)  # (n, k, 3)
+    D = np.einsum("nrd,nre->nde", J_w, J_w)  # (n, 3, 3)
+    s, U = np.linalg.eigh(D)
+    keep = s > 1e-12 * np.maximum(s.max(axis=-1, keepdims=True), 1e-300)
+    inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
+    D_pinv = np.einsum("nde,ne,nfe->ndf", U, inv, U)
+    S = A - np.einsum("nkd,nde,nje->kj", Bm, D_pinv, Bm)
+    S = 0.5 * (S + S.T)
+    s, U = np.linalg.eigh(S)
     null = s <= 1e-12 * max(s.max(), 1e-300)
     inv = np.where(null, 0.0, 1.0 / np.where(null, 1.0, s))
-    d = (U[:k] ** 2) @ inv
+    d = (U ** 2) @ inv
     if null.any():
-        d = d + np.where((np.abs(U[:k, null]) > 1e-6).any(axis=1), np.inf, 0.0)
+        d = d + np.where((np.abs(U[:, null]) > 1e-6).any(axis=1), np.inf, 0.0)
     return np.sqrt(np.maximum(d, 0.0))
 
 
@@ -269,7 +362,7 @@ def _advice(smap, presses, theta, free, w, bad, model_error=None) -> dict[str, s
                         sigma_B=presses.sigma_B, sigma_F=presses.sigma_F)
         x = np.concatenate([theta[free] / _SCALE[free], np.concatenate([w, wk]).ravel()])
         prob = _Problem(smap, extra, free, theta, model_error)
-        std[label] = _std(prob.jac(x), prob.k) * _SCALE[free]
+        std[label] = _std(*prob.blocks(x)) * _SCALE[free]
     return {b: min(std, key=lambda lab, b=b: std[lab][names.index(b)]) for b in bad}
 
 
@@ -320,10 +413,12 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
         raise MagtactError(f"model_error must be two relative errors >= 0, got {model_error}")
     prob = _Problem(exact, presses, free, theta0, model_error)
     x0 = np.concatenate([theta0[free] / _SCALE[free], w0.ravel()])
-    sol = least_squares(prob, x0, jac=prob.jac, method="lm", x_scale="jac", xtol=1e-12,
-                        ftol=1e-12, gtol=1e-12, max_nfev=200)
+    # trust-region reflective with a sparse Jacobian: the features couple to their own press
+    # only, so the fit's memory grows with the number of presses, not with its square
+    sol = least_squares(prob, x0, jac=prob.jac, method="trf", x_scale="jac", xtol=1e-12,
+                        ftol=1e-12, gtol=1e-12, max_nfev=200, tr_solver="lsmr")
     theta, w = prob.unpack(sol.x)
-    s = _std(prob.jac(sol.x), k) * _SCALE[free]
+    s = _std(*prob.blocks(sol.x)) * _SCALE[free]
     names = [p for p, f in zip(PARAMETERS, free, strict=True) if f]
     std = dict(zip(names, s.tolist(), strict=True))
     bad = [p for p in names if not std[p] <= tol[p]]

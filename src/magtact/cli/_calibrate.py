@@ -11,10 +11,38 @@ import typer
 from .._errors import MagtactError
 from ..study import checked_si, from_si
 from ._app import OutOpt, StudyArg, app, console, get_study, outputs
+from ._budget import noise_override, parse_noise
 from ._optimise import ModelsOpt
 
-#: Range of a Hall chip's field noise [T]: 1 nT to 10 mT.
-NOISE_BOUNDS = (1e-9, 1e-2)
+
+def fit_names(text: str, presses: bool) -> tuple[str, ...]:
+    """The unit parameters of ``--fit`` (comma-separated names of
+    :data:`magtact.calibration.PARAMETERS`).
+
+    Raises
+    ------
+    MagtactError
+        If there is nothing to fit the parameters to (no ``--presses``), if no name is given,
+        or a name is unknown or given twice; the message says why.
+    """
+    from ..calibration import PARAMETERS
+
+    if not presses:
+        raise MagtactError("--fit cannot take effect without --presses: the unit's parameters "
+                           "are fitted to a built unit's presses; give --presses CSV, or leave "
+                           "--fit out")
+    names = [p.strip() for p in text.split(",")]
+    if not any(names):
+        raise MagtactError(f"--fit names no parameter ({text!r}): give one or more of "
+                           f"{', '.join(PARAMETERS)}, or leave --fit out for the default")
+    for name in names:
+        if name not in PARAMETERS:
+            what = "an empty name between commas" if not name else f"unknown {name!r}"
+            raise MagtactError(f"--fit: {what}; the parameters are {', '.join(PARAMETERS)}")
+    if len(set(names)) != len(names):
+        twice = next(n for n in names if names.count(n) > 1)
+        raise MagtactError(f"--fit names {twice!r} twice")
+    return tuple(names)
 
 
 @app.command("calibrate")
@@ -25,10 +53,12 @@ def calibrate_command(
         "--H", help="Body height H (mm); default: the study's chosen design.")] = None,
     G: Annotated[float | None, typer.Option(
         "--G", help="Shear modulus G (kPa); default: the study's chosen design.")] = None,
-    noise: Annotated[float | None, typer.Option(
-        "--noise-uT", help="Field noise of the Hall chip, 1 sigma per axis (µT), for the "
-                           "resolution sigma_F the firmware map is held to; default: the "
-                           "noise of the study's chip at the design's setting.")] = None,
+    noise: Annotated[str | None, typer.Option(
+        "--noise-uT", metavar="S|X,Z",
+        help="RMS field noise [µT] of the Hall chip, one value for both axes or X,Z, for the "
+             "resolution sigma_F the firmware map is held to; it replaces the chip's own "
+             "figure, and the output says so. Default: the noise of the study's chip at the "
+             "design's setting.")] = None,
     presses: Annotated[Path | None, typer.Option(
         "--presses", help="CSV of a built unit's presses (columns B_x_T, B_y_T, B_z_T, F_x_N, "
                           "F_y_N, F_z_N): fit the unit's parameters and export its map.")] = None,
@@ -60,9 +90,13 @@ def calibrate_command(
     if model_error is not None and not 0 <= model_error <= 1:
         raise MagtactError(f"--model-error must be a fraction between 0 and 1, got "
                            f"{model_error}")
-    sigma = None if noise is None else (
-        checked_si(noise, "uT", "--noise-uT", bounds=NOISE_BOUNDS),) * 2
-    units = None if fit is None else tuple(p.strip() for p in fit.split(",") if p.strip())
+    if model_error is not None and presses is None:
+        raise MagtactError("--model-error cannot take effect without --presses: it weights the "
+                           "unit fit to a built unit's presses; give --presses CSV, or leave "
+                           "--model-error out")
+    given = None if H is None else (checked_si(H, "mm", "--H"), checked_si(G, "kPa", "--G"))
+    sigma = None if noise is None else parse_noise(noise)
+    units = None if fit is None else fit_names(fit, presses is not None)
     data = None if presses is None else read_presses(presses)
     # the folder is checked (writable, nothing of the user's in the way) before the work
     with outputs("calibrate", out, "force.h", "force_map.json", "force_table.csv",
@@ -78,12 +112,13 @@ def calibrate_command(
         else:
             from ..designer import answer
 
-            a = answer(ms, s, checked_si(H, "mm", "--H"), checked_si(G, "kPa", "--G"))
+            a = answer(ms, s, *given)
             label = "the given design"
         H_si, G_si, M_z = a.H, a.G, a.design.M_z
         console.print(f"calibrating {label}: H = {from_si(H_si, 'mm'):.4g} mm, "
                       f"G = {from_si(G_si, 'kPa'):.4g} kPa", highlight=False)
         eps = None if model_error is None else (model_error, model_error)
+        noise_override(a.chip, sigma)  # says, when given, what --noise-uT replaces
         cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
                         fit=DEFAULT_FIT if units is None else units, model_error=eps,
                         chip=a.chip,  # the chip at this design's setting

@@ -18,8 +18,13 @@ def study_command(
     write: Annotated[Path | None, typer.Option("--write", help="Also write the full study here.")]
     = None,
 ) -> None:
-    """Validate STUDY and print every setting (mm, kPa, N), defaults filled in."""
-    text = get_study(study).to_toml()
+    """Validate STUDY (every rule a command applies to it) and print every setting (mm, kPa,
+    N), defaults filled in."""
+    from ..study import check_study
+
+    s = get_study(study)
+    check_study(s, None if study is None else str(study))
+    text = s.to_toml()
     if write is not None and write.is_dir():
         raise MagtactError(f"--write {write}: Is a directory")
     # an existing file is the user's (its comments, its order): never replaced

@@ -13,7 +13,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from ..geometry import FieldMesh, field_mesh
-from ..study import MU0, Study, StudyError, from_si
+from ..study import MU0, Study, StudyError, check_field_mesh
 
 
 @dataclass(frozen=True, eq=False)
@@ -198,16 +198,7 @@ def solve_fe(study: Study) -> FieldSolution:
     if f.growth_near >= f.growth:
         raise StudyError("magnetics.growth_near", f"must be smaller than magnetics.growth "
                                                   f"({f.growth:g}), got {f.growth_near:g}")
-    if f.far_r * m.R_m <= m.R_m + f.near:
-        raise StudyError("magnetics.far_r", f"the far boundary r = far_r·R_m must lie beyond "
-                                            f"the near zone (R_m + near = "
-                                            f"{from_si(m.R_m + f.near, 'mm'):g} mm), got far_r = "
-                                            f"{f.far_r:g}")
-    if f.far_z * m.H_m <= 0.5 * m.H_m + f.near:
-        raise StudyError("magnetics.far_z", f"the far boundary z = ±far_z·H_m must lie beyond "
-                                            f"the near zone (H_m/2 + near = "
-                                            f"{from_si(0.5 * m.H_m + f.near, 'mm'):g} mm), got "
-                                            f"far_z = {f.far_z:g}")
+    check_field_mesh(study)  # the far box: the study's rule, also run by magtact study
     with _LOCK:  # gmsh is not thread-safe; one solve per magnet and mesh in a process
         return _solve_cached(m.R_m, m.H_m, m.M_z, f.h_magnet, f.growth_near, f.near, f.growth,
                              f.far_r, f.far_z)

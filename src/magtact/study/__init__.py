@@ -11,7 +11,6 @@ from ._hall import (
 from ._load import (
     PRESETS,
     StudyError,
-    check_holdout,
     load_study,
     magone,
     magone_printed,
@@ -36,10 +35,12 @@ from ._model import (
     Tolerances,
     holdout_limit,
 )
+from ._rules import check_field_mesh, check_holdout, check_study
 from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
-    "candidate_settings", "check_holdout", "holdout_limit", "setting_figures",
+    "candidate_settings", "check_field_mesh", "check_holdout", "check_study", "holdout_limit",
+    "setting_figures",
     "ARRAY_LAYOUTS", "Array", "Environment", "Tolerances",
     "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
     "Design", "HallChip", "HallPreset", "Loading", "Magnet", "Magnetics", "Material", "Mechanics",

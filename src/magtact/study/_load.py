@@ -12,7 +12,8 @@ from pathlib import Path
 
 from .._files import UnreadableFile, file_problem, read_text_capped
 from ._errors import StudyError
-from ._model import GEOMETRY, SECTIONS, Study, holdout_limit, key_of
+from ._model import GEOMETRY, SECTIONS, Study, key_of
+from ._rules import blamed, check_physical, check_unit, written_keys
 from ._units import LABEL, MU0, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
@@ -115,7 +116,11 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
     for name in SECTIONS:
         sections[name] = _section(name, getattr(base, name), data.get(name, {}), complete, source)
     study = _apply_parts(replace(base, **top, **sections), data.get("magnet", {}), source)
-    _check_consistency(study, source)
+    try:
+        _check_consistency(study, source)
+        check_physical(study, source)
+    except StudyError as exc:  # the key the user wrote, where the rule names a base value
+        raise blamed(exc, written_keys(data), source) from None
     _check_hall(study, source)
     return study
 
@@ -211,9 +216,15 @@ def _convert(full: str, f, value, source):
         if not lo < hi:
             raise StudyError(full, f"range out of order: low {value[0]} must be below high "
                                    f"{value[1]}", source)
-        return (_si(full, f, lo, source), _si(full, f, hi, source))
+        pair = (_si(full, f, lo, source), _si(full, f, hi, source))
+        check_unit(full, f"{full.split('.')[0]}.{f.name}", m["unit"], [lo, hi], pair, source)
+        return pair
     value = _number(full, f, value, source)
-    return value if m["integer"] else _si(full, f, value, source)
+    if m["integer"]:
+        return value
+    si = _si(full, f, value, source)
+    check_unit(full, f"{full.split('.')[0]}.{f.name}", m["unit"], value, si, source)
+    return si
 
 
 def _number(full: str, f, value, source):
@@ -402,31 +413,6 @@ def _check_order(s: Study, source) -> None:
         raise StudyError("mechanics.dt_initial", f"the first load step ({m.dt_initial:g}) must "
                                                  f"lie in [mechanics.dt_min, mechanics.dt_max] "
                                                  f"= [{m.dt_min:g}, {m.dt_max:g}]", source)
-
-
-def check_holdout(s: Study, n_theta: int | None = None, n_H: int | None = None,
-                  data: str | None = None, source: str | None = None) -> None:
-    """Refuse, before any work, more held-out paths (``[metamodel] holdout_paths``) than a fit
-    can hold out of the DOE's (θ, H) paths: those of the data set ``data`` (``n_theta × n_H``
-    levels) when given, else those the study's ``[doe]`` asks for. A study used for a DOE only
-    is not refused (the check is made by the commands that fit). ``source``: the study file
-    (default: the study's name).
-
-    Raises
-    ------
-    StudyError
-        Naming the setting, the number of paths and where they come from.
-    """
-    n_theta = s.doe.n_theta if n_theta is None else n_theta
-    n_H = s.doe.n_H if n_H is None else n_H
-    n, most = s.metamodel.holdout_paths, holdout_limit(n_theta, n_H)
-    if n > most:
-        of = (f"the data set {data} has {n_theta} × {n_H}" if data is not None else
-              f"the DOE's {n_theta} × {n_H} (doe.n_theta × doe.n_H)")
-        raise StudyError("metamodel.holdout_paths", f"{n} held-out paths, but {of} (θ, H) "
-                                                    f"paths allow at most {most} (interior "
-                                                    "paths, leaving some to fit)",
-                         source or f"study {s.name!r}")
 
 
 def _mm(x: float) -> str:

@@ -14,6 +14,7 @@ from ._io import (
     Experiment,
     read_cell,
     read_experiment,
+    read_row,
     read_table_lines,
 )
 from ._model import PathModel
@@ -26,6 +27,7 @@ __all__ = [
     "DataError",
     "Experiment",
     "FilterSettings", "PathModel", "ResponseStats", "Validation", "bandpass",
-    "excluded_ranges", "output_stem", "read_cell", "read_experiment", "read_table_lines",
+    "excluded_ranges", "output_stem", "read_cell", "read_experiment", "read_row",
+    "read_table_lines",
     "synthetic_files", "validate", "write_outputs",
 ]

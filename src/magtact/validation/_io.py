@@ -338,13 +338,18 @@ def _read_file(path: Path):
     return curves, theta, where, meta
 
 
-def _cells(path: Path, text: str, line: int) -> list[str]:
-    """The cells of one CSV line (the csv module's errors, e.g. a cell over its size limit,
-    become a DataError naming the line)."""
+def read_row(path: Path, text: str, line: int) -> list[str]:
+    """The cells of one CSV line. A quote left open (``"0.5``) or text after a closing quote
+    is refused rather than read as if closed (the csv module's strict mode); its other errors,
+    e.g. a cell over its size limit, become a DataError naming the line too."""
     try:
-        return next(csv.reader([text]), [])
+        return next(csv.reader([text], strict=True), [])
     except csv.Error as exc:
-        raise DataError(f"{path}: line {line}: not a CSV row ({exc})") from None
+        raise DataError(f"{path}: line {line}: not a CSV row ({exc}; a quoted cell must "
+                        "close its quote on the same line)") from None
+
+
+_cells = read_row
 
 
 def _columns(path: Path, header: list[str], line: int) -> dict[str, str]:

@@ -1,0 +1,168 @@
+"""Rules a study keeps beyond each setting's own range: unit mistakes, pairs of settings no
+physical sensor has, which key a message blames, and the rules every command applies before
+its work (:func:`check_study`, also run by ``magtact study``)."""
+
+from __future__ import annotations
+
+from ._errors import StudyError
+from ._model import Study, holdout_limit
+from ._units import PLAUSIBLE_KEYS, from_si, unit_mistake
+
+#: Room temperature [°C] a study's temperature change ``[environment] delta_T_K`` starts from
+#: (an assumption: the catalogue of ``parts/data/magnets.toml`` states no reference
+#: temperature for its remanence).
+ROOM_C = 20.0
+#: Largest remanence change α ΔT a linear reversible coefficient may describe: a magnet at
+#: half its remanence or below is far outside the range where one coefficient holds (an
+#: assumption, not a catalogue figure).
+MAX_REMANENCE_CHANGE = 0.5
+
+#: For each key a consistency rule names, the other keys that rule reads: when the user's file
+#: does not give the named key (its value comes from the base study) but gives one of these,
+#: the message blames the key the user wrote.
+INVOLVED: dict[str, tuple[str, ...]] = {
+    "magnet.R_m_mm": ("body.R_mm", "magnet.size"),
+    "body.R_g_mm": ("body.R_mm",),
+    "magnet.H_m_mm": ("body.H_g_mm", "magnet.placement", "magnet.size"),
+    "body.R_h_mm": ("body.R_mm", "magnet.R_m_mm", "body.H_g_mm", "magnet.size"),
+    "loading.dz_sat_mm": ("design.H_mm", "body.H_g_mm", "magnet.H_m_mm", "magnet.placement",
+                          "magnet.size"),
+    "loading.theta_max_rad": ("loading.mu_f",),
+    "mechanics.magnet_edge_radius_mm": ("magnet.R_m_mm", "magnet.H_m_mm", "magnet.size"),
+    "magnetics.h_magnet_mm": ("magnet.R_m_mm", "magnet.H_m_mm", "magnet.size"),
+    "array.pitch_mm": ("body.R_mm",),
+    "design.H_original_mm": ("design.H_mm",),
+    "design.G_original_kPa": ("design.G_kPa",),
+    "environment.delta_T_K": ("environment.remanence_tc_pct_per_K", "magnet.grade"),
+}
+
+
+def written_keys(data: dict) -> set[str]:
+    """The ``section.key`` names a study document gives (those of its tables)."""
+    return {f"{name}.{key}" for name, table in data.items() if isinstance(table, dict)
+            for key in table}
+
+
+def blamed(exc: StudyError, written: set[str], source) -> StudyError:
+    """``exc`` as it should reach the user: unchanged when the file gives the key it names or
+    gives none of the keys its rule reads; else naming the first key of the rule the file
+    gives, and saying where the other value came from."""
+    if exc.key in written or exc.key not in INVOLVED:
+        return exc
+    own = next((k for k in INVOLVED[exc.key] if k in written), None)
+    if own is None:
+        return exc
+    return StudyError(own, f"with {exc.key} from the base study (the file does not set it): "
+                           f"[{exc.key}] {exc.reason}", source)
+
+
+def check_unit(full: str, name: str, unit: str, value, si, source) -> None:
+    """Refuse a value of a key of :data:`magtact.study._units.PLAUSIBLE_KEYS` that looks like
+    a unit mistake (:func:`magtact.study._units.unit_mistake`), naming the key as written.
+
+    ``full``: the key as written (``design.G_kPa``); ``name``: ``section.setting``
+    (``design.G``); ``value``: as written; ``si``: the same in SI.
+    """
+    if name not in PLAUSIBLE_KEYS:
+        return
+    hint = unit_mistake(unit, value, si)
+    if hint is not None:
+        shown = value if not isinstance(value, list | tuple) else list(value)
+        raise StudyError(full, f"= {shown!r}: {hint}", source)
+
+
+def check_physical(s: Study, source) -> None:
+    """Pairs of settings that no physical sensor has, each message naming a key to change.
+
+    * The temperature change and the remanence's coefficient: the change α ΔT must stay
+      within :data:`MAX_REMANENCE_CHANGE` (a linear coefficient holds for small changes), and
+      for a catalogue grade ΔT from :data:`ROOM_C` must stay within the grade's largest working
+      temperature (``parts/data/magnets.toml``: 80 °C for the N series).
+    """
+    env = s.environment
+    change = env.remanence_tc * env.delta_T
+    if abs(change) > MAX_REMANENCE_CHANGE:
+        raise StudyError("environment.delta_T_K",
+                         f"a temperature change of {env.delta_T:g} K with "
+                         f"environment.remanence_tc_pct_per_K = "
+                         f"{from_si(env.remanence_tc, 'pct_per_K'):g} changes the remanence by "
+                         f"{100 * change:+.3g} %: no magnet keeps a linear reversible "
+                         f"coefficient that far (at most ±{100 * MAX_REMANENCE_CHANGE:g} % is "
+                         "accepted); give a smaller temperature change or coefficient", source)
+    if s.magnet.grade != "custom":
+        from ..parts import grade
+
+        g = grade(s.magnet.grade)
+        span = g.max_temperature_C - ROOM_C
+        if env.delta_T > span:
+            raise StudyError("environment.delta_T_K",
+                             f"{env.delta_T:g} K above {ROOM_C:g} °C takes the magnet "
+                             f"(magnet.grade = {s.magnet.grade!r}) beyond its working "
+                             f"temperature of {g.max_temperature_C:g} °C (the catalogue's "
+                             f"limit); at most {span:g} K", source)
+
+
+def check_field_mesh(s: Study, source=None) -> None:
+    """The field's FE mesh settings among themselves: the far boundary must enclose the magnet
+    and its finely meshed near zone (radially far_r · R_m > R_m + near; axially
+    far_z · H_m > H_m / 2 + near).
+
+    Raises
+    ------
+    StudyError
+        Naming ``magnetics.far_r`` or ``magnetics.far_z`` and the size it must exceed.
+    """
+    m, f = s.magnet, s.magnetics
+    if f.far_r * m.R_m <= m.R_m + f.near:
+        raise StudyError("magnetics.far_r", f"the far boundary r = far_r·R_m must lie beyond "
+                                            f"the near zone (R_m + near = "
+                                            f"{from_si(m.R_m + f.near, 'mm'):g} mm), got far_r = "
+                                            f"{f.far_r:g}", source)
+    if f.far_z * m.H_m <= 0.5 * m.H_m + f.near:
+        raise StudyError("magnetics.far_z", f"the far boundary z = ±far_z·H_m must lie beyond "
+                                            f"the near zone (H_m/2 + near = "
+                                            f"{from_si(0.5 * m.H_m + f.near, 'mm'):g} mm), got "
+                                            f"far_z = {f.far_z:g}", source)
+
+
+def check_holdout(s: Study, n_theta: int | None = None, n_H: int | None = None,
+                  data: str | None = None, source: str | None = None) -> None:
+    """Refuse, before any work, more held-out paths (``[metamodel] holdout_paths``) than a fit
+    can hold out of the DOE's (θ, H) paths: those of the data set ``data`` (``n_theta × n_H``
+    levels) when given, else those the study's ``[doe]`` asks for. ``source``: the study file
+    (default: the study's name).
+
+    Raises
+    ------
+    StudyError
+        Naming the setting, the number of paths and where they come from.
+    """
+    n_theta = s.doe.n_theta if n_theta is None else n_theta
+    n_H = s.doe.n_H if n_H is None else n_H
+    n, most = s.metamodel.holdout_paths, holdout_limit(n_theta, n_H)
+    if n > most:
+        of = (f"the data set {data} has {n_theta} × {n_H}" if data is not None else
+              f"the DOE's {n_theta} × {n_H} (doe.n_theta × doe.n_H)")
+        raise StudyError("metamodel.holdout_paths", f"{n} held-out paths, but {of} (θ, H) "
+                                                    f"paths allow at most {most} (interior "
+                                                    "paths, leaving some to fit)",
+                         source or f"study {s.name!r}")
+
+
+def check_study(s: Study, source: str | None = None) -> None:
+    """Every rule a command applies to a study before its work, in one place: ``magtact
+    study`` and ``magtact run`` call it, so a study the check accepts is one the commands
+    accept.
+
+    * held-out paths within what the study's DOE allows (:func:`check_holdout`);
+    * the field's FE mesh settings among themselves (:func:`check_field_mesh`), when the
+      field is solved by FE (``[magnetics] solver = "fe"``).
+
+    Raises
+    ------
+    StudyError
+        Naming the key to change.
+    """
+    check_holdout(s, source=source)
+    if s.magnetics.solver == "fe":
+        check_field_mesh(s, source or f"study {s.name!r}")
