@@ -264,6 +264,7 @@ def test_figure_shows_the_rows_of_the_json(budget):
 
 
 def test_report_shows_the_budget_section(tmp_path, budget, study):
+    from magtact._display import sig
     from magtact.report import build_report, draw_budget, save
 
     def png_only(doc, folder):
@@ -274,17 +275,17 @@ def test_report_shows_the_budget_section(tmp_path, budget, study):
     assert '<h2 id="budget">Error budget</h2>' in html
     doc = json.loads((tmp_path / "budget" / "budget.json").read_text(encoding="utf-8"))
     row = doc["budgets"][0]["rows"][2]
-    assert f"<td>{row['worst_mN']:.6g}</td>" in html
+    assert f"<td>{sig(row['worst_mN'])}</td>" in html
     assert "Error budget of the original design" in html and "data:image/png" in html
     sp = doc["budgets"][0]["array"]["smallest_pitch_mm"]
-    assert f"<b>{sp:.6g} mm</b>" in html
+    assert f"<b>{sig(sp)} mm</b>" in html
     # in a run's folder: shown only if it names the run
     (tmp_path / "run.json").write_text('{"run_id": "abc", "stages": []}', encoding="utf-8")
     assert "is not of this run" in build_report(tmp_path).read_text(encoding="utf-8")
     doc["run_id"] = "abc"
     (tmp_path / "budget" / "budget.json").write_text(json.dumps(doc), encoding="utf-8")
     html = build_report(tmp_path).read_text(encoding="utf-8")
-    assert "is not of this run" not in html and f"<td>{row['worst_mN']:.6g}</td>" in html
+    assert "is not of this run" not in html and f"<td>{sig(row['worst_mN'])}</td>" in html
     (tmp_path / "budget" / "budget.json").unlink()
     assert "No error budget in this folder" in build_report(tmp_path).read_text(encoding="utf-8")
 

@@ -56,7 +56,8 @@ def test_report_embeds_figures_and_reports_absent_and_failed_stages(tmp_path):
     # field, metamodel, optimise, calibration, validation (the budget says so in its own words)
     assert text.count("No results for this stage") == 5 and "No error budget" in text
     assert "No chosen design" in text and "No benchmark results" in text
-    assert "numpy" in text and '<td class="l">name</td><td class="l">MagOne</td>' in text
+    assert "numpy" in text
+    assert '<td class="l"><code>name</code></td><td class="l">MagOne</td>' in text
     assert "SYNTHETIC" not in text
 
 
@@ -131,7 +132,9 @@ def test_markdown_headings_tables_code_emphasis_links_lists_and_math():
     assert "<em>it</em>" in out and '<a href="https://x.org">a link</a>' in out
     assert "<li>one</li>" in out and "<li>two</li>" in out
     assert re.search(r"<th>a</th>\s*<th>b</th>", out) and re.search(r"<td>1</td>\s*<td>2</td>", out)
-    assert "B_{r} = t^2 * x_1\n</code></pre>" in out  # math verbatim, no emphasis
+    # math as MathML (the browser renders it, offline), no emphasis, no LaTeX source left
+    assert '<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">' in out
+    assert "<msup><mi>t</mi><mn>2</mn></msup>" in out and "B_{r}" not in out
     assert "code &amp; more" in out
     assert "<script>" not in out  # raw HTML is escaped
 
@@ -161,7 +164,7 @@ def test_method_appendix_renders_markdown_images_and_internal_links():
     ids = set(re.findall(r'id="(method-[^"]+)"', out))
     links = re.findall(r'href="#([^"]+)"', out)
     assert len(links) >= 10 and set(links) <= ids
-    assert "<table>" in out and 'class="language-math"' in out
+    assert "<table>" in out and "<math " in out and "\\frac" not in out
 
 
 def test_evidence_json_with_a_convergence_study_becomes_a_table(tmp_path):
@@ -173,8 +176,8 @@ def test_evidence_json_with_a_convergence_study_becomes_a_table(tmp_path):
         "refinement": [{"h_mm": 0.5, "err": 0.1}, {"h_mm": 0.25, "err": 0.03, "rate": 1.7}]}))
     text = build_report(folder, evidence=bench).read_text(encoding="utf-8")
     assert "No benchmark results" not in text
-    assert ("<tr><th>h [mm]</th><th>err</th><th>rate</th></tr><tr><td>0.5</td><td>0.1</td>"
-            "<td></td></tr><tr><td>0.25</td><td>0.03</td><td>1.7</td></tr>") in text
+    assert ("<tr><th>h [mm]</th><th>err</th><th>rate</th></tr><tr><td>0.500</td><td>0.100</td>"
+            "<td></td></tr><tr><td>0.250</td><td>0.0300</td><td>1.70</td></tr>") in text
 
 
 def test_force_map_draws_the_optimisers_stable_shear_box(monkeypatch):

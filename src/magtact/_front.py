@@ -162,8 +162,10 @@ class Result:
 
     def _budget_rows(self) -> list[list[str]]:
         from .budget import budget_card_rows
+        from .metamodel import fit_quality_rows  # a poor fit is said on the card
 
-        return [] if self.budgets is None else budget_card_rows(self.budgets)
+        return fit_quality_rows(self.models, 2) + (
+            [] if self.budgets is None else budget_card_rows(self.budgets))
 
     def evaluate(self, *, H_mm: float, G_kPa: float, M_z_A_per_m: float | None = None,
                  label: str = "design", **geometry_mm: float) -> DesignAnswer:
@@ -198,6 +200,9 @@ class Result:
                                    f"{self.study.name!r}; its geometric design variables: "
                                    f"{known}")
             own[name] = checked_si(v, "mm", key)
+        from .doe import check_design  # no answer outside the data's domain
+
+        check_design(self.study, values["H"], self.dataset, **own)
         return _answer(self.models, self.study, values | own, label)
 
     def budget(self, answer: DesignAnswer | None = None, *, dataset=None,
@@ -299,7 +304,13 @@ class Result:
         (a command's or a run's staging folder): no lock, no check of what is there."""
         from .budget import write_budgets
         from .optimise import write_geometry_outputs, write_optimise_outputs
-        from .report import budget_figures, fig_geometry_pareto, optimise_figures, write_card
+        from .report import (
+            budget_figures,
+            fig_geometry_pareto,
+            optimise_figures,
+            write_card,
+            write_explorer,
+        )
 
         out = Path(out)
         if self.study.geometric_variables:
@@ -311,6 +322,9 @@ class Result:
         files.append(write_card([self.chosen, self.original], out, self.constraints,
                                 rtol=self.study.optimise.active_rtol, study=self.study,
                                 extra_rows=self._budget_rows()))
+        explorer = write_explorer(self, out) if figures else None  # the report's explorer
+        if explorer is not None:
+            files.append(explorer)
         if budget and self.budgets is not None:
             files.append(write_budgets(self.budgets, self.study, out,
                                        figures=budget_figures if figures else None))

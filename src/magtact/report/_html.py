@@ -15,17 +15,19 @@ The report is built from the files a run leaves in its folder, never from memory
 from __future__ import annotations
 
 import csv
+import json
 import re
 from datetime import UTC, datetime
 from pathlib import Path
 
 from .._errors import MissingFileError
 from ._card import read_card
+from ._explorer import explorer_section
 from ._fragments import escape as _e
 from ._fragments import figure as _figure
 from ._fragments import load_json as _load_json
-from ._labels import label, value_text
-from ._markdown import render_markdown
+from ._labels import label, round_text, sig, value_text
+from ._markdown import mathml, render_markdown
 from ._publication import publication_section
 
 #: Stages in pipeline order: (folder, title, what it is).
@@ -72,6 +74,25 @@ pre{background:#f7f7f7;padding:.7em;overflow-x:auto;font-size:.8em}
 .missing{background:#fbe9eb;border:1px solid #e0a0a8;padding:.6em 1em;margin:1em 0}
 .design{background:#eef6ee;border:1px solid #9c9;padding:.6em 1em;margin:1em 0}
 details{margin:.5em 0}summary{cursor:pointer}
+*{box-sizing:border-box}img,svg,table,pre{max-width:100%}
+.intro{font-size:.9em;color:#444;margin:.2em 0 .6em}
+.front{display:grid;grid-template-columns:minmax(0,3fr) minmax(0,2fr);gap:1.2em;
+align-items:start;margin:.6em 0}.front h2{margin-top:.4em}
+ul.verdict-list{list-style:none;padding-left:0;margin:.3em 0}
+ul.verdict-list li{padding:.25em .5em;margin:.2em 0;border-left:5px solid #999}
+li.met{border-color:#2a8a3e!important;background:#eef8f0}
+li.unmet{border-color:#c0392b!important;background:#fcecea}
+table.parts td,table.parts th{text-align:left}
+.glance{display:grid;grid-template-columns:repeat(auto-fit,minmax(420px,1fr));gap:1em}
+.glance figure img{max-width:100%;max-height:440px}
+.xctl{display:flex;flex-wrap:wrap;gap:.6em;align-items:center;margin:.5em 0}
+.xctl input[type=range]{width:220px}.xctl input[type=number]{width:7em}
+.xgrid{display:grid;grid-template-columns:minmax(0,3fr) minmax(0,2fr);gap:1em}
+.xcard table{font-size:.8em}
+div.math{overflow-x:auto;margin:.6em 0}td div.math{max-width:60vw}
+div.wide{overflow-x:auto;max-width:100%}math{font-size:1.05em}
+td,th{overflow-wrap:anywhere}
+nav.toc{font-size:.85em}
 """
 
 
@@ -133,32 +154,37 @@ def report_document(folder: Path, *, shown: Path | None = None,
     stages = {s.get("key"): _stage_record(s) for s in (listed if isinstance(listed, list) else [])
               if isinstance(s, dict)}
     study_name = manifest.get("study", "unknown study")
+    run_id = manifest.get("run_id")
+    optimise = folder / "optimise" if _of_run(folder / "optimise", run_id) else None
+    card = read_card(optimise, shown / "publication") if optimise is not None else None
     parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
-             f"<p>Results folder <code>{_e(shown.resolve())}</code>; report built "
-             f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}. The method behind every number, with "
-             'its equations and defaults: <a href="#method">the method</a> (appendix, '
-             "<code>docs/method.md</code> of the magtact repository); the benchmarks' "
-             "evidence: <code>docs/verification.md</code>.</p>"]
+             f'<p class="intro">Results folder <code>{_e(shown.resolve())}</code>, built '
+             f"{datetime.now(UTC):%Y-%m-%d %H:%M UTC}. Read top-down: the verdict and the "
+             "parts, the figures a designer looks at, the explorer, the tables, then the "
+             'evidence and <a href="#method">the method</a> (collapsed at the end).</p>']
     parts.extend(_interrupted(r, manifest) for r in interrupted or [])
     if not manifest:
         parts.append('<div class="missing">No <code>run.json</code> in this folder: the stages '
                      "below are reported from the files present only; statuses and timings are "
                      "unknown.</div>")
-    if (_of_run(folder / "validation", manifest.get("run_id"))
+    if (_of_run(folder / "validation", run_id)
             and _is_synthetic(folder / "validation")):
         parts.append('<div class="banner"><b>SYNTHETIC validation data.</b> The validation '
                      "section compares the model with a generated example data set (model plus "
                      "noise, drift and scatter), not with measurements.</div>")
-    if _of_run(folder / "optimise", manifest.get("run_id")):
-        parts.append(_card(folder / "optimise", shown / "publication"))
+    parts.append(_front(card))
+    parts.append(_glance(folder, run_id))
+    if optimise is not None:
+        parts.append(explorer_section(optimise))
+        parts.append(_card(card))
     toc = " · ".join(f'<a href="#{k}">{_e(t)}</a>' for k, t, _ in STAGES)
-    parts.append(f'<p><a href="#summary">Summary</a> · <a href="#chosen">Chosen design</a> · '
+    parts.append(f'<nav class="toc"><a href="#verdict">Verdict</a> · '
+                 '<a href="#glance">Figures</a> · <a href="#explorer">Explorer</a> · '
+                 f'<a href="#card">Design card</a> · <a href="#chosen">Chosen design</a> · '
                  f'{toc} · <a href="#publication">The publication</a> · '
-                 '<a href="#evidence">Evidence</a> · <a href="#settings">Settings</a> · '
-                 '<a href="#method">Method</a></p>')
-    parts.append(_summary(manifest, stages, folder))
-    run_id = manifest.get("run_id")
-    parts.append(_chosen(folder / "optimise" if _of_run(folder / "optimise", run_id) else None))
+                 '<a href="#summary">Run summary</a> · <a href="#evidence">Evidence</a> · '
+                 '<a href="#settings">Settings</a> · <a href="#method">Method</a></nav>')
+    parts.append(_chosen(optimise))
     for key, title, what in STAGES:
         if key == "budget":  # a section of its own, from budget.json
             parts.append(_budget_section(folder / "budget", run_id))
@@ -169,6 +195,7 @@ def report_document(folder: Path, *, shown: Path | None = None,
         else:
             parts.append(_other_run(folder / key, key, title, what))
     parts.append(publication_section(shown / "publication", _definition(folder)))
+    parts.append(_summary(manifest, stages, folder))
     parts.append(_evidence([folder / "evidence"] + ([Path(evidence)] if evidence else [])))
     parts.append(_settings(folder / "study.toml"))
     parts.append(_method())
@@ -212,18 +239,66 @@ def _interrupted(run: dict, manifest: dict) -> str:
             f"the next run into this folder removes them. {last}</div>")
 
 
-def _card(folder: Path, publication: Path | None = None) -> str:
+def _front(card: dict | None) -> str:
+    """The verdict (one line per requirement, met or not) and the parts list, side by side:
+    the first thing the report shows. Nothing where the card has neither."""
+    if not isinstance(card, dict):
+        return ""
+    verdict = [v for v in card.get("verdict") or [] if isinstance(v, dict)]
+    parts = [p for p in card.get("parts") or [] if isinstance(p, (list, tuple)) and len(p) == 2]
+    if not verdict and not parts:
+        return ""
+    items = "".join(
+        f'<li class="{"met" if v.get("met") else "unmet"}">{"✓" if v.get("met") else "✗"} '
+        f"<b>{_inline(v.get('requirement', ''))}</b>: {_inline(v.get('text', ''))}</li>"
+        for v in verdict)
+    rows = "".join(f'<tr><th class="l">{_inline(k)}</th><td class="l">{_inline(v)}</td></tr>'
+                   for k, v in parts)
+    left = (f'<div id="verdict"><h2>Verdict</h2><ul class="verdict-list">{items}</ul></div>'
+            if verdict else "")
+    right = (f'<div id="parts"><h2>Parts</h2><table class="parts">{rows}</table></div>'
+             if parts else "")
+    return f'<section class="front">{left}{right}</section>'
+
+
+def _glance(folder: Path, run_id: str | None) -> str:
+    """The figures a designer looks at first: the error budget of the chosen design against
+    its resolution, the Pareto set and the calibration's error (each where the run made it)."""
+    picks = [("budget", "budget_chosen", "Error budget of the chosen design: false force per "
+              "row [mN], log scale; dashed: the resolution (1 σ, worst)"),
+             ("optimise", "pareto_set", None), ("optimise", "maps_constraints", None),
+             ("calibration", "calibration", "Calibration: error of the firmware map over the "
+              "stable region, and the candidates' size against their error")]
+    figs = []
+    for key, stem, caption in picks:
+        png = folder / key / f"{stem}.png"
+        if png.is_file() and _of_run(folder / key, run_id):
+            captions = _load_json(folder / key / "captions.json") or {}
+            figs.append(_figure(png, caption or captions.get(stem)))
+    if not figs:
+        return ""
+    return ('<section id="glance"><h2>The figures a designer looks at</h2>'
+            f'<div class="glance">{"".join(figs)}</div></section>')
+
+
+def _inline(text) -> str:
+    """Text of the card as HTML: escaped, numbers to 3 significant figures, `code` as code."""
+    return re.sub(r"`([^`<>]+)`", r"<code>\1</code>", _e(round_text(str(text))))
+
+
+def _card(card: dict | None) -> str:
     """The design card (written by the optimisation stage), or nothing."""
-    card = read_card(folder, publication)
     if not card or not isinstance(card.get("rows"), list):
         return ""
     head = "".join(f'<th class="l">{_e(h)}</th>' for h in card.get("header", []))
-    rows = "".join("<tr>" + "".join(f'<td class="l">{_e(c)}</td>' for c in r) + "</tr>"
+    rows = "".join("<tr>" + "".join(f'<td class="l">{_inline(c)}</td>' for c in r) + "</tr>"
                    for r in card["rows"] if isinstance(r, list))
     return (f'<h2 id="card">Design card</h2><table class="card"><tr>{head}</tr>{rows}</table>'
             "<p>Resolution: 1 σ force noise from the chip's RMS field noise, "
             "σ_F = √diag(J Σ_B Jᵀ) with J = ∂F/∂B; unloaded (t = 0) and worst over the stable "
             "region. Every number in <code>optimise/card.json</code>.</p>")
+
+
 def _budget_section(folder: Path, run_id: str | None) -> str:
     """The error budget (``budget/budget.json`` and its figures), or nothing without one."""
     data = _load_json(folder / "budget.json")
@@ -295,7 +370,8 @@ def _method() -> str:
             return None
 
     body = render_markdown(text, anchor_prefix="method-", images=image)
-    return ('<h2 id="method">Method</h2><details open><summary>docs/method.md</summary>'
+    return ('<h2 id="method">Method</h2><details><summary>The method behind every number, '
+            "with its equations and defaults (docs/method.md; click to open)</summary>"
             f"{body}</details>")
 
 
@@ -344,9 +420,9 @@ def _chosen(folder: Path | None) -> str:
                 "this folder (the optimisation stage did not produce "
                 "<code>optimise/chosen.json</code>).</div>")
 
-    def num(key, fmt=".4g"):
+    def num(key, fmt=None):
         v = data.get(key)
-        return f"{v:{fmt}}" if isinstance(v, (int, float)) and not isinstance(v, bool) else "?"
+        return sig(float(v)) if isinstance(v, (int, float)) and not isinstance(v, bool) else "?"
 
     rows = []
     if "design" in data:
@@ -359,9 +435,9 @@ def _chosen(folder: Path | None) -> str:
     if data.get("objective") == "sigma_F":  # the objective columns hold σ_F [N]
         g_r, g_z = (data.get(k) for k in ("Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T"))
         rows += [("worst shear force noise σ_Fr over the stable region (the objective)",
-                  f"{1e3 * g_r:.4g} mN" if isinstance(g_r, (int, float)) else "?"),
+                  f"{sig(1e3 * g_r)} mN" if isinstance(g_r, (int, float)) else "?"),
                  ("worst normal force noise σ_Fz over the stable region (the objective)",
-                  f"{1e3 * g_z:.4g} mN" if isinstance(g_z, (int, float)) else "?")]
+                  f"{sig(1e3 * g_z)} mN" if isinstance(g_z, (int, float)) else "?")]
     else:
         rows += [("worst shear sensitivity Γ_r,max over the stable region",
                   f"{num('Gamma_r_max_N_per_T')} N/T"),
@@ -383,7 +459,7 @@ def _chosen(folder: Path | None) -> str:
     if "active_constraints" in data:
         rows.append(("active constraints", _plain(data["active_constraints"])))
     if data.get("degenerate"):
-        rows.append(("note", _plain(data["degenerate"])))
+        rows.append(("note", round_text(_plain(data["degenerate"]))))
     if "sensitivity_definition" in data:
         rows.append(("sensitivity Γ", f"{_plain(data['sensitivity_definition'])} definition"))
     body = "".join(f'<tr><td class="l">{_e(k)}</td><td class="l">{_e(v)}</td></tr>'
@@ -466,8 +542,8 @@ def _calibration(folder: Path) -> str:
             continue
         design, fw = d.get("design") or {}, d.get("firmware") or {}
         out.append(
-            f"<p>Design H = {_sig(design.get('H_mm'), 4)} mm, "
-            f"G = {_sig(design.get('G_kPa'), 4)} kPa; "
+            f"<p>Design H = {_sig(design.get('H_mm'))} mm, "
+            f"G = {_sig(design.get('G_kPa'))} kPa; "
             f"stable region t ≤ {_sig(design.get('t_m'))}, θ ≤ "
             f"{_sig(design.get('theta_m_rad'))} rad. Round trip F → B → F: largest error "
             f"{_sig(d.get('round_trip_rel'), 2)} of the force range. Firmware map: "
@@ -549,6 +625,8 @@ def _evidence(folders: list[Path]) -> str:
 
 
 def _settings(path: Path) -> str:
+    """The study's settings, section by section: what each setting is (its description in the
+    study's schema), its value in its unit, and a value that means "not set" in words."""
     if not path.is_file():
         return ('<h2 id="settings">Study settings</h2><div class="missing">No study.toml in this '
                 "folder.</div>")
@@ -559,15 +637,82 @@ def _settings(path: Path) -> str:
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         return (f'<h2 id="settings">Study settings</h2><div class="missing">study.toml '
                 f"unreadable ({_e(exc)}).</div>")
+    schema = _schema()
     out = ['<h2 id="settings">Study settings</h2><p>The full study (user units), as loaded '
-           "and validated; the file is <code>study.toml</code>.</p>"]
-    top = {k: v for k, v in data.items() if not isinstance(v, dict)}
-    if top:
-        out.append(_dict_table(top))
-    for section, values in data.items():
-        if isinstance(values, dict):
-            out.append(f"<h3>{_e(section)}</h3>{_dict_table(values)}")
+           "and validated; the file is <code>study.toml</code>. A value that means “not set” "
+           "is shown as what it means.</p>"]
+    top = [(k, v) for k, v in data.items() if not isinstance(v, dict)]
+    sections = [(None, top)] + [(k, list(v.items())) for k, v in data.items()
+                                if isinstance(v, dict)]
+    for section, items in sections:
+        if not items:
+            continue
+        rows = "".join(_setting_row(k, v, schema.get((section, k)))
+                       for k, v in items if not isinstance(v, dict))
+        head = "" if section is None else f"<h3>{_e(section)}</h3>"
+        out.append(f'{head}<table class="settings"><tr><th class="l">setting</th>'
+                   f'<th class="l">value</th><th class="l">what it is</th></tr>{rows}</table>')
     return "\n".join(out)
+
+
+#: "value: meaning" at the end of a setting's description (``-1: picked``, ``[0, 0]: fixed``).
+_UNSET = re.compile(r"(\[[^\]]*\]|-?\d+(?:\.\d+)?): ([^;)]+)")
+
+
+def _schema() -> dict[tuple[str | None, str], tuple[str, str]]:
+    """(section, TOML key) → (unit, description) of every study setting."""
+    import dataclasses
+    import typing
+
+    from ..study import LABEL, Study
+
+    out = {}
+    hints = typing.get_type_hints(Study)
+    for f in dataclasses.fields(Study):
+        kind = hints.get(f.name)
+        if not dataclasses.is_dataclass(kind):
+            out[(None, f.name)] = ("", str(f.metadata.get("doc", "")))
+            continue
+        for g in dataclasses.fields(kind):
+            unit = g.metadata.get("unit", "")
+            key = f"{g.name}_{unit}" if unit else g.name
+            out[(f.name, key)] = (LABEL.get(unit, unit), str(g.metadata.get("doc", "")))
+    return out
+
+
+def _setting_row(key: str, value, schema: tuple[str, str] | None) -> str:
+    unit, doc = schema if schema is not None else ("", "")
+    shown = None
+    for m in _UNSET.finditer(doc):
+        try:
+            unset = json.loads(m.group(1))
+        except ValueError:
+            continue
+        if _same(value, unset):
+            shown = f"<i>{_e(m.group(2).strip())}</i>"
+    if shown is None:
+        if isinstance(value, list):
+            text = ", ".join(_plain(x) for x in value) if all(
+                not isinstance(x, (dict, list)) for x in value) else f"{len(value)} entries"
+            text = f"[{text}]" if len(value) != 1 else text
+        else:
+            text = _plain(value)
+        text = round_text(text)
+        shown = _e(f"{text} {unit}" if unit and unit != "-" and text not in ("", "—") else text)
+    what = _UNSET.sub("", doc).rstrip(" ;,(") if shown.startswith("<i>") else doc
+    return (f'<tr><td class="l"><code>{_e(key)}</code></td><td class="l">{shown}</td>'
+            f'<td class="l">{_inline(what)}</td></tr>')
+
+
+def _same(value, unset) -> bool:
+    """Whether a setting's value is its description's "not set" value (numbers compared as
+    numbers, lists element by element)."""
+    if isinstance(unset, list):
+        return isinstance(value, list) and len(value) == len(unset) if not unset else (
+            isinstance(value, list) and len(value) == len(unset)
+            and all(_same(a, b) for a, b in zip(value, unset, strict=True)))
+    return (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and isinstance(unset, (int, float)) and float(value) == float(unset))
 
 
 def _versions(manifest: dict) -> str:
@@ -589,6 +734,10 @@ def _csv_table(path: Path, caption: str | None) -> str:
     if not rows:
         return f"<p>{_e(path.name)}: empty table</p>"
     head, body = rows[0], rows[1:]
+    keep = [k for k in range(len(head))
+            if any(k < len(r) and r[k].strip() for r in body[:MAX_ROWS])]  # no empty column
+    head, body = [head[k] for k in keep], [[r[k] if k < len(r) else "" for k in keep]
+                                           for r in body]
     title = caption or path.stem.replace("_", " ")
     if "synthetic" in path.name.lower():
         title += " (SYNTHETIC data)"
@@ -620,8 +769,10 @@ def _json_summary(path: Path, level: int = 3) -> str:
 def _dict_table(data: dict, prefix: str = "", depth: int = 0) -> str:
     rows = []
     for k, v in _flatten(data, prefix, depth):
-        rows.append(f'<tr><td class="l">{_e(label(k))}</td><td class="l">{_fmt(v)}</td></tr>')
-    return f"<table>{''.join(rows)}</table>" if rows else ""
+        shown = (mathml(v) if k.rsplit(".", 1)[-1] == "latex" and isinstance(v, str)
+                 else _fmt(v))  # a formula as mathematics
+        rows.append(f'<tr><td class="l">{_e(label(k))}</td><td class="l">{shown}</td></tr>')
+    return f'<div class="wide"><table>{"".join(rows)}</table></div>' if rows else ""
 
 
 def _flatten(data: dict, prefix: str, depth: int):
@@ -629,12 +780,10 @@ def _flatten(data: dict, prefix: str, depth: int):
         name = f"{prefix}{k}"
         if isinstance(v, dict) and depth < 2:
             yield from _flatten(v, name + ".", depth + 1)
-        elif isinstance(v, list):
-            if len(v) <= 6 and all(not isinstance(x, (dict, list)) for x in v):
+        elif isinstance(v, list):  # long or nested lists: their own table, or in the file
+            if v and len(v) <= 6 and all(not isinstance(x, (dict, list)) for x in v):
                 yield name, ", ".join(_plain(x) for x in v)
-            else:
-                yield name, f"[{len(v)} items]"
-        elif not isinstance(v, dict):
+        elif not isinstance(v, dict) and v not in ("", None):  # no empty rows
             yield name, v
 
 
@@ -680,19 +829,24 @@ def _fmt(v) -> str:
                 f"<pre>{_e(v)}</pre></details>")
     if isinstance(v, str) and "*" in v and "(" in v:
         return f"<code>{_e(v)}</code>"
-    return _e(_plain(v))
+    return _e(round_text(_plain(v)))
 
 
 def _num(cell: str) -> str:
+    """A CSV cell as shown: a whole number as is (a count or a level), any other number to 3
+    significant figures, text with its numbers so."""
+    if re.fullmatch(r"-?\d+", cell.strip()):
+        return cell.strip()
     try:
-        return f"{float(cell):.6g}"
+        return sig(float(cell))
     except ValueError:
-        return cell
+        return round_text(cell)
 
 
 def _sig(v, digits: int = 3) -> str:
     """A measured number to ``digits`` significant figures, escaped (text stays text)."""
-    return f"{v:.{digits}g}" if isinstance(v, (int, float)) else _e(_plain(v))
+    return _e(sig(v, digits)) if isinstance(v, (int, float)) and not isinstance(v, bool) \
+        else _e(_plain(v))
 
 
 def _fmt_time(seconds) -> str:

@@ -9,6 +9,11 @@ names their letter, and the underscores after a symbol's subscript become commas
 
 from __future__ import annotations
 
+from .._display import COEFFICIENT_DIGITS, DIGITS, round_text, sig, significant_digits
+
+__all__ = ["COEFFICIENT_DIGITS", "DIGITS", "label", "name", "round_text", "sig",
+           "significant_digits", "split_unit", "value_text"]
+
 #: Unit suffixes of keys (longest first) and how they read.
 UNITS: tuple[tuple[str, str], ...] = (
     ("_mN_per_uT", "mN/µT"), ("_N_per_T", "N/T"), ("_A_per_m", "A/m"),
@@ -58,12 +63,12 @@ def label(key: str) -> str:
 
 
 def value_text(v) -> str:
-    """A value as a reader sees it: ``None`` as a dash, floats to 6 significant digits,
-    booleans as yes/no."""
+    """A value as a reader sees it: ``None`` as a dash, floats to :data:`DIGITS` significant
+    figures, booleans as yes/no."""
     if v is None:
         return "—"
     if isinstance(v, bool):
         return "yes" if v else "no"
     if isinstance(v, float):
-        return f"{v:.6g}"
+        return sig(v)
     return str(v)

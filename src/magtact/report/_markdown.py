@@ -2,10 +2,13 @@
 
 Used for the method appendix (``docs/method.md``, shipped with the package) and the ``*.md``
 files a stage leaves in its folder (e.g. ``metamodels.md``). Raw HTML in the source is escaped,
-not passed through. Math stays readable as source: ```` ```math ```` fences and ``$$`` blocks
-become preformatted text. Images whose source names a file the caller can supply (``images``)
-are embedded as data URIs so that the report stays one self-contained file; any other image is
-shown as its alternative text.
+not passed through. Math (```` ```math ```` fences and ``$$`` blocks, LaTeX) becomes MathML,
+which browsers render natively and offline, its coefficients to
+:data:`~magtact.report._labels.COEFFICIENT_DIGITS` significant digits; numbers in running text
+and tables are written to :data:`~magtact.report._labels.DIGITS` (code keeps every digit).
+Images whose source names a file the caller can supply (``images``) are embedded as data URIs
+so that the report stays one self-contained file; any other image is shown as its alternative
+text.
 """
 
 from __future__ import annotations
@@ -14,7 +17,11 @@ import base64
 import re
 from collections.abc import Callable
 
+from latex2mathml.converter import convert as _latex_to_mathml
 from markdown_it import MarkdownIt
+
+from ._fragments import escape
+from ._labels import COEFFICIENT_DIGITS, round_text, sig
 
 #: MIME types of the images that can be embedded.
 _MIME = {".svg": "image/svg+xml", ".png": "image/png", ".jpg": "image/jpeg",
@@ -76,7 +83,42 @@ def render_markdown(text: str, *, shift: int = 2, anchor_prefix: str | None = No
                     child.attrSet("href", "#" + anchor_prefix + href[1:])
             elif child.type == "image":
                 _embed(child, images)
+            elif child.type == "text":
+                child.content = round_text(child.content)
+        if tok.type == "fence" and tok.info.strip() == "math":
+            tok.type, tok.content = "html_block", mathml(tok.content)
     return md.renderer.render(tokens, md.options, {})
+
+
+#: A decimal number in LaTeX source (not a command's letters, not an exponent's sign alone).
+_LATEX_NUMBER = re.compile(r"(?<![\w.])\d+\.\d+(?:[eE][+-]?\d+)?|(?<![\w.])\d{6,}(?![\w.])")
+
+
+#: LaTeX commands the MathML converter does not read, and what they write.
+_UNKNOWN = {r"\lVert": r"\|", r"\rVert": r"\|"}
+
+
+def mathml(latex: str, digits: int = COEFFICIENT_DIGITS) -> str:
+    """LaTeX ``latex`` as a block of MathML, its decimal numbers to ``digits`` significant
+    digits; LaTeX the converter cannot read is shown as preformatted source, so a formula is
+    never lost."""
+    rounded = _LATEX_NUMBER.sub(lambda m: _tex_number(m.group(), digits), latex.strip())
+    for command, plain in _UNKNOWN.items():  # commands the converter does not know
+        rounded = rounded.replace(command, plain)
+    try:
+        return f'<div class="math">{_latex_to_mathml(rounded, display="block")}</div>\n'
+    except Exception:  # noqa: BLE001 -- the converter raises many types; the source still shows
+        return f"<pre>{escape(latex)}</pre>\n"
+
+
+def _tex_number(text: str, digits: int) -> str:
+    """A number of LaTeX source to ``digits`` significant digits (``1.2e-5`` as
+    ``1.2 \\cdot 10^{-5}``)."""
+    out = sig(float(text), digits)
+    if "e" in out:
+        mantissa, exponent = out.split("e")
+        return f"{mantissa} \\cdot 10^{{{int(exponent)}}}"
+    return out
 
 
 def _embed(token, images: Callable[[str], bytes | None] | None) -> None:
