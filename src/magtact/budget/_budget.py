@@ -21,6 +21,15 @@ from ..metamodel import ModelSet
 from ..optimise import DesignResult, per_design
 from ..sensitivity import dF_dB, gamma
 from ..study import Study, from_si, kpa, mm
+from ..viscoelastic import (
+    MEASURED_HYSTERESIS,
+    MEASURED_SOURCE,
+    design_forces,
+    implied_ratio,
+    relaxation_of,
+    time_json,
+    time_response,
+)
 from . import _array, _fabrication
 
 #: Points per side of the grid over the stable region (worst of the temperature rows and the
@@ -89,6 +98,7 @@ class Budget:
     fabrication: dict = field(default_factory=dict)
     environment: dict = field(default_factory=dict)
     not_modelled: tuple[str, ...] = ()
+    time: dict = field(default_factory=dict)
 
     def largest(self, n: int = 3) -> list[BudgetRow]:
         """The ``n`` rows with the largest worst-case false force."""
@@ -158,7 +168,11 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     - neighbours: the change of their superposed field when loaded (:mod:`._array`);
     - fabrication: one calibration shared by all units (:mod:`._fabrication`), 95th
       percentile;
-    - model: the mesh's error × the force, the metamodels' held-out error, the seeds' spread.
+    - model: the mesh's error × the force, the metamodels' held-out error, the seeds' spread;
+    - time: the silicone's relaxation (:mod:`magtact.viscoelastic`): the hysteresis of a press
+      and release in ``environment.press_time_s`` and the creep of a press held
+      ``environment.hold_s``, read by a sensor calibrated on ``environment.calibrated_on``
+      (not ΔF = J ΔB: the reading G_cal f(u) against the hereditary force).
     """
     if study.geometric_variables:
         raise MagtactError("the error budget is computed for one geometry: fix the geometric "
@@ -310,6 +324,13 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     # ---- the model's own error -------------------------------------------------------------
     rows += _model_rows(models, study, design, dataset, seeds)
 
+    # ---- time: the silicone's relaxation -----------------------------------------------------
+    time_rows, time_info = _time_rows(models, study, design)
+    rows += time_rows
+    if not time_rows:
+        not_modelled.append("the silicone's relaxation in time (hysteresis, creep): "
+                            + time_info["source"])
+
     env_info = {"delta_T": dT, "remanence_tc": a, "remanence_tc_tolerance": da,
                 "chip_drift": sd, "earth_field": env.earth_field,
                 "stray_field": env.stray_field, "B_rest": B0.tolist(), "sources": SOURCES}
@@ -319,7 +340,58 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
                                "seed": tol.seed,
                                "inputs": list(_fabrication.INPUTS),
                                "sigmas": _fabrication.sigmas(study).tolist()},
-                  env_info, tuple(not_modelled))
+                  env_info, tuple(not_modelled), time_info)
+
+
+def _time_rows(models, study, design) -> tuple[list[BudgetRow], dict]:
+    """The time rows (hysteresis, creep) and the ``time`` entry of budget.json; no rows where
+    the silicone's relaxation is not known. The MagOne's measured hysteresis is compared in
+    either case (the smallest one-term relaxation that reaches it)."""
+    env = study.environment
+    prony, source = relaxation_of(study, design.G)
+    g_min, tau_at = implied_ratio(design_forces(models, design.H, 0.0), design.t_m,
+                                  env.press_time, MEASURED_HYSTERESIS, env.calibrated_on)
+    implied = {"single_term_g_min": None if not math.isfinite(g_min) else g_min,
+               "single_term_tau_s": None if not math.isfinite(tau_at) else tau_at}
+    if prony is None:
+        return [], {"source": source, "press_time_s": env.press_time, "hold_s": env.hold,
+                    "calibrated_on": env.calibrated_on,
+                    "measured": {"hysteresis_pct": 100 * MEASURED_HYSTERESIS,
+                                 "source": MEASURED_SOURCE, **implied}}
+    r = time_response(models, study, design.H, design.G, design.t_m, design.theta_m, prony,
+                      implied=(g_min, tau_at))
+    modulus = "long-time G_∞" if env.calibrated_on == "long" else "instantaneous G(0)"
+    history = (f"the sensor calibrated on the {modulus} (environment.calibrated_on); presses "
+               "to t_m at θ = 0 and θ_m, the worst of the two; relaxation "
+               f"{prony.source}; quasi-linear viscoelastic body F(t) = ∫ G(t − s) df(u(s))")
+    rows = _rows(f"time: hysteresis, press and release in {env.press_time:g} s", "time",
+                 (0.0, 0.0), r.hysteresis,
+                 "largest difference of the readings loading and unloading at equal true "
+                 f"force, load rising linearly in environment.press_time_s; {history}")
+    rows += _rows(f"time: creep over a {env.hold:g} s hold", "time", (0.0, 0.0), r.creep,
+                  f"change of the reading while a full press is held at constant force for "
+                  f"environment.hold_s after a press in environment.press_time_s; {history}")
+    return rows, {"source": prony.source, **time_json(r),
+                  "silicones": _silicone_sweeps(models, study, design)}
+
+
+def _silicone_sweeps(models, study, design) -> dict:
+    """Hysteresis [% of the peak F_z] against the press time of the design's normal press for
+    every catalogue silicone with a cited relaxation (its ratios and times at the design's G)."""
+    from ..parts import SILICONES
+    from ..viscoelastic import Prony, rate_sweep
+
+    out = {}
+    f = design_forces(models, design.H, 0.0)
+    for name, sil in SILICONES.items():
+        if sil.relaxation is None:
+            continue
+        r = sil.relaxation
+        sw = rate_sweep(Prony.from_ratios(design.G, r.g, r.tau, r.source), f, design.t_m,
+                        calibrated_on=study.environment.calibrated_on, n=200)
+        out[name] = {"source": r.source, "press_time_s": sw.press_times.tolist(),
+                     "hysteresis_pct": (100 * sw.gap[:, 1] / sw.peak[:, 1]).tolist()}
+    return out
 
 
 def _model_rows(models, study, design, dataset, seeds) -> list[BudgetRow]:
@@ -411,6 +483,8 @@ def budget_json(b: Budget) -> dict:
                           "stray_field_uT": from_si(e["stray_field"], "uT"),
                           "B_rest_mT": [from_si(v, "mT") for v in e["B_rest"]],
                           "sources": e["sources"]}
+    if b.time:
+        out["time"] = b.time
     return out
 
 
@@ -430,8 +504,27 @@ def budget_card_rows(budgets, n: int = 3) -> list[list[str]]:
                 return f"{force(r.worst)} worst, {force(r.at_rest)} at rest"
         return "—"
 
-    out = [[f"error budget: {r.name} ({r.component})",
-            *(cell(b, r.name, r.component) for b in budgets)] for r in budgets[0].largest(n)]
+    def label(r: BudgetRow) -> str:  # a time row names the relaxation it rests on
+        if r.group != "time":
+            return f"error budget: {r.name} ({r.component})"
+        return (f"error budget: {r.name} ({r.component}; relaxation "
+                f"{budgets[0].time.get('source', '')})")
+
+    largest = budgets[0].largest(n)
+    out = [[label(r), *(cell(b, r.name, r.component) for b in budgets)] for r in largest]
+    # the time rows always: the larger component of each, unless already among the largest
+    shown = {r.name for r in largest}
+    time_rows = {}
+    for r in budgets[0].rows:
+        if r.group == "time" and r.name not in shown and \
+                (r.name not in time_rows or r.worst > time_rows[r.name].worst):
+            time_rows[r.name] = r
+    out += [[label(r), *(cell(b, r.name, r.component) for b in budgets)]
+            for r in time_rows.values()]
+    if not any(r.group == "time" for r in budgets[0].rows) and budgets[0].time:
+        out.append(["error budget: time (hysteresis, creep)",
+                    *("not known: " + b.time.get("source", "") if b.time else "—"
+                      for b in budgets)])
     pitches = [b.array.get("smallest_pitch") for b in budgets]
     if any(p is not None for p in pitches):
         out.append([f"smallest {budgets[0].array['layout']} array pitch for crosstalk below "

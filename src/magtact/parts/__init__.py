@@ -6,6 +6,7 @@ from ._catalogue import (
     SILICONES,
     SIZES,
     Grade,
+    Relaxation,
     Silicone,
     Size,
     grade,
@@ -24,5 +25,5 @@ from ._chips import (
 )
 
 __all__ = ["CHIP_FILES", "GRADES", "MLX_FIELDS", "SILICONES", "SIZES", "ChipSetting",
-           "ChipTable", "Grade", "SettingError", "SettingFigures", "Silicone", "Size",
+           "ChipTable", "Grade", "Relaxation", "SettingError", "SettingFigures", "Silicone", "Size",
            "chip_table", "grade", "silicones_around", "size", "widest"]

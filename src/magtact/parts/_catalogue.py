@@ -49,11 +49,25 @@ class Size:
 
 
 @dataclass(frozen=True)
+class Relaxation:
+    """A silicone's relaxation: G(t) = G_∞ (1 + Σ g_i exp(−t/τ_i)), with ``g`` the ratios
+    G_i / G_∞ and ``tau`` the times [s], from ``source`` (the publication and its test)."""
+
+    g: tuple[float, ...]
+    tau: tuple[float, ...]
+    source: str
+
+
+@dataclass(frozen=True)
 class Silicone:
-    """A silicone's shear modulus figures G [Pa], each with (source, method)."""
+    """A silicone's shear modulus figures G [Pa], each with (source, method), and its
+    relaxation (None where no cited series is known: ``relaxation_note`` says what was
+    searched)."""
 
     name: str
     figures: tuple[tuple[float, str, str], ...]
+    relaxation: Relaxation | None = None
+    relaxation_note: str = ""
 
     @property
     def G_range(self) -> tuple[float, float]:
@@ -97,7 +111,12 @@ def _silicones() -> dict[str, Silicone]:
             s = d["pdms_compression"]
             figs.append((20e6 / v["pdms_ratio"] / 3.0, s["source"] + f" (ratio "
                          f"{v['pdms_ratio']:g}:1)", s["method"]))
-        out[name] = Silicone(name, tuple(figs))
+        rel = v.get("relaxation")
+        relaxation = None if rel is None else Relaxation(
+            tuple(float(x) for x in rel["g"]), tuple(float(x) for x in rel["tau_s"]),
+            str(rel["source"]))
+        note = "" if relaxation is not None else d["relaxation_search"]["result"]
+        out[name] = Silicone(name, tuple(figs), relaxation, note)
     return out
 
 

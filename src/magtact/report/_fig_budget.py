@@ -68,10 +68,13 @@ def fig_budget(entry: dict, path: str | Path) -> list[Path]:
 
 def budget_figures(doc: dict, folder: str | Path, formats: tuple[str, ...] = ("png",)
                    ) -> list[Path]:
-    """The figures of ``budget.json`` (``doc``): ``budget_<label>.png`` per design (the report
-    embeds the PNG; add ``"svg"`` to ``formats`` for print)."""
+    """The figures of ``budget.json`` (``doc``): ``budget_<label>.png`` per design and, where
+    the budgets have time rows, ``time_<label>.png`` (:func:`time_figures`; the report embeds
+    the PNG; add ``"svg"`` to ``formats`` for print)."""
+    from ._fig_time import time_figures
+
     files = []
     for entry in doc.get("budgets", []):
         slug = re.sub(r"[^A-Za-z0-9]+", "_", str(entry.get("label", "design"))).strip("_")
         files += save(draw_budget(entry), Path(folder) / f"budget_{slug or 'design'}", formats)
-    return files
+    return files + time_figures(doc, folder, formats)

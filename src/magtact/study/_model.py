@@ -104,6 +104,17 @@ class Material:
                             doc="the silicone the sensor is cast from (docs/method.md §10); "
                                 "the design card says whether its G range holds each design's "
                                 "G; 'none': not named")
+    relaxation_g1: float = setting(0.0, minimum=0.0, bounds=(0.0, 100.0),
+                                   doc="the silicone's relaxation (docs/method.md §15): G_1 / "
+                                       "G_inf of G(t) = G_inf (1 + g1 exp(-t/tau1) + g2 "
+                                       "exp(-t/tau2)); 0 with g2: none given (the catalogue's "
+                                       "series of the silicone, if it has one)")
+    relaxation_tau1: float = setting(1.0, "s", positive=True, bounds=(1e-6, 1e7),
+                                     doc="relaxation time of the first term")
+    relaxation_g2: float = setting(0.0, minimum=0.0, bounds=(0.0, 100.0),
+                                   doc="G_2 / G_inf of the second term")
+    relaxation_tau2: float = setting(10.0, "s", positive=True, bounds=(1e-6, 1e7),
+                                     doc="relaxation time of the second term")
 
 
 @dataclass(frozen=True)
@@ -384,6 +395,16 @@ class Environment:
     stray_field: float = setting(0.0, "uT", minimum=0.0, bounds=(0.0, 0.1),
                                  doc="magnitude of a further stray field (steel, motors); 0: "
                                      "none")
+    press_time: float = setting(1.0, "s", positive=True, bounds=(1e-4, 1e5),
+                                doc="the load history of the time rows (docs/method.md §15): "
+                                    "seconds from rest to the full press, and back (the "
+                                    "hysteresis row)")
+    hold: float = setting(60.0, "s", positive=True, bounds=(1e-4, 1e7),
+                          doc="seconds a full press is held at constant force (the creep row)")
+    calibrated_on: str = setting("long", choices=("long", "short"),
+                                 doc="the modulus the sensor's force map is calibrated on: "
+                                     "'long' the long-time G_inf (a slow calibration), 'short' "
+                                     "the instantaneous G(0)")
 
 
 @dataclass(frozen=True)
