@@ -347,6 +347,10 @@ def _budget_section(folder: Path, run_id: str | None) -> str:
         missing = "".join(f"<li>{_e(n)}</li>" for n in b.get("not_modelled", []))
         out.append(f"<details><summary>assumptions of each row</summary><ul>{notes}</ul>"
                    f"</details><p>Not modelled:</p><ul>{missing}</ul>")
+    for png in sorted(folder.glob("time_*.png")):  # the time rows' figure (method.md §15)
+        out.append(_figure(png, "The silicone's relaxation: F_z read against the true F_z over "
+                                "a press and release at the study's press time, and the "
+                                "hysteresis against the press time"))
     return "\n".join(out)
 
 
