@@ -149,7 +149,9 @@ class Result:
 
         header, rows = card_rows([self.chosen, self.original], self.constraints,
                                  rtol=self.study.optimise.active_rtol)
-        return {"header": header, "rows": rows + self._budget_rows()}
+        from ._display import Card
+
+        return Card({"header": header, "rows": rows + self._budget_rows()})
 
     @cached_property
     def budgets(self) -> tuple[Budget, Budget] | None:
@@ -270,10 +272,18 @@ class Result:
                          presses=presses, chip=a.chip, dataset=self.dataset, **options)
 
     def figures(self) -> dict[str, Figure]:
-        """The optimisation's figures as matplotlib figures, by name."""
-        from .report import optimise_figure_objects
+        """The optimisation's figures, the error budget of the chosen design and its
+        calibration's error (where the study has one geometry) as matplotlib figures, by name
+        (computing the budgets and the calibration if not done yet)."""
+        from .report import calibration_figure, draw_budget, optimise_figure_objects
 
-        return optimise_figure_objects(self.optimisation)
+        figs = dict(optimise_figure_objects(self.optimisation))
+        if self.budgets is not None:
+            from .budget import budget_json
+
+            figs["budget_chosen"] = draw_budget(budget_json(self.budgets[0]))
+            figs["calibration"] = calibration_figure(self.calibrate())
+        return figs
 
     def write(self, out: str | Path, figures: bool = True, budget: bool = True) -> list[Path]:
         """Write the optimisation's tables, the design card (``card.json``), with ``budget``
@@ -331,9 +341,15 @@ class Result:
         return files
 
     def __str__(self) -> str:
-        return (f"{self.study.name}: chosen {self.chosen}; active constraints "
-                f"{', '.join(self.active_constraints) or 'none'}\n"
-                f"original {self.original}")
+        """A few lines in mN, N, mm and kPa (3 significant figures)."""
+        from ._display import result_rows, text_block
+
+        return text_block(*result_rows(self))
+
+    def _repr_html_(self) -> str:
+        from ._display import html_block, result_rows
+
+        return html_block(*result_rows(self))
 
 
 def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str

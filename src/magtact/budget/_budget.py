@@ -105,6 +105,17 @@ class Budget:
         rows = [r for r in self.rows if math.isfinite(r.worst)]
         return sorted(rows, key=lambda r: -r.worst)[:n]
 
+    def __str__(self) -> str:
+        """The rows, largest first, in mN (3 significant figures; at most 25 lines)."""
+        from .._display import budget_rows, text_block
+
+        return text_block(*budget_rows(self))
+
+    def _repr_html_(self) -> str:
+        from .._display import budget_rows, html_block
+
+        return html_block(*budget_rows(self))
+
 
 #: A false force below this fraction of the largest of its row is round-off of a zero (e.g. a
 #: shear force at rest, zero by symmetry) and is written as 0.

@@ -67,6 +67,17 @@ class Calibration:
     grid: dict
     force_error: dict | None = None
 
+    def __str__(self) -> str:
+        """The map's design, target and firmware in mN, mm and kPa (a few lines)."""
+        from .._display import calibration_rows, text_block
+
+        return text_block(*calibration_rows(self))
+
+    def _repr_html_(self) -> str:
+        from .._display import calibration_rows, html_block
+
+        return html_block(*calibration_rows(self))
+
     def to_json(self) -> dict:
         fw = approximation_json(self.firmware, self.map)
         return {

@@ -8,7 +8,12 @@ nothing). :func:`build_report` turns a results folder into one self-contained HT
 from ._card import card_rows, read_card, write_card
 from ._explorer import explorer_data, write_explorer
 from ._fig_budget import budget_figures, budget_labels, draw_budget, fig_budget
-from ._fig_calibration import calibration_figures, draw_calibration, fig_calibration
+from ._fig_calibration import (
+    calibration_figure,
+    calibration_figures,
+    draw_calibration,
+    fig_calibration,
+)
 from ._fig_doe import fig_doe
 from ._fig_field import fig_field
 from ._fig_geometry import draw_geometry_pareto, fig_geometry_pareto
@@ -30,7 +35,8 @@ from ._style import CMAP_DIV, CMAP_SEQ, save, style
 
 __all__ = [
     "budget_figures", "budget_labels", "draw_budget", "fig_budget", "calibration_figures",
-    "draw_calibration", "fig_calibration", "report_document", "explorer_data", "write_explorer",
+    "draw_calibration", "fig_calibration", "report_document", "calibration_figure",
+    "explorer_data", "write_explorer",
     "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "draw_geometry_pareto", "draw_maps",
     "draw_pareto", "optimise_figure_objects",
     "field_figures", "fig_deformed_body", "fig_doe", "fig_field", "fig_force_map", "fig_gamma",

@@ -16,16 +16,17 @@ def draw_calibration(fig, cal) -> list:
     target σ_F in the title; the candidates' largest held-out error over σ_F against their
     size in bytes (1 = the target, filled marks: on the frontier).
     """
-    axes = fig.subplots(1, 3)
+    # room between the panels: a colour bar's label never meets the next panel's axis label
+    axes = fig.subplots(1, 3, gridspec_kw={"wspace": 0.55})
     g = cal.grid
     a = cal.firmware.chosen
     for ax, key, sigma, name in ((axes[0], "err_r", cal.sigma_F[0], "F_r"),
                                  (axes[1], "err_z", cal.sigma_F[1], "F_z")):
         mesh = ax.pcolormesh(g["t"], g["theta"], from_si(g[key], "mN"), cmap=CMAP_SEQ,
                              shading="auto")
-        fig.colorbar(mesh, ax=ax, label=f"|error of ${name[0]}_{name[2]}$| (mN)")
+        fig.colorbar(mesh, ax=ax, label=f"|error of ${name[0]}_{name[2]}$| [mN]")
         ax.set_xlabel("load t")
-        ax.set_ylabel("shear angle θ (rad)")
+        ax.set_ylabel("shear angle θ [rad]")
         ax.set_title(f"${name[0]}_{name[2]}$: max {from_si(g[key].max(), 'mN'):.3g} mN, "
                      f"σ_F {from_si(sigma, 'mN'):.3g} mN", fontsize=8)
     ax = axes[2]
@@ -45,16 +46,26 @@ def draw_calibration(fig, cal) -> list:
     ax.axhline(1.0, color="0.4", lw=0.8, ls="--")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("size (bytes)")
-    ax.set_ylabel("largest error / σ_F")
+    ax.set_xlabel("size [bytes]")
+    ax.set_ylabel("largest error / $\\sigma_F$")
     reached = "target reached" if cal.firmware.reached else "target NOT reached"
     ax.set_title(f"firmware candidates ({reached})", fontsize=8)
     ax.legend(frameon=False, fontsize=6)
     d = cal.map.describe()
     noise = ", ".join(f"{from_si(v, 'uT'):.3g}" for v in cal.noise)
-    fig.suptitle(f"calibration of H = {d['H_mm']:.3g} mm, G = {d['G_kPa']:.4g} kPa: "
+    fig.suptitle(f"calibration of H = {d['H_mm']:.3g} mm, G = {d['G_kPa']:.3g} kPa: "
                  f"{a.kind} ({a.bytes} bytes); σ_F for σ_B = ({noise}) µT", fontsize=8)
     return list(axes)
+
+
+def calibration_figure(cal):
+    """The calibration figure of a :class:`magtact.calibration.Calibration` as a
+    :class:`matplotlib.figure.Figure` (for notebooks: :meth:`magtact.Result.figures`)."""
+    with style():
+        fig, _ = subplots(1, 1, figsize=(10.0, 3.4))
+        fig.clear()
+        draw_calibration(fig, cal)
+    return fig
 
 
 def fig_calibration(cal, path: str | Path) -> list[Path]:
