@@ -410,112 +410,202 @@ def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
 
 
 # ---- writers ---------------------------------------------------------------------------------
-def _c_array(name: str, values) -> str:
+#: Half-width of the band around the field at rest inside which a reading is valid, in the
+#: chip's RMS noise per axis: a sensor at rest reads its rest field plus noise, on both sides of
+#: the region's edge at t = 0.
+BAND_SIGMAS = 3.0
+
+#: A reading whose B_z (after the offset) is at most this fraction of B_z at rest has no
+#: field from the magnet (B_z grows from its rest value as the body is loaded).
+NO_FIELD_FRACTION = 0.5
+
+#: Return codes of the C function ``magtact_force``.
+C_RETURN = {"MAGTACT_FORCE_OK": 0, "MAGTACT_FORCE_OUTSIDE": 1, "MAGTACT_FORCE_NO_FIELD": 2}
+
+
+def _c_array(name: str, values, indent: str = "    ") -> str:
     vals = [f"{float(v):.17g}" for v in np.ravel(values)]
     lines = [", ".join(vals[k:k + 4]) for k in range(0, len(vals), 4)]
-    return (f"static const MAGTACT_REAL {name}[{len(vals)}] = {{\n    "
-            + ",\n    ".join(lines) + "\n};\n")
+    inner = indent + "    "
+    return (f"{indent}static const MAGTACT_REAL {name}[{len(vals)}] = {{\n{inner}"
+            + f",\n{inner}".join(lines) + f"\n{indent}}};\n")
 
 
-def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = None) -> str:
-    """The C99 header: coefficients and ``int force(bx, by, bz, out)`` (0 inside the stable
-    region, 1 outside), no dependency beyond <math.h>."""
+def _c_index(name: str, values, indent: str = "    ") -> str:
+    return (f"{indent}static const unsigned char {name}[{len(values)}] = "
+            f"{{{', '.join(str(v) for v in values)}}};\n")
+
+
+def rest_field(smap: SensorMap) -> np.ndarray:
+    """The reading (B_x, B_y, B_z) [T] of the map's sensor at rest (no load)."""
+    return np.asarray(smap.at_load(np.array([0.0]), 0.0)[0][0], dtype=float)
+
+
+def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = None,
+             noise: tuple[float, float] | None = None) -> str:
+    """The C99 header ``force.h``: ``magtact_force`` and ``magtact_force_tare``, both
+    ``static inline`` (a file that includes the header and calls neither compiles without a
+    warning; every file that calls them gets its own copy), with no dependency beyond
+    <math.h> (link with ``-lm``).
+
+    ``magtact_force(bx, by, bz, offset, out)`` returns 0 (``MAGTACT_FORCE_OK``) inside the
+    stable region or within :data:`BAND_SIGMAS` × the chip's ``noise`` (σ_x, σ_z) [T] of the
+    field at rest, 1 (``MAGTACT_FORCE_OUTSIDE``, ``out`` zero: an extrapolation is no
+    measurement) elsewhere and 2 (``MAGTACT_FORCE_NO_FIELD``, ``out`` zero) for B_z at most
+    :data:`NO_FIELD_FRACTION` of B_z at rest (B = 0, B_z < 0 included) or a reading that is not
+    finite. ``offset`` (or NULL) is subtracted from the
+    reading first; ``magtact_force_tare`` sets it from a reading at rest.
+    """
     d = smap.describe()
-    lo_r, hi_r, lo_v, hi_v = a.limits
+    rest = rest_field(smap)
+    band = (0.0, 0.0) if noise is None else tuple(BAND_SIGMAS * float(v) for v in noise)
     target = ("" if choice is None else
               " *   target sigma_F (the design's resolution): "
               f"F_r {from_si(choice.target_r, 'mN'):.4g} mN, "
               f"F_z {from_si(choice.target_z, 'mN'):.4g} mN; "
               f"{'reached' if choice.reached else 'NOT reached'} ({choice.rule})\n")
+    band_text = (" *   no band around the rest field (the chip's noise was not given)\n"
+                 if noise is None else
+                 f" *   valid band around the rest field: {BAND_SIGMAS:g} x the chip's RMS "
+                 f"noise, {from_si(band[0], 'uT'):.4g} uT in x and y, "
+                 f"{from_si(band[1], 'uT'):.4g} uT in z\n")
+    rest_mT = ", ".join(f"{from_si(v, 'mT'):.6g}" for v in rest)
+    kind = (f" of degree {a.degree} in b_r and {a.transform}" if a.kind == "poly"
+            else f" {a.degree} x {a.degree} bilinear in (b_r, b_z)" if a.kind == "table"
+            else f": load features of degree {a.degree} in b_r and {a.transform}, then the "
+                 f"force of degree {a.degree} in the features")
     head = (
-        "/* magtact field-to-force calibration (generated; docs/method.md section 12).\n"
+        "/* magtact field-to-force calibration (generated; docs/method.md section 13).\n"
         f" *   design: H = {d['H_mm']:.4g} mm, G = {d['G_kPa']:.4g} kPa, "
         f"M_z = {d['M_z_A_per_m']:.4g} A/m\n"
-        f" *   units: bx, by, bz in tesla (the Hall chip's axes: x, y in the base plane, z up);"
+        " *   units: bx, by, bz in tesla (the Hall chip's axes: x, y in the base plane, z up);"
         " out[3] in newtons\n"
         " *   out = (F_x, F_y, F_z): the reaction of the base on the body (F_r <= 0 against the "
         "shear,\n *   F_z > 0 in compression); the load applied on the top is -out.\n"
         f" *   region: t <= {d['t_m']:.6g}, theta <= {d['theta_m_rad']:.6g} rad (every azimuth); "
         f"F_r down to -{d['F_r_range_N']:.4g} N, F_z up to {d['F_z_range_N']:.4g} N\n"
-        f" *   approximation: {a.kind}"
-        + (f" of degree {a.degree} in b_r and {a.transform}" if a.kind == "poly"
-           else f" {a.degree} x {a.degree} bilinear in (b_r, b_z)" if a.kind == "table"
-           else f": load features of degree {a.degree} in b_r and {a.transform}, then the "
-                f"force of degree {a.degree} in the features") + "\n"
+        f" *   field at rest: ({rest_mT}) mT\n"
+        + band_text +
+        f" *   approximation: {a.kind}{kind}\n"
         + _unit_line(smap) +
         f" *   largest error over the region (held out): F_r {from_si(a.err_r, 'mN'):.4g} mN, "
         f"F_z {from_si(a.err_z, 'mN'):.4g} mN\n" + target +
         f" *   size: {a.bytes} bytes of float32 numbers (about twice in double), "
         f"{a.multiplies} multiplications per call\n"
-        " * force() returns 0 inside the region, 1 outside (out is then not a measurement).\n"
+        " *\n"
+        " * Use: #include \"force.h\" in any number of C files (the functions are static\n"
+        " * inline; a file that calls neither compiles without warnings) and link with -lm\n"
+        " * (sqrt, cbrt, fabs of <math.h>), e.g. cc -std=c99 main.c -lm\n"
+        " *   MAGTACT_REAL offset[3] = {0, 0, 0};\n"
+        " *   magtact_force_tare(bx0, by0, bz0, offset);   once, from a reading with no load\n"
+        " *   rc = magtact_force(bx, by, bz, offset, out);  offset may be NULL (no tare)\n"
+        " * magtact_force returns MAGTACT_FORCE_OK (0) inside the region or within the band\n"
+        " * around the rest field, MAGTACT_FORCE_OUTSIDE (1, out = 0) elsewhere,\n"
+        " * MAGTACT_FORCE_NO_FIELD (2, out = 0) for bz <= MAGTACT_BZ_MIN (half the field at rest,\n"
+        " * after the offset) or a reading that is not a finite number (no magnet above the\n"
+        " * chip, the chip upside down, a bad read).\n"
         " * Arithmetic in double by default; define MAGTACT_REAL as float before including for\n"
         " * single precision (its rounding adds up to about 2e-4 of the force range). */\n"
-        "#ifndef MAGTACT_CALIBRATION_H\n#define MAGTACT_CALIBRATION_H\n#include <math.h>\n"
-        "#ifndef MAGTACT_REAL\n#define MAGTACT_REAL double\n#endif\n\n")
-    body = _c_array("magtact_coef_r", a.coef_r) + _c_array("magtact_coef_z", a.coef_z)
-    body += _c_array("magtact_poly_r", a.polygon[:, 0]) + _c_array("magtact_poly_z",
-                                                                   a.polygon[:, 1])
-    k = len(a.polygon)
-    region = (
-        f"    int inside = 0, a, b;\n    for (a = 0, b = {k - 1}; a < {k}; b = a++) {{\n"
-        "        MAGTACT_REAL x1 = magtact_poly_r[a], y1 = magtact_poly_z[a];\n"
-        "        MAGTACT_REAL x2 = magtact_poly_r[b], y2 = magtact_poly_z[b];\n"
-        "        if (((y1 > bz) != (y2 > bz)) && (br < (x2 - x1) * (bz - y1) / (y2 - y1) + x1))\n"
-        "            inside = !inside;\n    }\n")
-    if a.kind == "poly":
-        n = a.degree
-        terms = basis_terms(n)
-        ii = ", ".join(str(i) for i, _ in terms)
-        jj = ", ".join(str(j) for _, j in terms)
-        body += f"static const unsigned char magtact_i[{len(terms)}] = {{{ii}}};\n"
-        body += f"static const unsigned char magtact_j[{len(terms)}] = {{{jj}}};\n\n"
-        core = (
-            f"    MAGTACT_REAL v = {TRANSFORMS[a.transform][1]};\n"
-            f"    MAGTACT_REAL xi = 2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1;\n"
-            f"    MAGTACT_REAL eta = 2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1;\n"
-            f"    MAGTACT_REAL tx[{n + 1}], ty[{n + 1}], fr = 0, fz = 0;\n"
-            "    int k;\n"
-            "    tx[0] = 1; ty[0] = 1;\n"
-            + (f"    tx[1] = xi; ty[1] = eta;\n    for (k = 2; k <= {n}; k++) {{\n"
-               "        tx[k] = 2 * xi * tx[k - 1] - tx[k - 2];\n"
-               "        ty[k] = 2 * eta * ty[k - 1] - ty[k - 2];\n    }\n" if n >= 1 else "")
-            + f"    for (k = 0; k < {len(terms)}; k++) {{\n"
-            "        MAGTACT_REAL b = tx[magtact_i[k]] * ty[magtact_j[k]];\n"
-            "        fr += magtact_coef_r[k] * b;\n        fz += magtact_coef_z[k] * b;\n    }\n")
-    else:
-        n = a.degree
-        core = (
-            f"    MAGTACT_REAL x = (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) * {n - 1};\n"
-            f"    MAGTACT_REAL y = (bz - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) * {n - 1};\n"
-            f"    int i, j;\n    MAGTACT_REAL fx, fy, fr, fz;\n"
-            f"    if (x < 0) x = 0;\n    if (x > {n - 1} - 1e-6) x = {n - 1} - 1e-6;\n"
-            f"    if (y < 0) y = 0;\n    if (y > {n - 1} - 1e-6) y = {n - 1} - 1e-6;\n"
-            "    i = (int)x; j = (int)y; fx = x - i; fy = y - j;\n"
-            f"#define MAGTACT_AT(c, a, b) c[(a) * {n} + (b)]\n"
-            "    fr = (MAGTACT_AT(magtact_coef_r, i, j) * (1 - fy) + "
-            "MAGTACT_AT(magtact_coef_r, i, j + 1) * fy) * (1 - fx)\n"
-            "       + (MAGTACT_AT(magtact_coef_r, i + 1, j) * (1 - fy) + "
-            "MAGTACT_AT(magtact_coef_r, i + 1, j + 1) * fy) * fx;\n"
-            "    fz = (MAGTACT_AT(magtact_coef_z, i, j) * (1 - fy) + "
-            "MAGTACT_AT(magtact_coef_z, i, j + 1) * fy) * (1 - fx)\n"
-            "       + (MAGTACT_AT(magtact_coef_z, i + 1, j) * (1 - fy) + "
-            "MAGTACT_AT(magtact_coef_z, i + 1, j + 1) * fy) * fx;\n"
-            "#undef MAGTACT_AT\n")
+        "#ifndef MAGTACT_FORCE_H\n#define MAGTACT_FORCE_H\n#include <math.h>\n"
+        "#include <stddef.h>\n"
+        "#ifndef MAGTACT_REAL\n#define MAGTACT_REAL double\n#endif\n"
+        + "".join(f"#define {k} {v}\n" for k, v in C_RETURN.items())
+        + f"#define MAGTACT_REST_X ({rest[0]:.17g})\n#define MAGTACT_REST_Y ({rest[1]:.17g})\n"
+        f"#define MAGTACT_REST_Z ({rest[2]:.17g})\n"
+        f"#define MAGTACT_BZ_MIN ({NO_FIELD_FRACTION * max(rest[2], 0.0):.17g})\n"
+        f"#define MAGTACT_BAND_XY ({band[0]:.17g})\n#define MAGTACT_BAND_Z ({band[1]:.17g})\n\n")
+    helpers, block = _c_features(a) if a.kind == "features" else ("", _c_planar(a))
     func = (
-        "static int force(MAGTACT_REAL bx, MAGTACT_REAL by, MAGTACT_REAL bz, "
-        "MAGTACT_REAL out[3])\n{\n"
-        "    MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(bx * bx + by * by));\n"
-        + core + region +
-        "    if (br > 0) {\n        out[0] = fr * bx / br;\n        out[1] = fr * by / br;\n"
-        "    } else {\n        out[0] = 0;\n        out[1] = 0;\n    }\n"
-        "    out[2] = fz;\n    return inside ? 0 : 1;\n}\n\n#endif\n")
-    if a.kind == "features":
-        return head + _c_features(a)
-    if a.kind == "poly" and a.transform == "B_z^(-1/3)":
-        func = func.replace("1.0 / cbrt(bz)", "(MAGTACT_REAL)(1.0 / cbrt((double)bz))")
-    if a.kind == "poly" and a.transform == "1/B_z":
-        func = func.replace("= 1.0 / bz;", "= (MAGTACT_REAL)(1.0 / (double)bz);")
-    return head + body + func
+        "/* The force of a reading (see the top of this file). */\n"
+        "static inline int magtact_force(MAGTACT_REAL bx, MAGTACT_REAL by, MAGTACT_REAL bz,\n"
+        "                                const MAGTACT_REAL *offset, MAGTACT_REAL out[3])\n{\n"
+        "    int inside = 0;\n"
+        "    out[0] = 0;\n    out[1] = 0;\n    out[2] = 0;\n"
+        "    if (offset != NULL) {\n"
+        "        bx -= offset[0];\n        by -= offset[1];\n        bz -= offset[2];\n    }\n"
+        "    if (!isfinite(bx) || !isfinite(by) || !isfinite(bz) || !(bz > MAGTACT_BZ_MIN))\n"
+        "        return MAGTACT_FORCE_NO_FIELD;\n"
+        + block +
+        "    if (!inside && fabs((double)bx - MAGTACT_REST_X) <= MAGTACT_BAND_XY\n"
+        "        && fabs((double)by - MAGTACT_REST_Y) <= MAGTACT_BAND_XY\n"
+        "        && fabs((double)bz - MAGTACT_REST_Z) <= MAGTACT_BAND_Z)\n"
+        "        inside = 1;  /* at rest, within the chip's noise */\n"
+        "    if (!inside) {  /* an extrapolation is no measurement: none is returned */\n"
+        "        out[0] = 0;\n        out[1] = 0;\n        out[2] = 0;\n"
+        "        return MAGTACT_FORCE_OUTSIDE;\n    }\n"
+        "    return MAGTACT_FORCE_OK;\n}\n\n"
+        "/* The offset (the reading at rest minus the design's rest field) that magtact_force\n"
+        " * subtracts: call with a reading taken with no load. Returns MAGTACT_FORCE_NO_FIELD\n"
+        " * (offset unchanged) for a reading magtact_force would refuse. */\n"
+        "static inline int magtact_force_tare(MAGTACT_REAL bx, MAGTACT_REAL by, MAGTACT_REAL bz,\n"
+        "                                     MAGTACT_REAL offset[3])\n{\n"
+        "    if (!isfinite(bx) || !isfinite(by) || !isfinite(bz) || !(bz > MAGTACT_BZ_MIN))\n"
+        "        return MAGTACT_FORCE_NO_FIELD;\n"
+        "    offset[0] = (MAGTACT_REAL)(bx - MAGTACT_REST_X);\n"
+        "    offset[1] = (MAGTACT_REAL)(by - MAGTACT_REST_Y);\n"
+        "    offset[2] = (MAGTACT_REAL)(bz - MAGTACT_REST_Z);\n"
+        "    return MAGTACT_FORCE_OK;\n}\n\n#endif\n")
+    return head + helpers + func
+
+
+def _c_planar(a: Approximation) -> str:
+    """The block of ``magtact_force`` for a ``poly`` or ``table`` approximation: sets out and
+    inside from (bx, by, bz), bz > 0."""
+    lo_r, hi_r, lo_v, hi_v = a.limits
+    n = a.degree
+    k = len(a.polygon)
+    ind = "        "
+    block = ("    {\n" + _c_array("coef_r", a.coef_r, ind) + _c_array("coef_z", a.coef_z, ind)
+             + _c_array("poly_r", a.polygon[:, 0], ind)
+             + _c_array("poly_z", a.polygon[:, 1], ind))
+    if a.kind == "poly":
+        terms = basis_terms(n)
+        block += (_c_index("ti", [i for i, _ in terms], ind)
+                  + _c_index("tj", [j for _, j in terms], ind))
+    block += (f"{ind}MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(bx * bx + by * by));\n"
+              f"{ind}MAGTACT_REAL fr = 0, fz = 0;\n{ind}int a, b;\n")
+    if a.kind == "poly":
+        v = {"B_z": "bz", "1/B_z": "(MAGTACT_REAL)(1.0 / (double)bz)",
+             "B_z^(-1/3)": "(MAGTACT_REAL)(1.0 / cbrt((double)bz))"}[a.transform]
+        terms = basis_terms(n)
+        block += (
+            f"{ind}MAGTACT_REAL v = {v};\n"
+            f"{ind}MAGTACT_REAL xi = 2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1;\n"
+            f"{ind}MAGTACT_REAL eta = 2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1;\n"
+            f"{ind}MAGTACT_REAL tx[{n + 1}], ty[{n + 1}];\n{ind}int k;\n"
+            f"{ind}tx[0] = 1;\n{ind}ty[0] = 1;\n"
+            + (f"{ind}tx[1] = xi;\n{ind}ty[1] = eta;\n"
+               f"{ind}for (k = 2; k <= {n}; k++) {{\n"
+               f"{ind}    tx[k] = 2 * xi * tx[k - 1] - tx[k - 2];\n"
+               f"{ind}    ty[k] = 2 * eta * ty[k - 1] - ty[k - 2];\n{ind}}}\n"
+               if n >= 1 else "")
+            + f"{ind}for (k = 0; k < {len(terms)}; k++) {{\n"
+            f"{ind}    MAGTACT_REAL t = tx[ti[k]] * ty[tj[k]];\n"
+            f"{ind}    fr += coef_r[k] * t;\n{ind}    fz += coef_z[k] * t;\n{ind}}}\n")
+    else:
+        block += (
+            f"{ind}MAGTACT_REAL x = (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) * {n - 1};\n"
+            f"{ind}MAGTACT_REAL y = (bz - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) * {n - 1};\n"
+            f"{ind}MAGTACT_REAL fx, fy;\n{ind}int i, j;\n"
+            f"{ind}if (x < 0) x = 0;\n{ind}if (x > {n - 1} - 1e-6) x = {n - 1} - 1e-6;\n"
+            f"{ind}if (y < 0) y = 0;\n{ind}if (y > {n - 1} - 1e-6) y = {n - 1} - 1e-6;\n"
+            f"{ind}i = (int)x;\n{ind}j = (int)y;\n{ind}fx = x - i;\n{ind}fy = y - j;\n"
+            + "".join(
+                f"{ind}f{c} = (coef_{c}[i * {n} + j] * (1 - fy) + coef_{c}[i * {n} + j + 1] "
+                f"* fy) * (1 - fx)\n"
+                f"{ind}    + (coef_{c}[(i + 1) * {n} + j] * (1 - fy) "
+                f"+ coef_{c}[(i + 1) * {n} + j + 1] * fy) * fx;\n" for c in ("r", "z")))
+    block += (
+        f"{ind}for (a = 0, b = {k - 1}; a < {k}; b = a++) {{\n"
+        f"{ind}    MAGTACT_REAL x1 = poly_r[a], y1 = poly_z[a];\n"
+        f"{ind}    MAGTACT_REAL x2 = poly_r[b], y2 = poly_z[b];\n"
+        f"{ind}    if (((y1 > bz) != (y2 > bz))\n"
+        f"{ind}        && (br < (x2 - x1) * (bz - y1) / (y2 - y1) + x1))\n"
+        f"{ind}        inside = !inside;\n{ind}}}\n"
+        f"{ind}if (br > 0) {{\n{ind}    out[0] = fr * bx / br;\n"
+        f"{ind}    out[1] = fr * by / br;\n{ind}}}\n"
+        f"{ind}out[2] = fz;\n    }}\n")
+    return block
 
 
 def _unit_line(smap: SensorMap) -> str:
@@ -528,8 +618,9 @@ def _unit_line(smap: SensorMap) -> str:
             f"({d}) mm, field offset ({b}) mT\n")
 
 
-def _c_features(a: Approximation) -> str:
-    """The body of the two-stage C function (see :func:`fit_features`)."""
+def _c_features(a: Approximation) -> tuple[str, str]:
+    """The helper and the block of ``magtact_force`` of the two-stage candidate (see
+    :func:`fit_features`)."""
     st = a.stage
     n = a.degree
     terms = basis_terms(n)
@@ -538,57 +629,55 @@ def _c_features(a: Approximation) -> str:
     b0 = [float(v) for v in st["field_offset"]]
     d = [float(v) for v in st["delta"]]
     t_m, tan_m = (float(v) for v in st["region"])
-    ii = ", ".join(str(i) for i, _ in terms)
-    jj = ", ".join(str(j) for _, j in terms)
-    body = (_c_array("magtact_coef_p", st["coef_p"]) + _c_array("magtact_coef_q", st["coef_q"])
-            + _c_array("magtact_coef_r", a.coef_r) + _c_array("magtact_coef_z", a.coef_z)
-            + f"static const unsigned char magtact_i[{len(terms)}] = {{{ii}}};\n"
-            + f"static const unsigned char magtact_j[{len(terms)}] = {{{jj}}};\n\n")
-    body += (
-        "/* two sums of c[k] T_i(xi) T_j(eta) over the basis (i, j) = (magtact_i[k], "
-        "magtact_j[k]) */\n"
-        "static void magtact_cheb2(const MAGTACT_REAL *c1, const MAGTACT_REAL *c2, "
-        "MAGTACT_REAL xi,\n                          MAGTACT_REAL eta, MAGTACT_REAL *s1, "
-        "MAGTACT_REAL *s2)\n{\n"
+    helper = (
+        f"/* two sums of c[k] T_i(xi) T_j(eta) over the basis i + j <= {n} */\n"
+        "static inline void magtact_force_cheb2(const MAGTACT_REAL *c1, const MAGTACT_REAL *c2,\n"
+        "                                       MAGTACT_REAL xi, MAGTACT_REAL eta,\n"
+        "                                       MAGTACT_REAL *s1, MAGTACT_REAL *s2)\n{\n"
+        + _c_index("ti", [i for i, _ in terms]) + _c_index("tj", [j for _, j in terms]) +
         f"    MAGTACT_REAL tx[{n + 1}], ty[{n + 1}], a = 0, b = 0;\n    int k;\n"
-        "    tx[0] = 1; ty[0] = 1;\n    tx[1] = xi; ty[1] = eta;\n"
+        "    tx[0] = 1;\n    ty[0] = 1;\n    tx[1] = xi;\n    ty[1] = eta;\n"
         f"    for (k = 2; k <= {n}; k++) {{\n"
         "        tx[k] = 2 * xi * tx[k - 1] - tx[k - 2];\n"
         "        ty[k] = 2 * eta * ty[k - 1] - ty[k - 2];\n    }\n"
         f"    for (k = 0; k < {len(terms)}; k++) {{\n"
-        "        MAGTACT_REAL t = tx[magtact_i[k]] * ty[magtact_j[k]];\n"
+        "        MAGTACT_REAL t = tx[ti[k]] * ty[tj[k]];\n"
         "        a += c1[k] * t;\n        b += c2[k] * t;\n    }\n"
         "    *s1 = a;\n    *s2 = b;\n}\n\n")
     v = {"B_z": "cz", "1/B_z": "(MAGTACT_REAL)(1.0 / (double)cz)",
          "B_z^(-1/3)": "(MAGTACT_REAL)(1.0 / cbrt((double)cz))"}[a.transform]
-    body += (
-        "static int force(MAGTACT_REAL bx, MAGTACT_REAL by, MAGTACT_REAL bz, "
-        "MAGTACT_REAL out[3])\n{\n"
-        f"    const MAGTACT_REAL s = {float(st['B_scale']):.17g}, g = "
+    ind = "        "
+    block = (
+        "    {\n"
+        + _c_array("coef_p", st["coef_p"], ind) + _c_array("coef_q", st["coef_q"], ind)
+        + _c_array("coef_r", a.coef_r, ind) + _c_array("coef_z", a.coef_z, ind) +
+        f"{ind}const MAGTACT_REAL s = {float(st['B_scale']):.17g}, g = "
         f"{float(st['G_scale']):.17g};\n"
-        f"    MAGTACT_REAL cx = (bx - ({b0[0]:.17g})) / s;\n"
-        f"    MAGTACT_REAL cy = (by - ({b0[1]:.17g})) / s;\n"
-        f"    MAGTACT_REAL cz = (bz - ({b0[2]:.17g})) / s;\n"
-        "    MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(cx * cx + cy * cy));\n"
-        f"    MAGTACT_REAL v = {v};\n"
-        "    MAGTACT_REAL p, q1, qx, qy, q, fr, fz, ux = 1, uy = 0;\n"
-        f"    magtact_cheb2(magtact_coef_p, magtact_coef_q,\n"
-        f"                  2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1,\n"
-        f"                  2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1, &p, &q1);\n"
-        "    if (br > 0) {\n        ux = cx / br;\n        uy = cy / br;\n    }\n"
-        f"    p -= ({d[0]:.17g});\n"
-        f"    qx = q1 * ux - ({d[1]:.17g});\n    qy = q1 * uy - ({d[2]:.17g});\n"
-        "    q = (MAGTACT_REAL)sqrt((double)(qx * qx + qy * qy));\n"
-        f"    magtact_cheb2(magtact_coef_r, magtact_coef_z,\n"
-        f"                  2 * (p - ({lo_p:.17g})) / ({hi_p - lo_p:.17g}) - 1,\n"
-        f"                  2 * (q - ({lo_q:.17g})) / ({hi_q - lo_q:.17g}) - 1, &fr, &fz);\n"
-        "    if (q > 0) {\n        out[0] = g * fr * qx / q;\n        out[1] = g * fr * qy / q;\n"
-        "    } else {\n        out[0] = 0;\n        out[1] = 0;\n    }\n"
-        "    out[2] = g * fz;\n"
-        f"    return (p >= -{REGION_SLACK!r} && p <= {t_m:.17g} + {REGION_SLACK!r}\n"
-        f"            && q <= (p > 0 ? p : 0) * {tan_m:.17g} + {REGION_SLACK!r}) ? 0 : 1;\n"
-        "}\n\n#endif\n")
-    return body
+        f"{ind}MAGTACT_REAL cx = (bx - ({b0[0]:.17g})) / s;\n"
+        f"{ind}MAGTACT_REAL cy = (by - ({b0[1]:.17g})) / s;\n"
+        f"{ind}MAGTACT_REAL cz = (bz - ({b0[2]:.17g})) / s;\n"
+        f"{ind}MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(cx * cx + cy * cy));\n"
+        f"{ind}MAGTACT_REAL p, q1, qx, qy, q, fr, fz, v, ux = 1, uy = 0;\n"
+        f"{ind}if (!(cz > 0))  /* the unit's field offset leaves no field from the magnet */\n"
+        f"{ind}    return MAGTACT_FORCE_NO_FIELD;\n"
+        f"{ind}v = {v};\n"
+        f"{ind}magtact_force_cheb2(coef_p, coef_q,\n"
+        f"{ind}                    2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1,\n"
+        f"{ind}                    2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1, &p, &q1);\n"
+        f"{ind}if (br > 0) {{\n{ind}    ux = cx / br;\n{ind}    uy = cy / br;\n{ind}}}\n"
+        f"{ind}p -= ({d[0]:.17g});\n"
+        f"{ind}qx = q1 * ux - ({d[1]:.17g});\n{ind}qy = q1 * uy - ({d[2]:.17g});\n"
+        f"{ind}q = (MAGTACT_REAL)sqrt((double)(qx * qx + qy * qy));\n"
+        f"{ind}magtact_force_cheb2(coef_r, coef_z,\n"
+        f"{ind}                    2 * (p - ({lo_p:.17g})) / ({hi_p - lo_p:.17g}) - 1,\n"
+        f"{ind}                    2 * (q - ({lo_q:.17g})) / ({hi_q - lo_q:.17g}) - 1, &fr, &fz);\n"
+        f"{ind}if (q > 0) {{\n{ind}    out[0] = g * fr * qx / q;\n"
+        f"{ind}    out[1] = g * fr * qy / q;\n{ind}}}\n"
+        f"{ind}out[2] = g * fz;\n"
+        f"{ind}inside = p >= -{REGION_SLACK!r} && p <= {t_m:.17g} + {REGION_SLACK!r}\n"
+        f"{ind}         && q <= (p > 0 ? p : 0) * {tan_m:.17g} + {REGION_SLACK!r};\n"
+        "    }\n")
+    return helper, block
 
 
 def write_table_csv(smap: SensorMap, path: Path, n: int = 64) -> Path:

@@ -100,8 +100,10 @@ class Calibration:
             "force_model_error": self.force_error,
             "files": {"c_header": "force.h", "json": "force_map.json",
                       "csv_table": "force_table.csv"},
-            "usage": ("C: #include \"force.h\"; MAGTACT_REAL F[3]; "
-                      "int outside = force(bx, by, bz, F); bx, by, bz in T, F in N. Python: "
+            "usage": ("C: #include \"force.h\" (link with -lm); MAGTACT_REAL F[3], off[3]; "
+                      "magtact_force_tare(bx0, by0, bz0, off) once at rest; "
+                      "int rc = magtact_force(bx, by, bz, off, F) (0 valid, 1 outside the "
+                      "region, 2 no field); bx, by, bz in T, F in N. Python: "
                       "magtact.calibration.load_approximation(json.load(open('force_map.json'))['approximation']).evaluate(B)"),
         }
 
@@ -255,8 +257,8 @@ def write_calibration_outputs(cal: Calibration, out_dir, figures=None) -> dict[s
         "csv_table": write_table_csv(cal.map, out / "force_table.csv"),
         "summary": write_json(cal.to_json(), out / "calibration.json"),
     }
-    files["c_header"].write_text(c_header(cal.firmware.chosen, cal.map, cal.firmware),
-                                 encoding="utf-8")
+    files["c_header"].write_text(c_header(cal.firmware.chosen, cal.map, cal.firmware,
+                                          noise=cal.noise), encoding="utf-8")
     if cal.unit is not None:
         files["unit"] = write_json(cal.unit.to_json(), out / "unit.json")
     if figures is not None:
