@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
-from ._errors import MissingFileError
+from ._errors import MagtactError, MissingFileError
 from ._files import write_json, write_text
 from ._front import solve
 from ._runfolder import (
@@ -87,7 +87,7 @@ class RunResult:
     @property
     def ok(self) -> bool:
         """True if every stage succeeded."""
-        return all(s.status == "ok" for s in self.stages)
+        return all(s.status in ("ok", "warning") for s in self.stages)
 
 
 @dataclass
@@ -213,7 +213,8 @@ def _run_stages(ctx: _Context, run_id: str, manifest: dict, start: float) -> lis
         t0 = time.perf_counter()
         try:
             rec.message = fn(ctx, rec) or ""
-            rec.status = "ok"
+            # a stage that completed with a caveat (a poor fit, a front gap) says so
+            rec.status = "warning" if any(n.startswith("WARNING") for n in rec.notes) else "ok"
         except StageSkipped as exc:
             rec.status, rec.message = "skipped", str(exc)
         except Exception as exc:  # a failed stage is reported, the run goes on
@@ -251,7 +252,7 @@ def _stage_field(ctx: _Context, rec: StageRecord) -> str:
 
 
 def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
-    from .doe import load_bundled, matches_study, run_doe, save_dataset, write_csv
+    from .doe import bundled_for, run_doe, save_dataset, write_csv
 
     folder = ctx.folder / "doe"
     if ctx.recompute:
@@ -260,12 +261,14 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
         ctx.doe_source = (f"recomputed: {a.get('run_paths_computed')} structural paths "
                           f"computed, {a.get('run_paths_cached')} from the cache")
     else:
-        ds = load_bundled()
-        if not matches_study(ds, ctx.study):
-            raise StageSkipped("the bundled data set was computed for the built-in MagOne "
-                               "study, whose geometry, material, levels or solver settings "
-                               "differ from this study's: run with --recompute")
-        ctx.doe_source = "bundled with magtact (precomputed FE DOE of the MagOne study)"
+        try:  # the bundled data, rescaled exactly to the study's G levels and M_z
+            ds = bundled_for(ctx.study, advice="run with --recompute")
+        except MagtactError as exc:
+            raise StageSkipped(str(exc)) from None
+        ctx.doe_source = (f"bundled with magtact (precomputed FE DOE "
+                          f"{ds.attrs.get('bundled_name', '')}"
+                          + (", rescaled exactly to this study's G levels and M_z)"
+                             if "rescaled_from" in ds.attrs else ")"))
     folder.mkdir(parents=True, exist_ok=True)
     save_dataset(ds, folder / "doe.nc")
     write_csv(ds, folder / "doe.csv")
@@ -282,15 +285,19 @@ def _stage_doe(ctx: _Context, rec: StageRecord) -> str:
 def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
     if ctx.dataset is None:
         raise StageSkipped("needs the DOE data set, which is missing")
-    if ctx.study.geometric_variables:
-        return _fit_geometry(ctx)
-    from .metamodel import copy_prefitted, select_metamodels, write_fit_outputs
+    from .metamodel import copy_prefitted, find_shipped, select_metamodels, write_fit_outputs
 
+    if ctx.study.geometric_variables and (ctx.refit or
+                                          find_shipped(ctx.study, ctx.dataset) is None):
+        return _fit_geometry(ctx, rec)
     chosen = select_metamodels(ctx.study, ctx.dataset, refit=ctx.refit,
                                log=lambda m: ctx.log(f"      {m}"))
     ctx.models_source = chosen.source
+    if chosen.poor_fit:
+        rec.notes.append(f"WARNING: {chosen.quality.message()}")
     if chosen.shipped is not None:
-        ctx.models, _ = copy_prefitted(chosen.shipped, ctx.folder / "metamodel")
+        ctx.models, _ = copy_prefitted(chosen.shipped, ctx.folder / "metamodel",
+                                       models=chosen.models)
         return ("B_r, B_z, f_r, f_z: the fit shipped with magtact for this very data set and "
                 "these settings (same data SHA-256; --refit fits again)")
     from .report import fit_figures
@@ -306,12 +313,14 @@ def _stage_metamodel(ctx: _Context, rec: StageRecord) -> str:
             f"{ctx.study.metamodel.b_model}); largest held-out relative error {worst:.3g}")
 
 
-def _fit_geometry(ctx: _Context) -> str:
+def _fit_geometry(ctx: _Context, rec: StageRecord) -> str:
     """Force models over (t, θ, H) and the geometric design variables; the field is exact."""
-    from .metamodel import fit_models, save_models
+    from .metamodel import fit_models, fit_quality, save_models
 
     result = fit_models(ctx.dataset, ctx.study, log=lambda m: ctx.log(f"      {m}"))
     ctx.models = result.model_set(ctx.study)
+    if fit_quality(ctx.models).is_poor:
+        rec.notes.append(f"WARNING: {fit_quality(ctx.models).message()}")
     ctx.models_source = "fitted now to the data set"
     save_models(ctx.models, ctx.folder / "metamodel")
     worst = max((r.test.max_rel_err for r in result.reports.values() if r.test is not None),

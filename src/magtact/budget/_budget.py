@@ -16,6 +16,7 @@ import numpy as np
 
 from .._errors import MagtactError
 from ..designer import HallChip, hall_chip, resolution
+from ..doe import check_design
 from ..magnetics import hall_field
 from ..metamodel import ModelSet
 from ..optimise import DesignResult, per_design
@@ -189,6 +190,7 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
         raise MagtactError("the error budget is computed for one geometry: fix the geometric "
                            f"design variables ({', '.join(study.geometric_variables)}) with "
                            "study.at(...) and use models fitted to it")
+    check_design(study, H, dataset)  # outside the data's domain the models extrapolate
     own = chip is None
     chip = hall_chip(study) if own else chip
     env, arr = study.environment, study.array

@@ -22,6 +22,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .._errors import MagtactError
+from ..doe import check_design
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..metamodel import ModelSet
 from ..optimise import per_design
@@ -453,6 +454,7 @@ def sensor_map(models: ModelSet, study: Study, H: float, G: float, M_z: float | 
     if force_source not in FORCE_SOURCES:
         raise MagtactError(f"force source {force_source!r} is unknown: choose "
                            f"{' or '.join(FORCE_SOURCES)}")
+    check_design(study, H, dataset)  # outside the data's domain the models extrapolate
     fe = fe_forces(dataset, H, study) if force_source == "fe" else None
     if field_source is None:
         field_source = "exact" if fe is not None else "models"

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
+from ..doe import check_design
 from ..metamodel import ModelSet
 from ..study import HallChip, Study, from_si, hall_chip
 from ._fe import fe_forces, has_height, path_holdout
@@ -225,6 +226,7 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
     from ..designer import resolution
     from ..optimise import per_design
 
+    check_design(study, H, dataset)  # before any work: outside it the models extrapolate
     chip, noise_source = _chip(study, noise, chip)
     source = force_source_for(force_source, dataset, H, presses is not None)
     if source == "fe":  # what the data lack is said before the design's work

@@ -48,7 +48,10 @@ def run_command(
 
     print_card(read_card(result.folder / "optimise"))
     console.print(f"report: {result.report} ({result.wall_time_s:.1f} s)", highlight=False)
-    bad = [r for r in result.stages if r.status != "ok"]
+    for r in result.stages:  # a poor fit or a front gap: the answer stands, with its caveat
+        for note in (n for n in r.notes if r.status == "warning" and n.startswith("WARNING")):
+            console.print(f"[bold yellow]{r.title}:[/] {note}", highlight=False)
+    bad = [r for r in result.stages if r.status not in ("ok", "warning")]
     if bad:
         console.print("[bold yellow]incomplete:[/] "
                       + "; ".join(f"{r.title}: {r.status} ({r.message})" for r in bad),

@@ -9,6 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import minimize
 
+from ..doe import check_design
 from ..metamodel import ExactField, ModelSet
 from ..optimise import (
     DesignResult,
@@ -181,6 +182,7 @@ def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "des
     A chip range below this design's field at rest shows as saturation at t = 0. ``M_z``
     (where it is a design variable) scales the field and divides the force noise.
     """
+    check_design(study, H)  # outside the data's domain the models extrapolate
     chip = hall_chip(study)
     design = per_design(models, H, G, study, M_z)
     choice = setting_for(models, study, design) if chip.picked else None

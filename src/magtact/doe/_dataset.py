@@ -169,18 +169,22 @@ def geometry_dims(ds: xr.Dataset) -> tuple[str, ...]:
     return tuple(d for d in ds.dims if d in GEOMETRY_NAMES)
 
 
-def bundled_path() -> Path:
-    """Location of the bundled data set inside the installed package."""
-    return Path(str(resources.files("magtact.doe").joinpath("data", BUNDLED_NAME)))
+def bundled_path(name: str = BUNDLED_NAME) -> Path:
+    """Location of a bundled data set (default: the MagOne study's) inside the installed
+    package."""
+    return Path(str(resources.files("magtact.doe").joinpath("data", name)))
 
 
-def load_bundled() -> xr.Dataset:
-    """The default MagOne study's DOE shipped with magtact (see ``magtact/doe/data/README.md``)."""
-    path = bundled_path()
+def load_bundled(name: str = BUNDLED_NAME) -> xr.Dataset:
+    """A DOE shipped with magtact (see ``magtact/doe/data/README.md``): by default the
+    built-in MagOne study's, ``"broad_doe.nc"`` the broad one over (H, R_m, H_m)."""
+    path = bundled_path(name)
     if not path.is_file():
         raise FileNotFoundError(f"the bundled DOE data set is missing ({path}); rebuild it with "
                                 "'python -m magtact.doe.bundle'")
-    return load_dataset(path)
+    ds = load_dataset(path)
+    ds.attrs["bundled_name"] = name  # what a rescaling of it names as its source
+    return ds
 
 
 def write_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
@@ -207,59 +211,165 @@ def write_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
                      cell=lambda x: repr(x + 0.0))  # + 0.0: no '-0.0'; shortest exact form
 
 
-#: Study sections that determine a DOE data set (the others may differ from the data set's).
+#: Study sections that hold settings a DOE data set depends on. Only part of them determines its
+#: FE forces and field (:data:`FORCE_SETTINGS`); the rest is answered from the data exactly.
 DOE_SECTIONS = ("body", "magnet", "loading", "material", "design", "doe", "magnetics",
                 "mechanics")
+#: The settings that determine the FE forces and the field of a DOE, by section (``None``: every
+#: setting of the section). Everything else is answered from a data set exactly: forces are
+#: proportional to G (so G_ref, the G range and the silicone only relabel them), the field is
+#: proportional to M_z (the grade), the DOE's levels only say how a new DOE would sample, and
+#: the thread count and the sparse solver change the forces by round-off (docs/method.md §3, §7).
+FORCE_SETTINGS = {
+    "body": None,
+    "magnet": ("R_m", "H_m", "placement"),
+    "loading": None,
+    "material": ("bulk_ratio",),
+    "magnetics": None,
+    "mechanics": None,
+}
+#: Settings of those sections that do not change the forces beyond round-off.
+ROUND_OFF_SETTINGS = {"mechanics": ("threads", "solver")}
+#: Bundled data sets, in the order they are tried (the first that describes a study serves it).
+BUNDLED_NAMES = (BUNDLED_NAME, "broad_doe.nc")
 
 
 def matches_study(ds, study) -> bool:
-    """True if the data set was computed for a study that agrees with ``study`` in every
-    section a DOE depends on (:data:`DOE_SECTIONS`), read from its ``study_toml`` attribute."""
+    """True if the data set describes ``study``: it agrees in every setting that determines the
+    FE forces and field (:data:`FORCE_SETTINGS`) and covers the study's heights and geometric
+    design ranges (:func:`differences`)."""
     return not differences(ds, study)
 
 
-def differences(ds, study) -> list[str]:
-    """The settings (``[section] key``) in which ``study`` differs from the study the data set
-    was computed for, in the sections a DOE depends on; ``["its study"]`` if the data set
-    records no study that loads today."""
+def data_study(ds):
+    """The study a data set was computed for (from its ``study_toml`` attribute), or a string
+    saying why there is none."""
     import tomllib
 
     from ..study import study_from_dict
 
-    text = ds.attrs.get("study_toml")
+    text = ds.attrs.get("computed_for_study_toml", ds.attrs.get("study_toml"))
     if text is None:
-        return ["its study (the data set records none)"]
+        return "its study (the data set records none)"
     try:
         # only the sections a DOE depends on: settings added since the data set was written
         # (sensitivity, optimisation, ...) take their defaults
         data = {k: v for k, v in tomllib.loads(text).items() if k in DOE_SECTIONS}
-        other = study_from_dict(data | {"base": "magone"})
+        return study_from_dict(data | {"base": "magone"})
     except Exception:  # a data set whose study no longer loads belongs to no study of today
-        return ["its study (the data set's study no longer loads)"]
-    mine, theirs = tomllib.loads(study.to_toml()), tomllib.loads(other.to_toml())
+        return "its study (the data set's study no longer loads)"
+
+
+def differences(ds, study) -> list[str]:
+    """What keeps the data set from describing ``study``, one entry per setting
+    (``[section] key = value (the data set's: ...)``), the setting that needs new mechanics
+    first: a setting of :data:`FORCE_SETTINGS` that differs, a height range or geometric
+    design range that reaches outside the data's levels, a fixed magnet or body size outside
+    the data's range; ``["its study ..."]`` if the data set records no study that loads today.
+    Empty when the study is answered from the data (after :func:`rescaled_for`)."""
+    from dataclasses import fields
+
+    other = data_study(ds)
+    if isinstance(other, str):
+        return [other]
+    geo = {d: (float(ds[d].values.min()), float(ds[d].values.max())) for d in geometry_dims(ds)}
     out = []
-    for name in DOE_SECTIONS:
-        if _doe_part(other, name) == _doe_part(study, name):
-            continue
-        for key, value in mine[name].items():
-            if value != theirs[name].get(key) and not (name == "design" and key.startswith(
-                    "M_z")):
-                out.append(f"[{name}] {key} = {value!r} (the data set's: "
-                           f"{theirs[name].get(key)!r})")
+    for name, keys in FORCE_SETTINGS.items():
+        mine, theirs = getattr(study, name), getattr(other, name)
+        for f in fields(mine):
+            if (keys is not None and f.name not in keys) or \
+                    f.name in ROUND_OFF_SETTINGS.get(name, ()):
+                continue
+            if f.name in geo and name in ("magnet", "body"):
+                continue  # a geometric dimension of the data: checked against its range below
+            a, b = getattr(mine, f.name), getattr(theirs, f.name)
+            if a != b:
+                out.append(f"[{name}] {_key(f)} = {_user(a, f)} (the data set's: "
+                           f"{_user(b, f)})")
+    H = (float(ds["H"].values.min()), float(ds["H"].values.max()))
+    if not _inside(study.design.H, H):
+        out.append(f"[design] H_mm = {_mm_range(study.design.H)} reaches outside the data's "
+                   f"heights {_mm_range(H)} mm")
+    design = study.geometric_variables
+    for k, section in (("R_m", "magnet"), ("H_m", "magnet"), ("R", "body")):
+        if k in design:
+            if k not in geo or not _inside(design[k], geo[k]):
+                span = (f"the data's range {_mm_range(geo[k])} mm" if k in geo
+                        else "data in which it is fixed")
+                out.append(f"[design] {k}_mm = {_mm_range(design[k])}: a design variable "
+                           f"outside {span}")
+        elif k in geo:
+            v = getattr(getattr(study, section), k)
+            if not _inside((v, v), geo[k]):
+                out.append(f"[{section}] {k}_mm = {from_si(v, 'mm'):.6g} outside the data's "
+                           f"range {_mm_range(geo[k])} mm")
     return out
 
 
-def _doe_part(study, name: str):
-    """What a DOE depends on in section ``name``: the magnetisation's design range needs no
-    simulation (the field scales with M_z; docs/method.md §7)."""
-    from dataclasses import replace
+def _key(f) -> str:
+    unit = f.metadata.get("unit", "")
+    return f"{f.name}_{unit}" if unit else f.name
 
-    section = getattr(study, name)
-    return replace(section, M_z=(0.0, 0.0)) if name == "design" else section
+
+def _inside(rng, span, rtol: float = 1e-9) -> bool:
+    tol = rtol * max(abs(span[0]), abs(span[1]), 1e-300)
+    return span[0] - tol <= rng[0] and rng[1] <= span[1] + tol
+
+
+def _mm_range(rng) -> str:
+    return f"[{from_si(rng[0], 'mm'):.6g}, {from_si(rng[1], 'mm'):.6g}]"
+
+
+def _user(value, f):
+    unit = f.metadata.get("unit", "")
+    if not unit or isinstance(value, (str, bool)):
+        return repr(value)
+    if isinstance(value, tuple):
+        return "[" + ", ".join(f"{from_si(v, unit):.6g}" for v in value) + "]"
+    return f"{from_si(value, unit):.6g}"
+
+
+def rescaled_for(ds, study) -> xr.Dataset:
+    """The data set relabelled exactly for ``study`` (which it must describe, :func:`differences`):
+    the G levels become the study's, each force scaled by G / G_data (forces are proportional
+    to G), and B scaled by M_z / M_z,data (the field is proportional to the magnetisation).
+
+    The attributes keep the study the data were computed for (``computed_for_study_toml``),
+    record the rescaling (``rescaled_from``, ``field_scale``, ``G_scaled_from_Pa``) and hold
+    ``study`` as ``study_toml``. Returns ``ds`` itself when nothing changes.
+    """
+    other = data_study(ds)
+    if isinstance(other, str):
+        raise MagtactError(f"the data set cannot be rescaled: {other}")
+    G_old = np.asarray(ds["G"].values, dtype=float)
+    G_new = np.asarray(study.G_levels, dtype=float)
+    k = study.magnet.M_z / other.magnet.M_z
+    if k == 1.0 and G_old.shape == G_new.shape and np.array_equal(G_old, G_new):
+        return ds
+    # forces per unit G from the first level (forces are exactly proportional to G)
+    out = ds.isel(G=[0] * len(G_new)).assign_coords(G=("G", G_new, dict(ds["G"].attrs)))
+    for name in ("F_r", "F_z"):
+        scale = xr.DataArray(G_new / G_old[0], dims="G", coords={"G": G_new})
+        out[name] = (out[name] * scale).transpose(*ds[name].dims).assign_attrs(ds[name].attrs)
+    for name in ("B_r", "B_z"):
+        out[name] = (ds[name] * k).assign_attrs(ds[name].attrs)
+    out.attrs = dict(ds.attrs)
+    out.attrs.setdefault("computed_for_study_toml", ds.attrs.get("study_toml", ""))
+    out.attrs.update({
+        "study_toml": study.to_toml(),
+        "rescaled_from": ds.attrs.get("rescaled_from", ds.attrs.get("bundled_name", "")),
+        "field_scale": float(k) * float(ds.attrs.get("field_scale", 1.0)),
+        "G_scaled_from_Pa": json.dumps(G_old.tolist()),
+        "rescaling": "forces scaled exactly to the study's G levels (F proportional to G), B "
+                     "by the study's M_z over the data's (B proportional to M_z)",
+    })
+    return out
 
 
 def bundled_for(study, advice: str | None = None):
-    """The bundled MagOne data set, if it describes ``study`` (:func:`matches_study`).
+    """The bundled data set that describes ``study`` (:func:`differences`), rescaled exactly to
+    its G levels and magnetisation (:func:`rescaled_for`): the MagOne data set, else the broad
+    one over (H, R_m, H_m) where shipped.
 
     ``advice`` ends the error message: what to run instead, in terms of the caller's options
     (default: compute the study's own DOE and models, and give the models with ``--models``).
@@ -267,18 +377,28 @@ def bundled_for(study, advice: str | None = None):
     Raises
     ------
     MagtactError
-        Naming the settings that differ and what to run instead.
+        Naming the setting that needs new mechanics (and any others) and what to run instead.
     """
-    from .._errors import MagtactError
-
-    ds = load_bundled()
-    diff = differences(ds, study)
-    if diff:
-        shown = "; ".join(diff[:6]) + (f"; and {len(diff) - 6} more" if len(diff) > 6 else "")
-        raise MagtactError(
-            f"study {study.name!r} differs from the built-in MagOne study in {shown}, so the "
-            "data set bundled with magtact does not describe it: "
-            + (advice or "compute its own DOE and models (magtact run STUDY --recompute; or "
-                         "magtact doe STUDY --out DOE, then magtact fit STUDY --data DOE/doe.nc "
-                         "--out MODELS, and give --models MODELS)"))
-    return ds
+    first = None
+    for name in BUNDLED_NAMES:
+        path = bundled_path(name)
+        if not path.is_file() and name != BUNDLED_NAME:
+            continue
+        ds = load_bundled(name)
+        diff = differences(ds, study)
+        if not diff:
+            return rescaled_for(ds, study)
+        first = first or (name, diff)
+    name, diff = first
+    shown = "; ".join(diff[1:6]) + (f"; and {len(diff) - 6} more" if len(diff) > 6 else "")
+    raise MagtactError(
+        f"study {study.name!r} needs new mechanics: {diff[0]}"
+        + (f" (it also differs in {shown})" if shown else "")
+        + ", so no data set bundled with magtact describes it (the settings that change the FE "
+          "forces or the field: the body, the magnet's size and placement, the loading, the "
+          "bulk ratio, the field and structural solvers; heights and magnet sizes inside the "
+          "bundled ranges, G, the silicone, the grade and M_z, the chip and everything else "
+          "are answered from the bundled data): "
+        + (advice or "compute its own DOE and models (magtact run STUDY --recompute; or "
+                     "magtact doe STUDY --out DOE, then magtact fit STUDY --data DOE/doe.nc "
+                     "--out MODELS, and give --models MODELS)"))

@@ -27,12 +27,22 @@ from ._io import (
 from ._model import RESPONSES, Metamodel, ModelSet, Response
 from ._outputs import write_fit_outputs
 from ._parse import format_expression, parse_expression
-from ._prefitted import copy_prefitted, find_prefitted, prefitted_dir
+from ._prefitted import (
+    SHIPPED,
+    copy_prefitted,
+    find_prefitted,
+    find_shipped,
+    prefitted_dir,
+    shipped_models,
+)
+from ._quality import POOR_OVER_RANGE, POOR_R2, FitQuality, fit_quality, fit_quality_rows
 from ._regressor import OPERATOR_SETS, SymbolicRegressor
 from ._select import Selection, select_metamodels
 from ._symbols import H, feature_jacobian, features, p, q, q_hessian, t, theta
 
 __all__ = [
+    "POOR_OVER_RANGE", "POOR_R2", "SHIPPED", "FitQuality", "fit_quality", "fit_quality_rows",
+    "find_shipped", "shipped_models",
     "Accuracy", "ComposedForce", "ExactField", "FieldForceModel", "FitReport", "FitResult",
     "H", "Metamodel", "ModelSet", "OPERATOR_SETS", "RESPONSES", "Response", "Selection",
     "SymbolicRegressor", "TRAIN_TARGET", "TRANSFORMS", "accuracy", "copy_prefitted",

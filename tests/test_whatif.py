@@ -1,0 +1,111 @@
+"""What-ifs answered from the bundled data: exact rescalings (forces ∝ G, field ∝ M_z) need no
+DOE; only what changes the FE forces or the field asks for one, naming the setting."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from magtact import MagtactError
+from magtact.doe import bundled_for, differences, load_bundled, rescaled_for
+from magtact.metamodel import find_shipped, prefitted_dir, select_metamodels
+from magtact.study import magone, study_from_dict
+
+
+@pytest.fixture(scope="module")
+def ds():
+    return load_bundled()
+
+
+def _study(**sections):
+    return study_from_dict({"base": "magone", **sections})
+
+
+# Other instances than the ones a designer first tried (Dragon Skin 10, N52, G 10-60 kPa).
+ANSWERED = {
+    "silicone": {"material": {"silicone": "Ecoflex 00-50"}},
+    "grade": {"magnet": {"grade": "N42"}},
+    "M_z": {"magnet": {"M_z_A_per_m": 0.9e6}},
+    "G range": {"design": {"G_kPa": [5.0, 80.0]}},
+    "G_ref": {"material": {"G_ref_kPa": 40.0}},
+    "H inside": {"design": {"H_mm": [4.0, 6.0], "H_original_mm": 4.0}},
+    "chip": {"hall": {"gain_sel": 5, "res": 1}},
+    "environment": {"environment": {"delta_T_K": 25.0}},
+    "tolerances": {"tolerances": {"G_pct": 8.0}},
+    "levels": {"doe": {"n_H": 7, "n_theta": 4}},
+    "threads": {"mechanics": {"threads": 2}},
+    "together": {"material": {"silicone": "Ecoflex 00-50"}, "magnet": {"grade": "N42"},
+                 "design": {"G_kPa": [5.0, 80.0]}, "hall": {"gain_sel": 5, "res": 1},
+                 "constraints": {"source": "values", "F_r_c_N": -0.2, "F_z_c_N": 4.0}},
+}
+
+
+@pytest.mark.parametrize("case", list(ANSWERED))
+def test_exact_rescalings_are_answered_from_the_bundled_data(ds, case):
+    study = _study(**ANSWERED[case])
+    assert differences(ds, study) == []
+    data = bundled_for(study)
+    base = magone()
+    # forces per unit G and the field per unit M_z are those computed, exactly
+    f = data["F_z"] / data["G"]
+    f0 = ds["F_z"].isel(G=0) / ds["G"][0]
+    assert np.allclose(f.values, f0.values[..., None], rtol=1e-14, atol=0)
+    np.testing.assert_allclose(data["G"].values, study.G_levels, rtol=1e-15)
+    k = study.magnet.M_z / base.magnet.M_z
+    np.testing.assert_allclose(data["B_z"].values, k * ds["B_z"].values, rtol=1e-14)
+    # and the shipped fit serves it, its field scaled by the same factor
+    sel = select_metamodels(study, data)
+    assert sel.shipped == prefitted_dir() and sel.fit is None
+    assert sel.field_scale == pytest.approx(k, rel=1e-15)
+    ref = select_metamodels(base, ds).models
+    t, th, H = 0.7, 0.3, 4.5e-3
+    assert float(sel.models.B_z.value(t, th, H)) == pytest.approx(
+        k * float(ref.B_z.value(t, th, H)), rel=1e-12)
+    assert float(sel.models.f_r.value(t, th, H)) == float(ref.f_r.value(t, th, H))
+
+
+NEW_MECHANICS = [
+    ({"body": {"R_mm": 7.0, "R_g_mm": 7.0}}, "[body] R_mm = 7"),
+    ({"magnet": {"R_m_mm": 2.0}}, "[magnet] R_m_mm = 2"),
+    ({"mechanics": {"mesh": "coarse"}}, "[mechanics] mesh = 'coarse'"),
+    ({"loading": {"mu_f": 0.4, "theta_max_rad": 0.38}}, "[loading] mu_f = 0.4"),
+    ({"material": {"bulk_ratio": 2000.0}}, "[material] bulk_ratio = 2000"),
+    ({"design": {"H_mm": [3.0, 8.0]}}, "[design] H_mm = [3, 8] reaches outside the data's "
+                                       "heights [3, 7] mm"),
+]
+
+
+@pytest.mark.parametrize(("edit", "named"), NEW_MECHANICS)
+def test_new_mechanics_is_refused_naming_the_setting(ds, edit, named):
+    study = _study(**edit)
+    assert differences(ds, study)[0].startswith(named)
+    with pytest.raises(MagtactError, match="needs new mechanics") as err:
+        bundled_for(study)
+    msg = str(err.value)
+    assert msg.split("needs new mechanics: ", 1)[1].startswith(named)
+    assert "magtact run STUDY --recompute" in msg
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(lo=st.floats(1.0, 100.0), span=st.floats(0.0, 400.0), n=st.integers(1, 9),
+       M_z=st.floats(2e5, 2e6))
+def test_rescaling_is_exact_for_any_G_levels_and_magnetisation(ds, lo, span, n, M_z):
+    base = magone()
+    study = replace(base, design=replace(base.design, G=(lo * 1e3, (lo + span) * 1e3)),
+                    doe=replace(base.doe, n_G=n), magnet=replace(base.magnet, M_z=M_z))
+    out = rescaled_for(ds, study)
+    G = study.G_levels
+    np.testing.assert_allclose(out["G"].values, G, rtol=0)
+    per_G = ds["F_r"].isel(G=0).values / ds["G"].values[0]
+    np.testing.assert_allclose(out["F_r"].values, per_G[..., None] * G, rtol=1e-13, atol=1e-18)
+    np.testing.assert_allclose(out["B_r"].values, ds["B_r"].values * M_z / base.magnet.M_z,
+                               rtol=1e-14)
+    assert differences(out, study) == []
+    # a rescaled data set is recognised as the shipped fit's data, a tampered one is not
+    assert find_shipped(study, out) is not None
+    bad = out.copy(deep=True)
+    bad["F_z"][...] = bad["F_z"] * 1.001
+    assert find_shipped(study, bad) is None
