@@ -137,7 +137,8 @@ def noise_override(chip, sigma):
     if sigma is None:
         return chip, None
     given = ", ".join(f"{v * 1e6:.3g}" for v in sigma)
-    own = ("none" if chip.noise is None
+    own = (("that of the setting magtact picks per design" if chip.picked else "none")
+           if chip.noise is None
            else ", ".join(f"{v * 1e6:.3g}" for v in chip.noise) + f" µT at {chip.setting}")
     said = (f"given as --noise-uT {given} µT (x, z), in place of the chip's own figure "
             f"({chip.name}: {own})")

@@ -13,7 +13,7 @@ from pathlib import Path
 from .._files import UnreadableFile, file_problem, read_text_capped
 from ._errors import StudyError
 from ._model import GEOMETRY, SECTIONS, Study, key_of
-from ._rules import blamed, check_physical, check_unit, written_keys
+from ._rules import blamed, check_physical, check_unit, unit_hint, written_keys
 from ._units import LABEL, MU0, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
@@ -263,7 +263,8 @@ def _si(full: str, f, value: float, source) -> float:
     lo, hi = bounds
     if not lo <= si <= hi:
         where = ("0 or " if m["minimum"] == 0 else "") + bounds_text(unit, lo, hi)
-        raise StudyError(full, f"must be {where}, got {value!r}", source)
+        hint = unit_hint(f"{full.split('.')[0]}.{f.name}", unit, value, si)
+        raise StudyError(full, f"must be {where}, got {value!r}{hint}", source)
     return si
 
 

@@ -71,6 +71,13 @@ def check_unit(full: str, name: str, unit: str, value, si, source) -> None:
         raise StudyError(full, f"= {shown!r}: {hint}", source)
 
 
+def unit_hint(name: str, unit: str, value, si) -> str:
+    """``": <why>; did you give <unit>?"`` for a value outside its physical bounds that a
+    neighbouring unit would make plausible (keys of :data:`PLAUSIBLE_KEYS` only), else ``""``."""
+    hint = unit_mistake(unit, value, si) if name in PLAUSIBLE_KEYS else None
+    return "" if hint is None else f": {hint}"
+
+
 def check_physical(s: Study, source) -> None:
     """Pairs of settings that no physical sensor has, each message naming a key to change.
 

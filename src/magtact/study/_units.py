@@ -146,11 +146,13 @@ def checked_si(value: float, unit: str, what: str, bounds=None) -> float:
         si = to_si(float(value), unit)
     except (OverflowError, TypeError, ValueError):
         raise MagtactError(f"{what} must be a number, got {value!r}") from None
-    si = check_si(si, unit, what, value, bounds)
-    if bounds is None:
-        hint = unit_mistake(unit, value, si)
-        if hint is not None:
-            raise MagtactError(f"{what} = {value!r}: {hint}")
+    hint = unit_mistake(unit, value, si) if bounds is None else None
+    try:
+        check_si(si, unit, what, value, bounds)
+    except MagtactError as exc:
+        raise MagtactError(f"{exc}" + ("" if hint is None else f": {hint}")) from None
+    if hint is not None:
+        raise MagtactError(f"{what} = {value!r}: {hint}")
     return si
 
 
