@@ -22,7 +22,7 @@ def fitted(tmp_path_factory):
     data = save_dataset(synthetic_doe(load_study(None), n_t=6), tmp / "doe.nc")
     out = tmp / "out"
     result = CliRunner().invoke(app, ["fit", "--data", str(data), "--out", str(out),
-                                      "--generations", "3", "--H-mm", "4", "--G-kpa", "20"])
+                                      "--generations", "3", "--H", "4", "--G", "20"])
     assert result.exit_code == 0, result.output
     return out
 

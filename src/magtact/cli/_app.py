@@ -68,15 +68,25 @@ def strict_numbers(command) -> None:
         param.process_value = process_value
 
 
+#: Commands in the order of the pipeline (``magtact --help`` lists them so); any other after.
+ORDER = ("study", "field", "simulate", "doe", "fit", "optimise", "compare", "budget",
+         "calibrate", "validate", "reproduce", "run", "report")
+
+
 class _Group(TyperGroup):
     """The command group: number options follow the usual grammar (:func:`strict_numbers`);
-    a broken pipe is click's quiet exit only when it is the terminal's output that closed; any
-    other broken pipe is raised as :class:`BrokenPipeFault`, so that the exit says why."""
+    commands are listed in pipeline order (:data:`ORDER`); a broken pipe is click's quiet exit
+    only when it is the terminal's output that closed; any other broken pipe is raised as
+    :class:`BrokenPipeFault`, so that the exit says why."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         for command in self.commands.values():
             strict_numbers(command)
+
+    def list_commands(self, ctx):
+        rank = {name: k for k, name in enumerate(ORDER)}
+        return sorted(self.commands, key=lambda n: (rank.get(n, len(ORDER)), n))
 
     def invoke(self, ctx):
         try:
@@ -99,13 +109,48 @@ app = typer.Typer(
     # rich's markup would read as a style tag and drop.
     rich_markup_mode=None,
 )
-#: Messages keep their lines whole (paths can be copied from a log); a terminal wraps them.
+#: Diagnostics (progress, what a command does, warnings) go to stderr; messages keep their
+#: lines whole (paths can be copied from a log); a terminal wraps them.
 console = Console(stderr=True, soft_wrap=True)
+#: Width of the tables written to a file or a pipe (a terminal's own width otherwise).
+TABLE_WIDTH = 160
+
+
+def tables() -> Console:
+    """The console of a command's results (tables): stdout, at the terminal's width or, into a
+    file or a pipe, :data:`TABLE_WIDTH` columns so that headers are not cut."""
+    out = Console()
+    return out if out.is_terminal else Console(width=TABLE_WIDTH)
+
+
+def _version(value: bool) -> None:
+    if value:
+        from .. import __version__
+
+        typer.echo(f"magtact {__version__}")
+        raise typer.Exit()
 
 
 @app.callback()
-def _root() -> None:
+def _root(
+    version: Annotated[bool, typer.Option(
+        "--version", is_eager=True, callback=_version,
+        help="Print magtact's version and exit.")] = False,
+) -> None:
     """magtact: design magnetic soft tactile sensors by simulation and optimisation."""
+
+
+def renamed(old: str, new: str, usage: str | None = None):
+    """A hidden option ``old`` that refuses itself naming ``new`` (an option renamed so that
+    one idea has one name across the commands)."""
+    def refuse(ctx: typer.Context, value):
+        if value is not None:
+            raise typer.BadParameter(f"{old} is now {usage or new}", ctx=ctx,
+                                     param_hint=old)
+        return value
+
+    return typer.Option(old, hidden=True, callback=refuse, expose_value=True,
+                        help=f"renamed: {new}")
 
 #: The optional STUDY argument of every command: a TOML file or a preset name.
 StudyArg = Annotated[

@@ -50,9 +50,9 @@ def calibrate_command(
     out: OutOpt,
     study: StudyArg = None,
     H: Annotated[float | None, typer.Option(
-        "--H", help="Body height H (mm); default: the study's chosen design.")] = None,
+        "--H", help="Body height H [mm]; default: the study's chosen design.")] = None,
     G: Annotated[float | None, typer.Option(
-        "--G", help="Shear modulus G (kPa); default: the study's chosen design.")] = None,
+        "--G", help="Shear modulus G [kPa]; default: the study's chosen design.")] = None,
     noise: Annotated[str | None, typer.Option(
         "--noise-uT", metavar="S|X,Z",
         help="RMS field noise [µT] of the Hall chip, one value for both axes or X,Z, for the "
@@ -119,10 +119,12 @@ def calibrate_command(
                       f"G = {from_si(G_si, 'kPa'):.4g} kPa", highlight=False)
         eps = None if model_error is None else (model_error, model_error)
         noise_override(a.chip, sigma)  # says, when given, what --noise-uT replaces
-        cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
-                        fit=DEFAULT_FIT if units is None else units, model_error=eps,
-                        chip=a.chip,  # the chip at this design's setting
-                        force_source=force_source, dataset=dataset)
+        with console.status("calibrating: the map, its round trip and the firmware "
+                            "candidates"):  # shown in a terminal only
+            cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
+                            fit=DEFAULT_FIT if units is None else units, model_error=eps,
+                            chip=a.chip,  # the chip at this design's setting
+                            force_source=force_source, dataset=dataset)
         write_calibration_outputs(cal, o.folder, figures=calibration_figures)
     a = cal.firmware.chosen
     console.print(

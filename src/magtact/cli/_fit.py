@@ -9,7 +9,8 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from ._app import OutOpt, StudyArg, app, console, get_study, outputs
+from .._display import sig
+from ._app import OutOpt, StudyArg, app, console, get_study, outputs, renamed, tables
 
 
 @app.command()
@@ -21,9 +22,11 @@ def fit(
     generations: Annotated[int | None, typer.Option(
         help="Override [metamodel] generations.", min=1)] = None,
     H_mm: Annotated[float | None, typer.Option(
-        "--H-mm", help="Design height of the figures [mm]; default: the original design.")] = None,
+        "--H", help="Design height of the figures [mm]; default: the original design.")] = None,
     G_kpa: Annotated[float | None, typer.Option(
-        "--G-kpa", help="Shear modulus of the figures [kPa]; default: original design.")] = None,
+        "--G", help="Shear modulus of the figures [kPa]; default: original design.")] = None,
+    _old_H: Annotated[str | None, renamed("--H-mm", "--H")] = None,
+    _old_G: Annotated[str | None, renamed("--G-kpa", "--G")] = None,
 ) -> None:
     """Fit B_r, B_z, F_r/G, F_z/G; write model JSON files, metamodels.md and figures."""
     from ..doe import bundled_for, load_dataset
@@ -35,8 +38,8 @@ def fit(
     s = get_study(study)
     if generations is not None:
         s = replace(s, metamodel=replace(s.metamodel, generations=generations))
-    H = checked_si(H_mm, "mm", "--H-mm") if H_mm is not None else None
-    G = checked_si(G_kpa, "kPa", "--G-kpa") if G_kpa is not None else None
+    H = checked_si(H_mm, "mm", "--H") if H_mm is not None else None
+    G = checked_si(G_kpa, "kPa", "--G") if G_kpa is not None else None
     ds = load_dataset(data) if data is not None else bundled_for(
         s, "compute its own (magtact doe STUDY --out DOE) and give it with --data DOE/doe.nc")
     check_holdout(s, ds.sizes.get("theta", 0), ds.sizes.get("H", 0),
@@ -50,8 +53,9 @@ def fit(
         tab.add_column(col)
     for k, r in result.reports.items():
         te = r.test
-        tab.add_row(k, *(f"{v:.4g}" for v in (te.r2, te.max_abs_err_over_range, te.max_rel_err))
-                    if te else ("–",) * 3, f"{r.fit_time_s:.1f}")
-    console.print(tab)
-    console.print(f"wrote {len(files)} files (models, metamodels.md, figures) to {out}")
+        tab.add_row(k, *(sig(v) for v in (te.r2, te.max_abs_err_over_range, te.max_rel_err))
+                    if te else ("–",) * 3, sig(r.fit_time_s))
+    tables().print(tab)
+    console.print(f"wrote {len(files)} files (models, metamodels.md, figures) to {out}",
+                  highlight=False)
 

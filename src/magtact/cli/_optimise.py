@@ -10,9 +10,10 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from .._display import sig
 from .._errors import MagtactError
 from ..study import Study, checked_si, from_si
-from ._app import OutOpt, StudyArg, app, console, get_study, outputs
+from ._app import OutOpt, StudyArg, app, console, get_study, outputs, renamed, tables
 
 ModelsOpt = Annotated[
     Path | None,
@@ -23,7 +24,7 @@ ModelsOpt = Annotated[
 
 #: Files ``magtact optimise`` always writes (:meth:`magtact.Result.write`).
 OPTIMISE_OUTPUTS = ("design.json", "pareto.csv", "reduction.csv", "maps.csv", "card.json",
-                    "chosen.json")
+                    "chosen.json", "sensor.json")
 
 
 def parse_design(text: str, what: str) -> tuple[float, float]:
@@ -107,7 +108,7 @@ def print_card(card: dict | None, stdout: Console | None = None) -> None:
                          ratio=2 if k == 0 else 1)
     for row in card["rows"]:
         table.add_row(*(escape(str(c)) for c in row))
-    (stdout or Console()).print(table)
+    (stdout or tables()).print(table)
 
 
 def print_choice(result, stdout: Console | None = None) -> None:
@@ -144,16 +145,17 @@ def print_choice(result, stdout: Console | None = None) -> None:
     rows += [("F_r,min [N]", d.F_r_min, e.F_r_min), ("F_z,max [N]", d.F_z_max, e.F_z_max)]
     for label, x, y in rows:
         table.add_row(escape(label), f"{x:.5g}", f"{y:.5g}")
-    (stdout or Console()).print(table)
+    (stdout or tables()).print(table)
 
 
 @app.command("compare")
 def compare_command(
     first: Annotated[str, typer.Argument(metavar="H1,G1", help="First design, mm,kPa.")],
     second: Annotated[str, typer.Argument(metavar="H2,G2", help="Second design, mm,kPa.")],
-    study: Annotated[str | None, typer.Option(
-        "--study", help="Study TOML file or preset; default: the built-in MagOne study.")] = None,
+    study: StudyArg = None,
     models: ModelsOpt = None,
+    _old_study: Annotated[str | None, renamed(
+        "--study", "an argument", "an argument: magtact compare H1,G1 H2,G2 STUDY")] = None,
 ) -> None:
     """Percentage changes of Γ_r,max, Γ_z,max, F_r,min, F_z,max from design 1 to design 2."""
     from ..designer import answer
@@ -169,7 +171,7 @@ def compare_command(
     for col in ("quantity", "design 1", "design 2", "change (%)"):
         table.add_column(col, justify="left" if col == "quantity" else "right")
     for label, unit, v1, v2, pct in cmp.rows:
-        table.add_row(escape(f"{label} [{unit}]"), f"{v1:.5g}", f"{v2:.5g}", f"{pct:+.2f}")
+        table.add_row(escape(f"{label} [{unit}]"), sig(v1), sig(v2), f"{pct:+.2f}")
     r1, r2 = a1.resolution, a2.resolution
     if r1 is None or r2 is None:
         table.caption = (f"resolution with the {a1.chip.name}: give "
@@ -182,8 +184,8 @@ def compare_command(
                             ("σ_Fz, worst in the stable region", r1.sigma_z_worst,
                              r2.sigma_z_worst)):
             v1, v2 = from_si(a, "mN"), from_si(b, "mN")
-            table.add_row(escape(f"{label} [mN]"), f"{v1:.5g}", f"{v2:.5g}",
+            table.add_row(escape(f"{label} [mN]"), sig(v1), sig(v2),
                           f"{100 * (v2 - v1) / v1:+.2f}")
         table.caption = (f"σ_F with the {a1.chip.name}: design 1 at {a1.chip.setting}, "
                          f"design 2 at {a2.chip.setting}")
-    Console().print(table)
+    tables().print(table)

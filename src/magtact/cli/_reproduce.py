@@ -10,7 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..publication import SEED_GENERATIONS
-from ._app import StudyArg, app, console, get_study, outputs
+from ._app import StudyArg, app, console, get_study, outputs, tables
 
 
 @app.command("reproduce")
@@ -69,6 +69,6 @@ def reproduce_command(
                       "yes" if r["scale_free"] else "no",
                       escape(publication_text(r["publication"])),
                       *(escape(cell_text(r[c])) for c in cols))
-    console.print(table)
+    tables().print(table)
     console.print(f"{len(files)} files in {folder}; report {report} "
                   f"({result.wall_time_s:.0f} s, {result.workers} workers)", highlight=False)

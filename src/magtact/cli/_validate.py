@@ -7,14 +7,13 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
 from .._errors import MagtactError
 from .._floor import RELATIVE_FLOOR
 from ..study import MESH_DENSITIES, PRESETS, Study, checked_si, to_si
 from ..validation import MAX_GRID, N_GRID
-from ._app import app, check_out, console, get_study, outputs
+from ._app import app, check_out, console, get_study, outputs, tables
 
 #: Highest filter cut-off accepted (cycles per mm of u_z; the samples are far coarser).
 MAX_CYCLES_PER_MM = 1e6
@@ -58,7 +57,7 @@ def print_table(validation) -> None:
         table.add_row(row["response"], f"{row['c_v_percent']:.3g}", f"{row['c_v_at_u_z_mm']:.3g}",
                       f"{row['eps_percent']:.3g}", f"{row['eps_at_u_z_mm']:.3g}",
                       row["eps_excluded"])
-    Console().print(table)
+    tables().print(table)
     for note in validation.notes:
         console.print(f"note: {note}", highlight=False)
 
@@ -72,9 +71,9 @@ def validate_command(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.", callback=check_out)]
     = Path("validation"),
     H: Annotated[float | None, typer.Option("--H", help="Body height H of the tested design "
-                                            "(mm); default: the data's metadata.")] = None,
+                                            "[mm]; default: the data's metadata.")] = None,
     G: Annotated[float | None, typer.Option("--G", help="Shear modulus G of the tested design "
-                                            "(kPa); default: the data's metadata.")] = None,
+                                            "[kPa]; default: the data's metadata.")] = None,
     models: Annotated[Path | None, typer.Option(
         "--models", help="Folder of metamodel JSON files (from 'magtact fit'); default: "
                          "simulate the design directly (one structural path).")] = None,

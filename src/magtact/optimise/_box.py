@@ -413,7 +413,10 @@ def _newton_step(g, Hs, act) -> tuple[np.ndarray, np.ndarray]:
     mu = np.where(lmin < floor, floor - lmin, 0.0)
     a, c = a + mu, c + mu
     det = a * c - b * b
-    d0 = -(c * g[:, 0] - b * g[:, 1]) / det
-    d1 = -(a * g[:, 1] - b * g[:, 0]) / det
+    # a row with a zero determinant steps to ±inf (the line search clips the trial to the
+    # box) or NaN (never accepted): the numbers are meant, no warning
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d0 = -(c * g[:, 0] - b * g[:, 1]) / det
+        d1 = -(a * g[:, 1] - b * g[:, 0]) / det
     d = np.stack([d0, d1], axis=1)
     return np.where(act, 0.0, d), mu == 0
