@@ -26,6 +26,6 @@ def test_other_geometry_is_refused_with_what_to_run(tmp_path, capsys, monkeypatc
         main()
     assert exc.value.code == 2
     err = capsys.readouterr().err
-    assert "differs from the built-in MagOne study" in err
+    assert "needs new mechanics: [body] H_g_mm = 6" in " ".join(err.split())
     assert "magtact doe" in err
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

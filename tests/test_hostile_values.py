@@ -202,7 +202,9 @@ def test_study_the_bundled_data_do_not_describe_names_the_settings():
     with pytest.raises(MagtactError) as err:
         bundled_for(s)
     text = str(err.value)
-    assert "[doe] n_G = 3 (the data set's: 5)" in text and "[body] R_h_mm = 0.8" in text
+    # the DOE's levels only say how a new DOE would sample: the body needs new mechanics
+    assert "needs new mechanics: [body] R_h_mm = 0.8 (the data set's: 1)" in text
+    assert "n_G" not in text
     assert "as its data" not in text and "--models MODELS" in text
 
 
