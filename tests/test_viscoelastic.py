@@ -192,6 +192,35 @@ def test_time_rows_are_the_loops_of_the_design_in_mN_with_their_source(original,
     assert "time: hysteresis" in names and "time: creep" in names and source in names
 
 
+def test_a_catalogue_relaxation_serves_where_the_study_gives_none(original, models,
+                                                                  monkeypatch):
+    """A silicone given a cited series in the catalogue: its ratios and times at the design's
+    G, its source on the rows, and its sweep in budget.json and the figure."""
+    from magtact.parts import SILICONES, Relaxation
+    from magtact.report import draw_time
+
+    s, _, design, _, _ = original
+    cited = Relaxation((0.4,), (2.0,), "a cited test")
+    monkeypatch.setitem(SILICONES, "Ecoflex 00-30",
+                        replace(SILICONES["Ecoflex 00-30"], relaxation=cited))
+    prony, source = relaxation_of(s, G_ORIGINAL)
+    assert source == "Ecoflex 00-30: a cited test"
+    assert prony.G == pytest.approx((0.4 * G_ORIGINAL,)) and prony.tau == (2.0,)
+    b = error_budget(models, s, H_ORIGINAL, G_ORIGINAL, label="original", design=design,
+                     noise=(1e-6, 1.5e-6), samples=200)
+    assert all("Ecoflex 00-30: a cited test" in r.assumptions for r in b.rows
+               if r.group == "time")
+    doc = {"budgets": [budget_json(b)]}
+    sweep = doc["budgets"][0]["time"]["silicones"]["Ecoflex 00-30"]
+    f = design_forces(models, H_ORIGINAL, 0.0)
+    T = sweep["press_time_s"][5]
+    lp = press_cycle(prony, f, design.t_m, T, n=200)
+    assert sweep["hysteresis_pct"][5] == pytest.approx(100 * lp.gap[1] / lp.peak[1], rel=1e-12)
+    ax_h = draw_time(doc).axes[1]
+    (line,) = [ln for ln in ax_h.lines if ln.get_gid() == "silicone:Ecoflex 00-30"]
+    np.testing.assert_allclose(line.get_ydata(), sweep["hysteresis_pct"])
+
+
 def test_the_study_refuses_a_bad_relaxation_naming_the_key():
     with pytest.raises(StudyError, match=r"material\.relaxation_g1.*at least 0"):
         _load({"material": {"relaxation_g1": -0.1}})
