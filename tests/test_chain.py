@@ -57,8 +57,9 @@ def test_the_chain_has_one_definition():
 
 @pytest.fixture(scope="module")
 def magone(tmp_path_factory):
-    """The MagOne study with small optimiser budgets, through the front door."""
-    s = load_study("magone")
+    """The publication's problem on MagOne with small optimiser budgets, through the front
+    door (the sensor problem: tests/test_sensor.py)."""
+    s = load_study("magone-publication")
     s = replace(s, optimise=replace(s.optimise, **FAST))
     path = tmp_path_factory.mktemp("magone") / "study.toml"
     path.write_text(s.to_toml(), encoding="utf-8")

@@ -25,7 +25,12 @@ if TYPE_CHECKING:
     from .calibration import Calibration, SensorMap
     from .designer import DesignAnswer
     from .metamodel import ModelSet
-    from .optimise import ForceConstraints, GeometryOptimisation, Optimisation
+    from .optimise import (
+        ForceConstraints,
+        GeometryOptimisation,
+        Optimisation,
+        SensorOptimisation,
+    )
 
 
 def load(source: str | Path | None = None, **sections: dict) -> Study:
@@ -72,7 +77,8 @@ def load(source: str | Path | None = None, **sections: dict) -> Study:
 
 
 #: User unit of each design variable (the study-file key is the name plus ``_<unit>``).
-UNITS = {"H": "mm", "G": "kPa", "M_z": "A_per_m", "R_m": "mm", "H_m": "mm", "R": "mm"}
+UNITS = {"H": "mm", "G": "kPa", "M_z": "A_per_m", "R_m": "mm", "H_m": "mm", "R": "mm",
+         "standoff": "mm"}
 
 
 @dataclass(frozen=True)
@@ -117,6 +123,8 @@ class Result:
     original: DesignAnswer
     variables: dict[str, float]
     dataset: object = None
+    #: The sensor problem's answer (the whole sensor; None for the publication's problem).
+    sensor_design: SensorOptimisation | None = None
 
     @property
     def constraints(self) -> ForceConstraints:
@@ -169,8 +177,19 @@ class Result:
         return fit_quality_rows(self.models, 2) + (
             [] if self.budgets is None else budget_card_rows(self.budgets))
 
+    def of(self, answer: DesignAnswer) -> tuple[ModelSet, Study]:
+        """The models and the study of a design's answer: its magnet, the chip's standoff and
+        setting (in the sensor problem, with the exact field at that standoff)."""
+        study = self.study if answer.study is None else answer.study
+        if study.optimise.problem == "sensor" and not study.geometric_variables:
+            from .chip import exact_field_models
+
+            return exact_field_models(self.models, study), study
+        return self.models, study
+
     def evaluate(self, *, H_mm: float, G_kPa: float, M_z_A_per_m: float | None = None,
-                 label: str = "design", **geometry_mm: float) -> DesignAnswer:
+                 label: str = "design", grade: str | None = None,
+                 standoff_mm: float | None = None, **geometry_mm: float) -> DesignAnswer:
         """The designer's answer for any design, given in user units.
 
         Parameters
@@ -181,9 +200,19 @@ class Result:
             Magnetisation [A/m]; default the magnet's own.
         label : str
             Name of the design in the answer.
+        grade : str, optional
+            The magnet's grade (a catalogue name, sets M_z); default the study's magnet.
+        standoff_mm : float, optional
+            The chip's distance below the body [mm]; default ``[hall] standoff_mm``.
         **geometry_mm : float
             ``R_m_mm``, ``H_m_mm``, ``R_mm`` where the study has them as design variables
             (default: the study's own value).
+
+        Returns
+        -------
+        DesignAnswer
+            Its ``verdict`` says which requirements the design meets, with margins; its
+            ``design`` has the force extrema and whether the force constraints hold.
 
         Raises
         ------
@@ -205,7 +234,10 @@ class Result:
         from .doe import check_design  # no answer outside the data's domain
 
         check_design(self.study, values["H"], self.dataset, **own)
-        return _answer(self.models, self.study, values | own, label)
+        study = self.study
+        if grade is not None or standoff_mm is not None:
+            study = _with_parts(study, grade, standoff_mm)
+        return _answer(self.models, study, values | own, label)
 
     def budget(self, answer: DesignAnswer | None = None, *, dataset=None,
                seeds: dict | None = None, noise: tuple[float, float] | None = None) -> Budget:
@@ -231,7 +263,8 @@ class Result:
         from .budget import error_budget
 
         a = self.chosen if answer is None else answer
-        return error_budget(self.models, self.study, a.H, a.G, a.design.M_z, label=a.label,
+        models, study = self.of(a)
+        return error_budget(models, study, a.H, a.G, a.design.M_z, label=a.label,
                             design=a.design, noise=noise, dataset=dataset, seeds=seeds,
                             chip=a.chip)
 
@@ -245,6 +278,8 @@ class Result:
         models, study = ((self.models.at(**geometry), self.study.at(**geometry)) if geometry
                          else (self.models, self.study))
         a = self.chosen
+        if not geometry:
+            models, study = self.of(a)
         return sensor_map(models, study, a.H, a.G, a.design.M_z, design=a.design)
 
     def calibrate(self, answer: DesignAnswer | None = None, *, presses=None,
@@ -268,7 +303,8 @@ class Result:
             raise MagtactError("a calibration belongs to one geometry: fix the geometric "
                                "design variables (study.at(...)) with models fitted to it")
         a = self.chosen if answer is None else answer
-        return calibrate(self.models, self.study, a.H, a.G, a.design.M_z, noise=noise,
+        models, study = self.of(a)
+        return calibrate(models, study, a.H, a.G, a.design.M_z, noise=noise,
                          presses=presses, chip=a.chip, dataset=self.dataset, **options)
 
     def figures(self) -> dict[str, Figure]:
@@ -329,6 +365,9 @@ class Result:
         else:
             files = write_optimise_outputs(self.optimisation, self.models, out,
                                            figures=optimise_figures if figures else None)
+        if self.sensor_design is not None:  # the whole sensor is the chosen design
+            written = self.sensor_design.write(out, self.chosen.design)
+            files = [f for f in files if f.name != "chosen.json"] + written
         files.append(write_card([self.chosen, self.original], out, self.constraints,
                                 rtol=self.study.optimise.active_rtol, study=self.study,
                                 extra_rows=self._budget_rows()))
@@ -354,13 +393,41 @@ class Result:
 
 def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str
             ) -> DesignAnswer:
-    """The designer's answer for a design given by its variables [SI] (at its geometry)."""
+    """The designer's answer for a design given by its variables [SI] (at its geometry; in
+    the sensor problem with the exact field of its magnet at its standoff)."""
     from .designer import answer
 
     geometry = {k: values[k] for k in study.geometric_variables if k in values}
     if geometry:
         models, study = models.at(**geometry), study.at(**geometry)
+    elif study.optimise.problem == "sensor":
+        from .chip import exact_field_models
+
+        models = exact_field_models(models, study)
     return answer(models, study, values["H"], values["G"], label, values.get("M_z"))
+
+
+def _with_parts(study: Study, grade: str | None, standoff_mm: float | None) -> Study:
+    """``study`` with the magnet of ``grade`` and the chip at ``standoff_mm``."""
+    from dataclasses import replace
+
+    from .parts import grade as catalogue_grade
+    from .study import MU0
+
+    magnet, hall = study.magnet, study.hall
+    if grade is not None:
+        if not isinstance(grade, str):
+            raise MagtactError(f"grade: expected a catalogue name such as 'N42', got "
+                               f"{type(grade).__name__}")
+        try:
+            M_z = catalogue_grade(grade).M_z(MU0)[0]
+        except KeyError as exc:
+            raise MagtactError(f"grade: {exc.args[0]}") from None
+        magnet = replace(magnet, grade=grade, M_z=M_z)
+    if standoff_mm is not None:
+        hall = replace(hall, standoff=checked_si(standoff_mm, "mm", "standoff_mm",
+                                                 bounds=(0.0, 20e-3)))
+    return replace(study, magnet=magnet, hall=hall)
 
 
 def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None = None, *,
@@ -390,12 +457,23 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
         values), a chip that reads nothing but its limit.
     """
     from .designer import check_rest_field
-    from .optimise import force_constraints, optimise, optimise_geometry
+    from .optimise import InfeasibleError, force_constraints, optimise, optimise_geometry
 
     own = study.geometry()
-    check_rest_field(study.at(**own) if own else study)  # before any work
+    sensor = study.optimise.problem == "sensor" and not study.geometric_variables
+    # before any work; the sensor problem at its weakest field (the weakest grade, the chip
+    # farthest away), where a chip that reads nothing but its limit may still read
+    check_rest_field(_weakest(study) if sensor else study.at(**own) if own else study)
     if constraints is None:
         constraints = force_constraints(models, study)
+    if sensor:
+        try:
+            opt = optimise(models, study, constraints)
+        except InfeasibleError as exc:
+            r = study.requirements
+            raise InfeasibleError(f"the requirements cannot be met (requirements.F_z_N = "
+                                  f"{r.F_z:g} N, F_r_N = {r.F_r:g} N): {exc}") from None
+        return _sensor_result(models, study, opt, models_source, dataset)
     if study.geometric_variables:
         opt = optimise_geometry(models, study, constraints)
         values = dict(opt.choice.values)
@@ -408,6 +486,37 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
     original = {"H": study.design.H_original, "G": study.design.G_original} | own
     return Result(study, models, models_source, opt, _answer(models, study, values, "chosen"),
                   _answer(models, study, original, "original"), values, dataset)
+
+
+def _weakest(study: Study) -> Study:
+    """``study`` with its sensor problem's weakest field: the lowest grade, the largest
+    standoff."""
+    from dataclasses import replace
+
+    from .parts import grade as catalogue_grade
+    from .study import MU0
+
+    d = study.design
+    M_z = min((catalogue_grade(g).M_z(MU0)[0] for g in d.grades), default=study.magnet.M_z)
+    standoff = d.standoff[1] if d.standoff[1] > 0 else study.hall.standoff
+    return replace(study, magnet=replace(study.magnet, M_z=M_z),
+                   hall=replace(study.hall, standoff=standoff))
+
+
+def _sensor_result(models: ModelSet, study: Study, opt, models_source: str, dataset
+                   ) -> Result:
+    """The sensor problem's :class:`Result`: the whole sensor (:func:`magtact.optimise.
+    optimise_sensor`) as the chosen design, the publication's optimisation kept beside it."""
+    from .optimise import optimise_sensor
+
+    sensor = optimise_sensor(models, study, opt.reduction.table)
+    c = sensor.choice
+    chosen = _answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen")
+    original = _answer(models, study, {"H": study.design.H_original,
+                                       "G": study.design.G_original}, "original")
+    values = {"H": c.H, "G": c.G, "M_z": c.M_z, "standoff": c.standoff}
+    return Result(study, models, models_source, opt, chosen, original, values, dataset,
+                  sensor)
 
 
 def models_for(study: Study, *, data: str | Path | None = None,

@@ -15,8 +15,9 @@ from ._answer import (
     resolution,
     saturation,
 )
+from ._verdict import N_FINE, Requirement, Verdict, verdict
 
-__all__ = ["HALL_PRESETS", "DesignAnswer", "HallChip", "HallPreset", "Parts", "Resolution",
+__all__ = ["N_FINE", "Requirement", "Verdict", "verdict", "HALL_PRESETS", "DesignAnswer", "HallChip", "HallPreset", "Parts", "Resolution",
            "Saturation", "SettingChoice", "answer", "answer_json", "best_setting",
            "check_rest_field", "hall_chip", "parts_of", "resolution", "saturation",
            "setting_for", "with_setting"]

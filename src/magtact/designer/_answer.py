@@ -22,6 +22,7 @@ from ..optimise import (
 from ..parts import SettingFigures, grade, silicones_around
 from ..sensitivity import force_noise
 from ..study import MU0, HallChip, Study, StudyError, from_si, hall_chip, mm, mt
+from ._verdict import Verdict, verdict
 
 #: Points per side of the grid over the stable box (the worst σ_F starts from its best point).
 N_BOX = 41
@@ -122,6 +123,15 @@ class DesignAnswer:
     resolution_low: Resolution | None = None
     #: The parts: magnet grade and size, silicones whose G range holds G.
     parts: Parts | None = None
+    #: Each requirement of the study met or not, with its margin.
+    verdict: Verdict | None = None
+    #: The study of this design: its magnet, the chip's standoff and setting.
+    study: Study | None = None
+
+    @property
+    def standoff(self) -> float:
+        """The chip's distance below the body [m]."""
+        return 0.0 if self.study is None else self.study.hall.standoff
 
     @property
     def figures(self) -> SettingFigures | None:
@@ -161,6 +171,8 @@ def check_rest_field(study: Study) -> None:
     """
     chip = hall_chip(study)
     H = study.design.H[1]
+    s = study.hall.standoff
+    below = f", the chip {mm(s):.3g} mm below the body" if s > 0 else ""
     for axis, name in (("x", "B_r"), ("z", "B_z")):
         b = abs(float(ExactField(study, name).value(0.0, 0.0, H)))
         limit = chip.range_x if axis == "x" else chip.range_z
@@ -168,8 +180,8 @@ def check_rest_field(study: Study) -> None:
             raise StudyError(f"hall.range_{axis}_mT",
                              f"{mt(limit):.4g} mT is below the field at rest of every design "
                              f"(|B_{axis}| = {mt(b):.4g} mT even at the tallest, H = "
-                             f"{mm(H):.3g} mm): the {chip.name} would read nothing but its "
-                             "limit")
+                             f"{mm(H):.3g} mm{below}): the {chip.name} would read nothing but "
+                             "its limit")
 
 
 def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design",
@@ -201,7 +213,7 @@ def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "des
         low = resolution(models, study, design, replace(chip, noise_x=f.sigma_x[0],
                                                         noise_z=f.sigma_z[0]))
     return DesignAnswer(label, design, chip, res, sat, study.constraints.G_tolerance, choice,
-                        low, parts)
+                        low, parts, verdict(models, study, design, chip), study)
 
 
 def resolution(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
@@ -276,8 +288,14 @@ def answer_json(a: DesignAnswer) -> dict:
         "chip_margin_stable_region": s.region_margin,
         "saturates_in_stable_region": s.in_region,
         "G_tolerance": a.tolerance, "worst_case_factor": a.worst_factor,
-        "missing": list(a.chip.missing),
+        "missing": list(a.chip.missing), "standoff_mm": mm(a.standoff),
     }
+    if a.verdict is not None:
+        v = a.verdict
+        out |= {"verdict": v.to_json(), "meets_requirements": v.met,
+                "sigma_Fr_required_loads_mN": from_si(v.sigma_r, "mN"),
+                "sigma_Fz_required_loads_mN": from_si(v.sigma_z, "mN"),
+                "saturation_F_z_N": None if np.isinf(v.F_saturation) else v.F_saturation}
     f = a.chip.figures
     if f is not None:
         out |= {"setting": {k: v for k, v in f.setting.__dict__.items() if v is not None},

@@ -57,9 +57,25 @@ from ._run import (
     optimise,
     write_optimise_outputs,
 )
+from ._sensor import (
+    WARN_GAP as WARN_GAP_SENSOR,
+)
+from ._sensor import (
+    SensorDesign,
+    SensorOptimisation,
+    SensorPareto,
+    SensorSpace,
+    evaluate_designs,
+    exact_sensor_reduction,
+    optimise_sensor,
+    sensor_nsga2,
+    sensor_space,
+)
 from ._setting import SettingChoice, best_setting, setting_for, sigma_objective, with_setting
 
 __all__ = [
+    "WARN_GAP_SENSOR", "SensorDesign", "SensorOptimisation", "SensorPareto", "SensorSpace", "evaluate_designs",
+    "exact_sensor_reduction", "optimise_sensor", "sensor_nsga2", "sensor_space",
     "SettingChoice", "best_setting", "setting_for", "sigma_objective", "with_setting",
     "DesignSet", "FrontGapWarning", "GeometricChoice", "GeometryOptimisation", "describe",
     "geometry_json",

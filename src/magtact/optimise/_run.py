@@ -169,6 +169,11 @@ def _csv(path: Path, header: list[str], rows) -> Path:
     return write_csv(path, header, rows, cell=significant(12))
 
 
+def design_json(d: DesignResult) -> dict:
+    """A design's variables and extrema in user units, each key naming its unit."""
+    return _design_json(d)
+
+
 def _design_json(d: DesignResult) -> dict:
     out = {"H_mm": from_si(d.H, "mm"), "G_kPa": from_si(d.G, "kPa")}
     if d.M_z is not None:  # a design variable

@@ -1,10 +1,12 @@
 """The Hall chip's setting as a design choice (docs/method.md §10).
 
 For a design (H, G[, M_z]) the best setting of a chip with a setting table is the one with the
-lowest force noise whose range holds the exact field over the design's stable region
-t ≤ t_m, θ ≤ θ_m (or over its loads t ≤ f t_m, f = ``[hall] read_fraction``), among the
+lowest force noise whose range holds the exact field over the loads the sensor must read (the
+sensor problem: the stable region's points with G f_z ≤ ``[requirements] F_z_N``) or over
+the design's stable region t ≤ t_m, θ ≤ θ_m (the publication's problem; or over its loads
+t ≤ f t_m, f = ``[hall] read_fraction``), among the
 settings the study allows (its fixed ``[hall]`` fields) whose sample rate reaches
-``[hall] min_rate_Hz``. The force noise of a setting is the root sum of squares of its worst
+``[requirements] rate_Hz``. The force noise of a setting is the root sum of squares of its worst
 σ_Fr and σ_Fz over the stable region, σ_F = √diag(J Σ_B Jᵀ) with Σ_B = diag(σ_x², σ_z²) at the
 upper end of the setting's noise interval (the end that holds under both assumptions). Ties go
 to the lower end, then to the faster setting. Where no setting holds the field, those that
@@ -81,10 +83,10 @@ def setting_for(models: ModelSet, study: Study, design: DesignResult) -> Setting
     J = dF_dB(models, T, TH, H, G).reshape(-1, 2, 2) / design.field_scale
     A = J**2  # (points, force, field axis)
     figs = [f for f in (setting_figures(study, s) for s in candidate_settings(study))
-            if f.rate >= study.hall.min_rate
+            if f.rate >= study.requirements.rate
             and np.isfinite(f.sigma_x[1]) and np.isfinite(f.sigma_z[1])]
     if not figs:  # the loader refuses a rate no allowed setting reaches
-        raise ValueError("no chip setting reaches the study's hall.min_rate_Hz")
+        raise ValueError("no chip setting reaches the study's requirements.rate_Hz")
     sx = np.array([[f.sigma_x[0], f.sigma_x[1]] for f in figs])  # (settings, end)
     sz = np.array([[f.sigma_z[0], f.sigma_z[1]] for f in figs])
     # worst σ_F per setting, end and force: max over points of √(A_kx σx² + A_kz σz²)
@@ -96,9 +98,16 @@ def setting_for(models: ModelSet, study: Study, design: DesignResult) -> Setting
     rz = np.array([f.range_z for f in figs])
     over = (Bx_t[None, :] > rx[:, None]) | (Bz_t[None, :] > rz[:, None])  # (settings, t)
     onset = np.where(over.any(axis=1), over.argmax(axis=1), N_GRID)  # first saturated level
-    asked = T[:, 0] <= study.hall.read_fraction * design.t_m * (1 + 1e-12)  # levels to hold
-    holds = onset >= int(asked.sum())
-    pool = onset == onset.max()  # those that hold, else those that read the farthest
+    if study.optimise.problem == "sensor":  # hold the field over the required loads
+        bx = np.abs(ExactField(study, "B_r").value(T, TH, H))
+        bz = np.abs(ExactField(study, "B_z").value(T, TH, H))
+        asked = G * models.f_z.value(T, TH, H) <= study.requirements.F_z  # (t, θ)
+        sat = (bx[None] > rx[:, None, None]) | (bz[None] > rz[:, None, None])
+        holds = ~(sat & asked[None]).any(axis=(1, 2))
+    else:
+        asked = T[:, 0] <= study.hall.read_fraction * design.t_m * (1 + 1e-12)  # levels
+        holds = onset >= int(asked.sum())
+    pool = holds if holds.any() else onset == onset.max()  # else those reading the farthest
     idx = np.flatnonzero(pool)
     rate = np.array([f.rate for f in figs])
     order = np.lexsort((-rate[idx], score[idx, 0], score[idx, 1]))

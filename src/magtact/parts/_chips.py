@@ -36,7 +36,7 @@ MLX_FIELDS: dict[str, tuple[str, int]] = {"gain_sel": ("GAIN_SEL", 8), "res": ("
 
 class SettingError(MagtactError):
     """A chip setting that does not exist or is not permitted; ``key`` names the setting field
-    (``gain_sel``, ``res``, ``osr``, ``dig_filt``, ``min_rate``, ``noise_x``, ``noise_z``)."""
+    (``gain_sel``, ``res``, ``osr``, ``dig_filt``, ``noise_x``, ``noise_z``)."""
 
     def __init__(self, key: str, message: str):
         self.key, self.reason = key, message

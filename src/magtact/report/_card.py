@@ -30,8 +30,19 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
     def row(name, fn):
         rows.append([name, *(fn(a) for a in answers)])
 
+    verdicts = [a.verdict for a in answers]
+    if all(v is not None for v in verdicts):  # the verdict leads the card
+        for i, r in enumerate(verdicts[0].requirements):
+            rows.append([r.statement, *(_verdict_cell(v.requirements[i]) for v in verdicts)])
     row("height H", lambda a: f"{mm(a.H):.3g} mm")
     row("shear modulus G", lambda a: f"{kpa(a.G):.3g} kPa")
+    if any(a.parts is not None for a in answers):
+        row("magnet (grade, size)", _magnet_text)
+    if any(a.standoff > 0 for a in answers):
+        row("chip standoff below the body", lambda a: f"{mm(a.standoff):.3g} mm")
+    if all(v is not None and v.sigma_r == v.sigma_r for v in verdicts):
+        row("force noise σ_F over the required loads, shear / normal (1 σ)",
+            lambda a: f"{_mN(a.verdict.sigma_r)} / {_mN(a.verdict.sigma_z)}")
     if any(a.design.M_z is not None for a in answers):
         row("magnetisation M_z (magnet grade)",
             lambda a: "the magnet's own" if a.design.M_z is None
@@ -60,7 +71,6 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
         lambda a: f"{a.design.F_r_min:.3g} N")
     row("chip range (x / z) and saturation", _saturation_text)
     if any(a.parts is not None for a in answers):
-        row("magnet (grade, size)", _magnet_text)
         named = answers[0].parts.silicone if answers[0].parts is not None else "none"
         label = "silicones whose G range holds G"
         if named != "none":
@@ -78,6 +88,26 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
                       f"{(1 - d) * a.design.F_r_min:.3g} N shear; Γ and σ_F × {1 + d:.3g} "
                       f"at G + {d:.0%}")
     return header, rows
+
+
+def _verdict_cell(r) -> str:
+    return r.answer
+
+
+def parts_list(a) -> list[list[str]]:
+    """The parts of a design as [label, value] pairs in user units: magnet, silicone, chip and
+    its setting, standoff, height."""
+    p = a.parts
+    out = []
+    if p is not None:
+        out.append(["magnet", _magnet_text(a)])
+        out.append(["silicone", f"{p.silicone} (G {kpa(a.G):.3g} kPa)" if p.silicone != "none"
+                    else f"G {kpa(a.G):.3g} kPa"])
+    chip = a.chip.name + (f", {_setting_text(a)}" if a.chip.figures is not None else "")
+    out.append(["Hall chip", chip])
+    out.append(["chip standoff below the body", f"{mm(a.standoff):.3g} mm"])
+    out.append(["body height H", f"{mm(a.H):.3g} mm"])
+    return out
 
 
 def _saturation_text(a) -> str:
@@ -101,7 +131,7 @@ def _setting_text(a) -> str:
         text += ("; no allowed setting holds the field over the stable region (largest |B| "
                  f"{from_si(c.B_max_x, 'mT'):.3g} / {from_si(c.B_max_z, 'mT'):.3g} mT): the one "
                  "that saturates at the largest load")
-    elif c is None:
+    elif c is None and (a.study is None or a.study.optimise.problem != "sensor"):
         text += " (the study's)"
     return text
 
@@ -150,7 +180,12 @@ def _magnet_text(a) -> str:
         g = grade(p.grade)
         text = (f"{p.grade} (B_r {g.B_r_min:.3g}–{g.B_r_max:.3g} T, max {g.max_temperature_C:g} "
                 f"°C)")
-    return text + ("" if p.size == "custom" else f", {p.size} mm (diameter × height)")
+    if p.size != "custom":
+        return text + f", {p.size} mm (diameter × height)"
+    if a.study is None:
+        return text
+    m = a.study.magnet
+    return text + f", ⌀{mm(2 * m.R_m):.3g} × {mm(m.H_m):.3g} mm"
 
 
 def _kpa_range(lo: float, hi: float) -> str:
@@ -192,6 +227,8 @@ def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None
     header, rows = card_rows(answers, constraints, rtol=rtol)
     rows = rows + [list(r) for r in (extra_rows or [])]
     doc = {"header": header, "rows": rows, "answers": [answer_json(a) for a in answers]}
+    if answers[0].verdict is not None:  # the chosen design's verdict and parts lead the card
+        doc = {"verdict": answers[0].verdict.to_json(), "parts": parts_list(answers[0])} | doc
     if study is not None:
         doc |= {"study": study.name, "definition": study.sensitivity.definition}
     return write_json(Path(folder) / "card.json", doc, indent=1, ensure_ascii=False)

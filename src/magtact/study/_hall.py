@@ -123,10 +123,7 @@ def check_hall(study: Study) -> None:
             if not v > 0:
                 raise StudyError(f"hall.{k}_uT", "give the chip's RMS field noise (> 0): a "
                                                  "'custom' chip has no data")
-    if h.chip in ("custom", "TLE493D"):
-        if h.min_rate > 0:
-            raise StudyError("hall.min_rate_Hz", f"the {h.chip} chip's sample rate is not in "
-                                                 "magtact's data; leave it at 0")
+    if h.chip in ("custom", "TLE493D"):  # no rate data: the verdict says the rate is unknown
         return
     table = chip_table(h.chip)
     for k, v in fixed.items():
@@ -139,13 +136,14 @@ def check_hall(study: Study) -> None:
             table.check(ChipSetting(0, 0, fixed["osr"], fixed["dig_filt"]))
         except SettingError as exc:
             raise StudyError(f"hall.{exc.key}", exc.reason) from None
-    if h.min_rate > table.fastest:
-        raise StudyError("hall.min_rate_Hz", f"{h.min_rate:g} Hz is above the {table.name}'s "
+    rate = study.requirements.rate
+    if rate > table.fastest:
+        raise StudyError("requirements.rate_Hz", f"{rate:g} Hz is above the {table.name}'s "
                                              f"fastest permitted sample rate, {table.fastest:g} "
                                              "Hz (full XYZ read)")
     rates = [setting_figures(study, s).rate for s in _rate_classes(study)]
-    if rates and max(rates) < h.min_rate:
-        raise StudyError("hall.min_rate_Hz", f"{h.min_rate:g} Hz is above the fastest sample "
+    if rates and max(rates) < rate:
+        raise StudyError("requirements.rate_Hz", f"{rate:g} Hz is above the fastest sample "
                                              f"rate of the fixed setting fields, "
                                              f"{max(rates):g} Hz")
 

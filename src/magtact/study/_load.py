@@ -16,7 +16,8 @@ from ._model import GEOMETRY, SECTIONS, Study, key_of
 from ._rules import blamed, check_physical, check_unit, unit_hint, written_keys
 from ._units import LABEL, MU0, bounds_text, from_si, to_si
 
-PRESETS = {"magone": "magone.toml", "magone-printed": "magone_printed.toml"}
+PRESETS = {"magone": "magone.toml", "magone-publication": "magone_publication.toml",
+           "magone-printed": "magone_printed.toml"}
 
 
 def magone() -> Study:
@@ -116,6 +117,7 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
     for name in SECTIONS:
         sections[name] = _section(name, getattr(base, name), data.get(name, {}), complete, source)
     study = _apply_parts(replace(base, **top, **sections), data.get("magnet", {}), source)
+    study = _apply_requirements(study, base, source)
     try:
         _check_consistency(study, source)
         check_physical(study, source)
@@ -148,6 +150,23 @@ def _apply_parts(s: Study, given: dict, source) -> Study:
                                               f"{LABEL.get(unit, unit)}); give one of the two",
                              source)
     return replace(s, magnet=replace(mg, **values)) if values else s
+
+
+def _apply_requirements(s: Study, base: Study, source) -> Study:
+    """With ``[constraints] source = "requirements"`` the force constraints are the required
+    forces (F_r,c = −F_r, F_z,c = F_z); a constraint value changed from its base's is refused,
+    since it would not take effect."""
+    c, r = s.constraints, s.requirements
+    if c.source != "requirements":
+        return s
+    for name, derived, own in (("F_r_c", -r.F_r, "F_r_N"), ("F_z_c", r.F_z, "F_z_N")):
+        value = getattr(c, name)
+        if value != getattr(base.constraints, name) and value != derived:
+            raise StudyError(f"constraints.{name}_N",
+                             f"{value:g} N would not take effect: with constraints.source = "
+                             f"'requirements' the force is requirements.{own} ({abs(derived):g} "
+                             "N); change that, or set constraints.source = 'values'", source)
+    return replace(s, constraints=replace(c, F_r_c=-r.F_r, F_z_c=r.F_z))
 
 
 def _check_hall(s: Study, source) -> None:
@@ -187,7 +206,8 @@ def _expected(f) -> str:
     m = f.metadata
     unit = LABEL.get(m["unit"], m["unit"])
     if m["choices"]:
-        return "one of " + ", ".join(repr(c) for c in m["choices"])
+        return ("a list of " if isinstance(f.default, tuple) else "one of ") + ", ".join(
+            repr(c) for c in m["choices"])
     if isinstance(f.default, bool):
         return "true or false"
     if isinstance(f.default, tuple):
@@ -199,6 +219,17 @@ def _expected(f) -> str:
 
 def _convert(full: str, f, value, source):
     m = f.metadata
+    if m["choices"] and isinstance(f.default, tuple):  # a list of names
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise StudyError(full, f"expected a list of names from {', '.join(m['choices'])}, "
+                                   f"got {_show(value)}", source)
+        for v in value:
+            if v not in m["choices"]:
+                raise StudyError(full, f"{_clip(v)!r}: " + _unknown(v, m["choices"], "name"),
+                                 source)
+        if len(set(value)) != len(value):
+            raise StudyError(full, f"names a choice twice: {_show(value)}", source)
+        return tuple(value)
     if m["choices"]:
         if not isinstance(value, str) or value not in m["choices"]:
             raise StudyError(full, f"expected {_expected(f)}, got {_show(value)}", source)

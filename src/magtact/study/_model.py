@@ -137,6 +137,14 @@ class Design:
     R: tuple[float, float] = setting((0.0, 0.0), "mm", minimum=0.0,
                                      doc="range of the body radius as a design variable; "
                                          "[0, 0]: fixed at body.R")
+    standoff: tuple[float, float] = setting(
+        (0.0, 3e-3), "mm", minimum=0.0, bounds=(1e-6, 20e-3),
+        doc="range of the chip's standoff below the body (a thicker board, a spacer) as a "
+            "design variable of the sensor problem; [0, 0]: fixed at hall.standoff_mm")
+    grades: tuple[str, ...] = setting(
+        tuple(GRADES), choices=tuple(GRADES),
+        doc="magnet grades the sensor problem chooses from (catalogue names, each sets M_z); "
+            "[]: the study's magnet only")
     H_original: float = setting(3e-3, "mm", positive=True, doc="H of the original sensor")
     G_original: float = setting(29.4e3, "kPa", positive=True, doc="G of the original sensor")
 
@@ -221,14 +229,35 @@ class Constraints:
 
     F_r_c: float = setting(-0.25, "N", doc="F_r,min must be at most this (shear capacity)")
     F_z_c: float = setting(5.0, "N", positive=True, doc="F_z,max must be at least this")
-    source: str = setting("values", choices=("values", "reference"),
-                          doc="'values': numbers above; 'reference': original design")
+    source: str = setting("requirements", choices=("requirements", "values", "reference"),
+                          doc="'requirements': the forces of [requirements] (F_r,c = -F_r, "
+                              "F_z,c = F_z); 'values': the numbers above; 'reference': the "
+                              "original design's")
     G_tolerance: float = setting(0.0, minimum=0.0, maximum=0.5, bounds=(0.0, 0.5),
                                  doc="fabrication tolerance δ of G: the force constraints must "
                                      "hold at G (1 − δ); Γ and σ_F are reported at G (1 + δ)")
     chip_range: bool = setting(False, doc="true: the [hall] chip must stay within its range "
                                           "over each design's stable region (a constraint of "
                                           "the optimisation)")
+
+
+@dataclass(frozen=True)
+class Requirements:
+    """The specification the sensor must meet (docs/method.md §10): the forces it must carry
+    and read on every loading path without leaving its chip's range, the sample rate, and
+    optionally a resolution and a footprint. The defaults are the MagOne sensor's forces."""
+
+    F_z: float = setting(5.0, "N", positive=True, bounds=(1e-3, 1e4),
+                         doc="normal force the sensor must read, from 0 to this")
+    F_r: float = setting(0.25, "N", positive=True, bounds=(1e-4, 1e3),
+                         doc="shear force the sensor must carry and read, from 0 to this")
+    rate: float = setting(100.0, "Hz", minimum=0.0, bounds=(1e-3, 1e6),
+                          doc="sample rate (full XYZ read) the chip setting must reach; 0: any")
+    resolution: float = setting(0.0, "mN", minimum=0.0, bounds=(1e-9, 1e3),
+                                doc="largest force noise σ_F (1 σ, worst over the required "
+                                    "loads); 0: no target")
+    R_max: float = setting(0.0, "mm", minimum=0.0, bounds=(1e-4, 1.0),
+                           doc="largest body radius (footprint); 0: no limit")
 
 
 @dataclass(frozen=True)
@@ -299,9 +328,10 @@ class Hall:
                                    doc="the picked chip setting must hold the field over the "
                                        "loads t <= read_fraction * t_m of the stable region "
                                        "(1: all of it)")
-    min_rate: float = setting(0.0, "Hz", minimum=0.0, bounds=(1e-3, 1e6),
-                              doc="smallest sample rate (full XYZ read) the chip setting must "
-                                  "reach; 0: any")
+    standoff: float = setting(0.0, "mm", minimum=0.0, bounds=(1e-6, 20e-3),
+                              doc="distance of the chip's sensing point below the body's base "
+                                  "(the original design's, and any design's where the standoff "
+                                  "is not a design variable)")
 
 
 @dataclass(frozen=True)
@@ -340,6 +370,14 @@ class Optimise:
                                doc="start grid along theta of the batched per-height solver")
     active_rtol: float = setting(1e-2, positive=True, bounds=(1e-12, 1.0),
                                  doc="a constraint is active when |margin| <= this x |limit|")
+    problem: str = setting("sensor", choices=("sensor", "publication"),
+                           doc="'sensor': the whole sensor (H, G, magnet grade, standoff, chip "
+                               "setting) that meets [requirements] with the least force noise; "
+                               "'publication': the publication's (H, G) problem")
+    sensor_population: int = setting(60, integer=True, minimum=4, maximum=100_000,
+                                     doc="population of NSGA-II in the sensor problem")
+    sensor_generations: int = setting(60, integer=True, minimum=1, maximum=10_000,
+                                      doc="NSGA-II generations in the sensor problem")
     objective: str = setting("gamma", choices=("gamma", "sigma_F"),
                              doc="'gamma': minimise the sensitivities Γ_r,max, Γ_z,max [N/T] "
                                  "(the publication's); 'sigma_F': the force noise σ_F,r, "
@@ -456,6 +494,7 @@ class Study:
     doe: DOE = field(default_factory=DOE)
     magnetics: Magnetics = field(default_factory=Magnetics)
     mechanics: Mechanics = field(default_factory=Mechanics)
+    requirements: Requirements = field(default_factory=Requirements)
     constraints: Constraints = field(default_factory=Constraints)
     metamodel: MetamodelSettings = field(default_factory=MetamodelSettings)
     sensitivity: Sensitivity = field(default_factory=Sensitivity)
@@ -557,7 +596,7 @@ def study_to_toml(s: Study) -> str:
         for f in fields(sec):
             value, unit = getattr(sec, f.name), f.metadata["unit"]
             if isinstance(value, tuple):
-                value = [_tidy(v, unit) for v in value]
+                value = [v if isinstance(v, str) else _tidy(v, unit) for v in value]
             elif isinstance(value, float):
                 value = _tidy(value, unit)
             table[key_of(f)] = value

@@ -1,0 +1,134 @@
+"""What the Hall chip reads of a design: the required loads, where it leaves its range, and the
+force noise over the loads it must read (docs/method.md §10).
+
+The loads a sensor must read are the points (t, θ) of its stable region t ≤ t_m, θ ≤ θ_m
+whose normal force is at most the required one, G f_z(t, θ) ≤ F_z,req: every path up to the
+required normal force, and with it every shear force the body carries there. The field scales
+exactly with the magnetisation and does not depend on G, so on a grid over the stable region a
+design's field per unit M_z, its forces per unit G and its Jacobian per unit G and M_z serve
+every grade, chip setting and G at once:
+
+.. math:: B = M_z\\,b(t, θ), \\qquad F = G\\,f(t, θ), \\qquad
+          \\frac{∂F}{∂B} = \\frac{G}{M_z}\\,j(t, θ)
+
+A grid point where the chip leaves its range must lie beyond the required loads. So that no
+point between two load levels escapes the check, the force compared is the one of the level
+before it on the same path, and with a margin of :data:`READ_MARGIN`: the chip reads the
+required loads when G f_z(t_{i−1}, θ) > (1 + m) F_z,req at every saturated level i. The
+smallest such G is :meth:`SensorGrid.G_range`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..metamodel import ExactField, ModelSet
+from ..sensitivity import dF_dB
+from ..study import Study
+
+#: Load levels and shear angles of the grid over each design's stable region.
+N_T, N_THETA = 31, 7
+#: Relative margin of force by which the chip's range must outlast the required loads: the grid
+#: is coarse, and a designer's sensor should not saturate at exactly its rated force.
+READ_MARGIN = 0.02
+
+
+def exact_field_models(models: ModelSet, study: Study) -> ModelSet:
+    """``models`` with the exact field of ``study``'s magnet and chip position as B_r, B_z
+    (the field models fitted to a DOE hold at its chip position only)."""
+    return replace(models, B_r=ExactField(study, "B_r"), B_z=ExactField(study, "B_z"))
+
+
+def unit_magnet(study: Study, standoff: float | None = None) -> Study:
+    """``study`` with a magnetisation of 1 A/m (the field per unit M_z) and, if given, the
+    chip's standoff [m]."""
+    hall = study.hall if standoff is None else replace(study.hall, standoff=float(standoff))
+    return replace(study, magnet=replace(study.magnet, M_z=1.0), hall=hall)
+
+
+@dataclass(frozen=True)
+class SensorGrid:
+    """Per-unit responses of designs on a grid over each one's stable region.
+
+    Arrays have shape (n, N_T, N_THETA) for n designs (heights H with their stable bounds).
+
+    Attributes
+    ----------
+    T, TH : numpy.ndarray
+        Load levels t ∈ [0, t_m] and shear angles θ ∈ [0, θ_m] [rad].
+    f_r, f_z : numpy.ndarray
+        Forces per unit G [N/Pa].
+    b_x, b_z : numpy.ndarray
+        Field per unit M_z [T m/A] (x: shear, z: normal).
+    j : numpy.ndarray, shape (n, N_T, N_THETA, 2, 2)
+        ∂F/∂B per unit G and per unit M_z: rows (F_r, F_z), columns (B_x, B_z).
+    """
+
+    T: np.ndarray
+    TH: np.ndarray
+    f_r: np.ndarray
+    f_z: np.ndarray
+    b_x: np.ndarray
+    b_z: np.ndarray
+    j: np.ndarray
+
+    def saturated(self, M_z, range_x, range_z) -> np.ndarray:
+        """Where the chip leaves its range (±range_x, ±range_z [T]) with magnetisation M_z
+        [A/m] (arrays of shape (n,) or scalars)."""
+        M_z, rx, rz = (np.asarray(v, float).reshape(-1, 1, 1) for v in (M_z, range_x, range_z))
+        return (M_z * np.abs(self.b_x) > rx) | (M_z * np.abs(self.b_z) > rz)
+
+    def G_range(self, M_z, range_x, range_z, F_z: float) -> np.ndarray:
+        """The smallest G [Pa] at which the chip reads every load up to the normal force F_z
+        [N] (see the module notes); inf where it leaves its range at rest."""
+        sat = self.saturated(M_z, range_x, range_z)
+        before = np.concatenate([np.zeros_like(self.f_z[:, :1]), self.f_z[:, :-1]], axis=1)
+        with np.errstate(divide="ignore"):
+            need = np.where(before > 0, F_z / np.where(before > 0, before, 1.0), np.inf)
+        need = np.where(sat, need, 0.0)
+        return need.reshape(need.shape[0], -1).max(axis=1) * (1.0 + READ_MARGIN)
+
+    def sigma(self, G, M_z, noise_x, noise_z, F_z: float) -> tuple[np.ndarray, np.ndarray]:
+        """Worst σ_Fr, σ_Fz [N] over the required loads (G f_z ≤ F_z) with field noise
+        (σ_x, σ_z) [T RMS]; arrays of shape (n,)."""
+        G, M_z, sx, sz = (np.asarray(v, float).reshape(-1, 1, 1)
+                          for v in (G, M_z, noise_x, noise_z))
+        with np.errstate(invalid="ignore"):  # G = inf: no design, σ inf
+            region = G * self.f_z <= F_z
+        scale = G / M_z
+        s = np.sqrt(self.j[..., 0] ** 2 * sx[..., None] ** 2
+                    + self.j[..., 1] ** 2 * sz[..., None] ** 2) * scale[..., None]
+        s = np.where(region[..., None], s, 0.0)
+        worst = s.reshape(s.shape[0], -1, 2).max(axis=1)
+        return worst[:, 0], worst[:, 1]
+
+    def F_saturation(self, G, M_z, range_x, range_z) -> np.ndarray:
+        """The smallest normal force [N] on the grid at which the chip has left its range
+        (inf: it reads the whole stable region)."""
+        sat = self.saturated(M_z, range_x, range_z)
+        with np.errstate(invalid="ignore"):
+            F = np.asarray(G, float).reshape(-1, 1, 1) * self.f_z
+        F = np.where(sat, F, np.inf)
+        return F.reshape(F.shape[0], -1).min(axis=1)
+
+
+def sensor_grid(models: ModelSet, study: Study, H, t_m, theta_m,
+                standoff: float | None = None, n: tuple[int, int] = (N_T, N_THETA)
+                ) -> SensorGrid:
+    """:class:`SensorGrid` of designs at heights H [m] with stable bounds t_m, θ_m (arrays of
+    shape (n,)) and the chip at ``standoff`` [m] (default the study's); ``n``: load levels and
+    shear angles of the grid."""
+    H, t_m, theta_m = (np.atleast_1d(np.asarray(v, float)) for v in (H, t_m, theta_m))
+    s = np.linspace(0.0, 1.0, n[0])[None, :, None]
+    u = np.linspace(0.0, 1.0, n[1])[None, None, :]
+    T = s * t_m[:, None, None] + 0.0 * u
+    TH = u * theta_m[:, None, None] + 0.0 * s
+    HH = np.broadcast_to(H[:, None, None], T.shape)
+    unit = exact_field_models(models, unit_magnet(study, standoff))
+    f_r, f_z = unit.forces(T, TH, HH, 1.0)
+    b_x, b_z = unit.fields(T, TH, HH)
+    j = dF_dB(unit, T, TH, HH, 1.0)
+    return SensorGrid(T, TH, np.asarray(f_r), np.asarray(f_z), np.asarray(b_x),
+                      np.asarray(b_z), np.asarray(j))

@@ -1,0 +1,487 @@
+"""The whole sensor as the design: H, G, the magnet's grade, the chip's standoff and its setting
+(docs/method.md §10).
+
+The problem: minimise the force noise σ_F,r and σ_F,z (1 σ, worst over the loads the sensor
+must read) subject to the force constraints (the body carries the required forces stably) and
+to the chip's range (it reads every required load without leaving the range of its setting).
+The setting must reach the required sample rate. The grade and the standoff change the field
+only (exactly: B ∝ M_z, and the chip's position), not the mechanics; the setting changes the
+range and the noise.
+
+Two solvers answer it, and each checks the other:
+
+- the **exact reduction** enumerates every grade, standoff level and setting on a grid of
+  heights, and is exact in G: over the required loads σ_F = (G / M_z) W(F_z,req / G), with W
+  the largest per-unit noise among the grid points whose normal force per unit G is at most
+  F_z,req / G. W steps down only where G passes a point's F_z,req / f_z, so the least σ_F over
+  G lies at the smallest feasible G or just above one of these breakpoints;
+- **NSGA-II** over the mixed variables (H real; the standoff level, the grade and the chip
+  option integers, each in the order of its effect: standoff, magnetisation, range), with
+  pymoo's mixed-variable operators, minimising (σ_F,r, σ_F,z); each design it proposes takes
+  its least-noise feasible G (the reduction's exact step in G), so that the two solvers differ
+  in how they search the heights and the discrete choices.
+
+The decision takes the least √(σ_F,r² + σ_F,z²) of each, and the lower of the two is the
+answer; NSGA-II's may not lie more than ``WARN_GAP`` above the reduction's. The standoff takes levels ``standoff_step``
+apart (boards and spacers come in steps).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._errors import MagtactError
+from ..chip import ChipOption, SensorGrid, chip_options, sensor_grid
+from ..metamodel import ModelSet
+from ..parts import grade as catalogue_grade
+from ..study import MU0, Study, from_si
+from ._design import HeightTable
+from ._pareto import ForceConstraints, feasible_G, force_constraints, sweep
+
+#: Step between the standoff levels [m].
+STANDOFF_STEP = 0.1e-3
+#: Heights of the exact reduction's grid.
+N_H = 41
+#: Relative step above a breakpoint of G at which σ_F is evaluated.
+G_STEP = 1e-9
+#: Largest relative gap between NSGA-II's and the reduction's least σ_F that counts as agreement.
+WARN_GAP = 0.05
+
+
+@dataclass(frozen=True)
+class SensorSpace:
+    """The choices of a sensor design: grades (names and M_z [A/m]), standoff levels [m], chip
+    options, the H and G bounds, the per-height table of the stable region and extrema, the
+    force constraints and the required normal force F_z [N]."""
+
+    grades: tuple[str, ...]
+    M_z: np.ndarray
+    standoffs: np.ndarray
+    options: tuple[ChipOption, ...]
+    H_bounds: tuple[float, float]
+    G_bounds: tuple[float, float]
+    table: HeightTable
+    constraints: ForceConstraints
+    F_z: float
+
+    def box(self, H) -> tuple[np.ndarray, ...]:
+        """(t_m, θ_m, f_r,min, f_z,max) at heights H [m], interpolated in the table."""
+        H = np.atleast_1d(np.asarray(H, float))
+        tb = self.table
+        return tuple(np.interp(H, tb.H, getattr(tb, k))
+                     for k in ("t_m", "theta_m", "f_r_min", "f_z_max"))
+
+    def G_force(self, f_r_min, f_z_max) -> np.ndarray:
+        """The smallest G [Pa] meeting the force constraints (inf where none in the bounds)."""
+        low, high = feasible_G(f_r_min, f_z_max, self.constraints, self.G_bounds)
+        return np.where(low <= high, low, np.inf)
+
+
+def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = None
+                 ) -> SensorSpace:
+    """The choices of ``study``'s sensor problem (``table``: a sweep over the H range, computed
+    when not given)."""
+    d = study.design
+    if d.grades:
+        grades = tuple(d.grades)
+        M_z = np.array([catalogue_grade(g).M_z(MU0)[0] for g in grades])
+    else:
+        grades, M_z = (study.magnet.grade,), np.array([study.magnet.M_z])
+    if d.standoff[1] > 0:
+        lo, hi = d.standoff
+        n = int(np.floor((hi - lo) / STANDOFF_STEP + 1e-9)) + 1
+        standoffs = lo + STANDOFF_STEP * np.arange(n)
+    else:
+        standoffs = np.array([study.hall.standoff])
+    if table is None:
+        table = sweep(models, study)
+    order = np.argsort(table.H)
+    return SensorSpace(grades, M_z, standoffs, tuple(chip_options(study)), d.H, d.G,
+                       table.take(order), force_constraints(models, study),
+                       study.requirements.F_z)
+
+
+@dataclass(frozen=True)
+class SensorDesign:
+    """One sensor: its parts and dimensions, evaluated on the sensor grid (SI).
+
+    Attributes
+    ----------
+    H, G : float
+        Base height [m], shear modulus [Pa].
+    grade : str
+        The magnet's grade (``custom``: the study's own magnetisation).
+    M_z : float
+        Magnetisation [A/m].
+    standoff : float
+        The chip's distance below the body [m].
+    option : ChipOption
+        The chip's setting: range, noise, rate.
+    sigma_r, sigma_z : float
+        Worst σ_F,r, σ_F,z [N] over the required loads.
+    G_force, G_range : float
+        The smallest G [Pa] that meets the force constraints, and that at which the chip
+        reads the required loads (inf: none).
+    F_saturation : float
+        The smallest normal force [N] on the grid at which the chip has left its range (inf:
+        never in the stable region).
+    """
+
+    H: float
+    G: float
+    grade: str
+    M_z: float
+    standoff: float
+    option: ChipOption
+    sigma_r: float
+    sigma_z: float
+    G_force: float
+    G_range: float
+    F_saturation: float
+
+    def apply(self, study: Study) -> Study:
+        """``study`` with this sensor's parts: the magnet's grade and M_z, the chip's standoff
+        and setting."""
+        from dataclasses import replace
+
+        from ._setting import with_setting
+
+        s = replace(study, magnet=replace(study.magnet, grade=self.grade, M_z=self.M_z),
+                    hall=replace(study.hall, standoff=self.standoff))
+        return s if self.option.figures is None else with_setting(s, self.option.figures.setting)
+
+    @property
+    def sigma(self) -> float:
+        """√(σ_F,r² + σ_F,z²) [N]: the decision's objective."""
+        return float(np.hypot(self.sigma_r, self.sigma_z))
+
+    @property
+    def feasible(self) -> bool:
+        """Whether G meets the force constraints and the chip reads the required loads."""
+        return bool(self.G >= max(self.G_force, self.G_range) * (1.0 - 1e-9))
+
+    def to_json(self) -> dict:
+        """The design in user units, each key naming its unit."""
+        o = self.option
+        return {"H_mm": from_si(self.H, "mm"), "G_kPa": from_si(self.G, "kPa"),
+                "magnet_grade": self.grade, "M_z_A_per_m": self.M_z,
+                "standoff_mm": from_si(self.standoff, "mm"), "chip_setting": o.words,
+                "range_x_mT": from_si(o.range_x, "mT"), "range_z_mT": from_si(o.range_z, "mT"),
+                "noise_x_uT": from_si(o.noise_x, "uT"), "noise_z_uT": from_si(o.noise_z, "uT"),
+                "sample_rate_Hz": None if np.isnan(o.rate) else o.rate,
+                "sigma_Fr_mN": from_si(self.sigma_r, "mN"),
+                "sigma_Fz_mN": from_si(self.sigma_z, "mN"),
+                "G_force_kPa": _finite(from_si(self.G_force, "kPa")),
+                "G_range_kPa": _finite(from_si(self.G_range, "kPa")),
+                "F_saturation_N": _finite(self.F_saturation), "feasible": self.feasible}
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
+
+
+def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, standoff,
+                     grade, option) -> dict[str, np.ndarray]:
+    """σ_F,r, σ_F,z [N], G [Pa], G_force, G_range [Pa] and F_saturation [N] of designs given by
+    arrays: H [m], G [Pa], and indices of the standoff level, grade and chip option. Where G is
+    None, each design takes the G of least √(σ_r² + σ_z²) among those it may have (exact on
+    the grid; inf σ where none is feasible)."""
+    H = np.atleast_1d(np.asarray(H, float))
+    standoff, grade, option = (np.atleast_1d(np.asarray(v, int)) for v in (standoff, grade,
+                                                                            option))
+    t_m, theta_m, f_r_min, f_z_max = space.box(H)
+    G_force = space.G_force(f_r_min, f_z_max)
+    G = np.full(H.size, np.nan) if G is None else np.atleast_1d(np.asarray(G, float)).copy()
+    free = np.isnan(G)
+    M_z = space.M_z[grade]
+    rx, rz, sx, sz = (np.array([getattr(space.options[k], a) for k in option])
+                      for a in ("range_x", "range_z", "noise_x", "noise_z"))
+    out = {k: np.empty(H.size) for k in ("sigma_r", "sigma_z", "G_range", "F_saturation")}
+    for s in np.unique(standoff):
+        m = standoff == s
+        grid = sensor_grid(models, study, H[m], t_m[m], theta_m[m], space.standoffs[s])
+        out["G_range"][m] = G_range = grid.G_range(M_z[m], rx[m], rz[m], space.F_z)
+        for i in np.flatnonzero(m & free):  # the best G of each design
+            r = np.flatnonzero(np.flatnonzero(m) == i)
+            one = SensorGrid(*(getattr(grid, f)[r] for f in ("T", "TH", "f_r", "f_z", "b_x",
+                                                              "b_z", "j")))
+            low = np.maximum(np.maximum(G_force[i:i + 1], G_range[r]), space.G_bounds[0])
+            _, G[i:i + 1] = _Noise(one, (sx[i], sz[i])).least(M_z[i], low,
+                                                              space.G_bounds[1], space.F_z)
+        out["sigma_r"][m], out["sigma_z"][m] = grid.sigma(G[m], M_z[m], sx[m], sz[m], space.F_z)
+        out["F_saturation"][m] = grid.F_saturation(G[m], M_z[m], rx[m], rz[m])
+    out["G"], out["G_force"] = G, G_force
+    return out
+
+
+def _design(space: SensorSpace, values: dict, H, s, g, k, i: int = 0) -> SensorDesign:
+    return SensorDesign(float(np.atleast_1d(H)[i]), float(values["G"][i]), space.grades[g],
+                        float(space.M_z[g]), float(space.standoffs[s]), space.options[k],
+                        *(float(values[n][i]) for n in ("sigma_r", "sigma_z", "G_force",
+                                                        "G_range", "F_saturation")))
+
+
+@dataclass(frozen=True)
+class _Best:
+    sigma: float
+    H: float
+    G: float
+    s: int
+    g: int
+    k: int
+
+
+class _Noise:
+    """Per height of a grid and one chip noise: the grid's points sorted by their normal force
+    per unit G, and the worst per-unit √(σ_r² + σ_z²) among the first i of them."""
+
+    def __init__(self, grid: SensorGrid, noise: tuple[float, float]):
+        n = grid.f_z.shape[0]
+        f = grid.f_z.reshape(n, -1)
+        S = np.sqrt(grid.j[..., 0] ** 2 * noise[0] ** 2 + grid.j[..., 1] ** 2 * noise[1] ** 2)
+        order = np.argsort(f, axis=1, kind="stable")
+        self.f = np.take_along_axis(f, order, axis=1)
+        cm = np.maximum.accumulate(np.take_along_axis(S.reshape(n, -1, 2), order[..., None],
+                                                      axis=1), axis=1)
+        cm = np.concatenate([np.zeros((n, 1, 2)), cm], axis=1)  # cm[:, i]: worst of first i
+        self.W = np.hypot(cm[..., 0], cm[..., 1])  # (n, P + 1)
+        with np.errstate(divide="ignore"):
+            self.breaks = np.where(self.f > 0, 1.0 / np.where(self.f > 0, self.f, 1.0), np.inf)
+
+    def least(self, M_z: float, G_low: np.ndarray, G_high: float, F_z: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """Per height: the least √(σ_r² + σ_z²) [N] over G ∈ [G_low, G_high] and its G
+        (exact on the grid; see the module notes); inf where G_low > G_high."""
+        n = self.f.shape[0]
+        rows = np.arange(n)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            count = (self.f <= (F_z / G_low)[:, None]).sum(axis=1)  # the region at G_low
+            low = np.where(G_low <= G_high, G_low * self.W[rows, count] / M_z, np.inf)
+            Gb = F_z * self.breaks * (1.0 + G_STEP)  # just above each breakpoint: the first i
+            ok = (Gb >= G_low[:, None]) & (Gb <= G_high)
+            at = np.where(ok, Gb * self.W[:, :-1] / M_z, np.inf)
+        j = np.argmin(at, axis=1)
+        use = at[rows, j] < low
+        return np.where(use, at[rows, j], low), np.where(use, Gb[rows, j], G_low)
+
+
+def exact_sensor_reduction(models: ModelSet, study: Study, space: SensorSpace
+                           ) -> tuple[SensorDesign, int]:
+    """The least √(σ_r² + σ_z²) over every grade, standoff level and chip option, on ``N_H``
+    heights (refined around the best), exact in G; the best-reading design where none is
+    feasible. Returns it and the number of discrete combinations compared."""
+    H = np.linspace(*space.H_bounds, N_H)
+    best, fallback = None, None
+    for s in range(space.standoffs.size):
+        best, fallback = _reduce_heights(models, study, space, H, s, best, fallback)
+    if best is not None:  # refine the height between the grid's neighbours
+        step = H[1] - H[0]
+        Hf = np.clip(np.linspace(best.H - step, best.H + step, 41), *space.H_bounds)
+        best, fallback = _reduce_heights(models, study, space, Hf, best.s, best, fallback,
+                                         only=(best.g, best.k))
+    pick = best if best is not None else fallback
+    values = evaluate_designs(models, study, space, pick.H, pick.G, pick.s, pick.g, pick.k)
+    combos = space.standoffs.size * space.M_z.size * len(space.options)
+    return _design(space, values, pick.H, pick.s, pick.g, pick.k), combos
+
+
+def _reduce_heights(models, study, space, H, s, best, fallback, only=None):
+    t_m, theta_m, f_r_min, f_z_max = space.box(H)
+    grid = sensor_grid(models, study, H, t_m, theta_m, space.standoffs[s])
+    G_force = space.G_force(f_r_min, f_z_max)
+    G_hi = space.G_bounds[1]
+    ok = np.isfinite(G_force) & (G_force <= G_hi)
+    for k, o in enumerate(space.options):
+        if only is not None and k != only[1]:
+            continue
+        noise = _Noise(grid, (o.noise_x, o.noise_z))
+        for g, M_z in enumerate(space.M_z):
+            if only is not None and g != only[0]:
+                continue
+            G_range = grid.G_range(M_z, o.range_x, o.range_z, space.F_z)
+            G_low = np.maximum(np.maximum(G_force, G_range), space.G_bounds[0])
+            value, G = noise.least(M_z, G_low, G_hi, space.F_z)
+            i = int(np.argmin(value))
+            if np.isfinite(value[i]) and (best is None or value[i] < best.sigma):
+                best = _Best(float(value[i]), float(H[i]), float(G[i]), s, g, k)
+            # where none reads the required loads: the design that reads the most, at G_hi
+            F_sat = np.where(ok, grid.F_saturation(np.full(H.size, G_hi), M_z, o.range_x,
+                                                   o.range_z), -np.inf)
+            j = int(np.argmax(F_sat))
+            if ok[j] and (fallback is None or F_sat[j] > fallback.sigma):
+                fallback = _Best(float(F_sat[j]), float(H[j]), G_hi, s, g, k)
+    return best, fallback
+
+
+@dataclass(frozen=True)
+class SensorPareto:
+    """NSGA-II's feasible non-dominated sensor designs (arrays of shape (n,)): H [m], G [Pa],
+    indices of the standoff level, grade and option, σ_F,r and σ_F,z [N]."""
+
+    H: np.ndarray
+    G: np.ndarray
+    standoff: np.ndarray
+    grade: np.ndarray
+    option: np.ndarray
+    sigma_r: np.ndarray
+    sigma_z: np.ndarray
+    seed: int
+    generations: int
+    evaluations: int
+
+
+def sensor_nsga2(models: ModelSet, study: Study, space: SensorSpace) -> SensorPareto | None:
+    """NSGA-II over the mixed variables (see the module notes), seeded by ``optimise.seed``;
+    None if it found no feasible design."""
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.core.mixed import (
+        MixedVariableDuplicateElimination,
+        MixedVariableMating,
+        MixedVariableSampling,
+    )
+    from pymoo.core.problem import Problem
+    from pymoo.core.variable import Integer, Real
+    from pymoo.optimize import minimize
+
+    o = study.optimise
+    scale = 1e3  # objectives in mN
+
+    class _Sensors(Problem):
+        def __init__(self):
+            super().__init__(vars={"H": Real(bounds=space.H_bounds),
+                                   "standoff": Integer(bounds=(0, space.standoffs.size - 1)),
+                                   "grade": Integer(bounds=(0, space.M_z.size - 1)),
+                                   "option": Integer(bounds=(0, len(space.options) - 1))},
+                             n_obj=2, n_ieq_constr=1)
+
+        def _evaluate(self, X, out, *args, **kwargs):
+            v = {k: np.array([x[k] for x in X]) for k in ("H", "standoff", "grade", "option")}
+            r = evaluate_designs(models, study, space, v["H"], None, v["standoff"],
+                                 v["grade"], v["option"])
+            feasible = np.isfinite(r["sigma_r"]) & np.isfinite(r["sigma_z"])
+            out["F"] = np.where(feasible[:, None],
+                                np.stack([r["sigma_r"], r["sigma_z"]], axis=1) * scale, 1e6)
+            low = np.maximum(r["G_force"], r["G_range"])
+            with np.errstate(invalid="ignore", divide="ignore"):
+                out["G"] = np.minimum(low / space.G_bounds[1] - 1.0, 1e6)[:, None]
+
+    dup = MixedVariableDuplicateElimination()
+    algorithm = NSGA2(pop_size=o.sensor_population, sampling=MixedVariableSampling(),
+                      mating=MixedVariableMating(eliminate_duplicates=dup),
+                      eliminate_duplicates=dup)
+    generations = o.sensor_generations
+    res = minimize(_Sensors(), algorithm, ("n_gen", generations), seed=o.seed, verbose=False)
+    opt = res.opt
+    if opt is None:
+        return None
+    feasible = np.ravel(opt.get("CV")) <= 0
+    if not feasible.any():
+        return None
+    X = [x for x, ok in zip(opt.get("X"), feasible, strict=True) if ok]
+    F = np.atleast_2d(opt.get("F"))[feasible] / scale
+    col = {k: np.array([x[k] for x in X]) for k in ("H", "standoff", "grade", "option")}
+    col["G"] = evaluate_designs(models, study, space, col["H"], None, col["standoff"],
+                                col["grade"], col["option"])["G"]
+    order = np.argsort(col["H"])
+    return SensorPareto(col["H"][order], col["G"][order], col["standoff"][order].astype(int),
+                        col["grade"][order].astype(int), col["option"][order].astype(int),
+                        F[order, 0], F[order, 1], o.seed, generations,
+                        int(res.algorithm.evaluator.n_eval))
+
+
+@dataclass(frozen=True)
+class SensorOptimisation:
+    """The sensor problem's answer (:func:`optimise_sensor`).
+
+    Attributes
+    ----------
+    choice : SensorDesign
+        The chosen sensor: NSGA-II's least √(σ_r² + σ_z²) where it agrees with the
+        reduction's, else the reduction's.
+    reduction_choice : SensorDesign
+        The exact reduction's (the cross-check; the best-reading design where none is
+        feasible).
+    pareto : SensorPareto or None
+        NSGA-II's feasible set (None where it found none).
+    gap : float
+        (σ NSGA-II − σ reduction) / σ reduction; NaN where either found no feasible design.
+    combinations : int
+        Discrete combinations (standoff levels × grades × chip options) the reduction compared.
+    wall_time : float
+        [s].
+    """
+
+    choice: SensorDesign
+    reduction_choice: SensorDesign
+    pareto: SensorPareto | None
+    gap: float
+    combinations: int
+    wall_time: float
+
+    @property
+    def feasible(self) -> bool:
+        return self.choice.feasible
+
+    def write(self, folder, design) -> list:
+        """Write ``sensor.json`` (:meth:`to_json`) and ``chosen.json`` (the chosen sensor as
+        flat values in user units, with ``design``'s extrema, a
+        :class:`magtact.optimise.DesignResult` of the chosen sensor, for the report) into
+        ``folder``; return the files."""
+        import json
+        from pathlib import Path
+
+        from ._run import design_json
+
+        folder = Path(folder)
+        flat = design_json(design) | self.choice.to_json() | {"problem": "sensor"}
+        files = []
+        for name, doc in (("sensor.json", self.to_json()), ("chosen.json", flat)):
+            (folder / name).write_text(json.dumps(doc, indent=2) + "\n")
+            files.append(folder / name)
+        return files
+
+    def to_json(self) -> dict:
+        """The answer in user units (``sensor.json``)."""
+        p = self.pareto
+        return {"chosen": self.choice.to_json(),
+                "exact_reduction_choice": self.reduction_choice.to_json(),
+                "gap_to_exact_reduction": None if np.isnan(self.gap) else self.gap,
+                "combinations": self.combinations, "wall_time_s": self.wall_time,
+                "nsga2": None if p is None else {"points": int(p.H.size), "seed": p.seed,
+                                                 "generations": p.generations,
+                                                 "evaluations": p.evaluations}}
+
+
+def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = None
+                    ) -> SensorOptimisation:
+    """The sensor problem of ``study`` (see the module notes): the exact reduction and
+    NSGA-II, the decision and their gap.
+
+    Raises
+    ------
+    MagtactError
+        If NSGA-II's choice lies more than ``WARN_GAP`` above the exact reduction's.
+    """
+    t0 = time.perf_counter()
+    space = sensor_space(models, study, table)
+    red, combos = exact_sensor_reduction(models, study, space)
+    pareto = sensor_nsga2(models, study, space) if red.feasible else None
+    choice, gap = red, float("nan")
+    if pareto is not None:
+        i = int(np.argmin(np.hypot(pareto.sigma_r, pareto.sigma_z)))
+        values = evaluate_designs(models, study, space, pareto.H[i], pareto.G[i],
+                                  pareto.standoff[i], pareto.grade[i], pareto.option[i])
+        nsga = _design(space, values, pareto.H[i], pareto.standoff[i], pareto.grade[i],
+                       pareto.option[i])
+        gap = (nsga.sigma - red.sigma) / red.sigma
+        if gap > WARN_GAP:
+            raise MagtactError(
+                f"NSGA-II's sensor (σ_F {from_si(nsga.sigma, 'mN'):.3g} mN) lies {gap:.3g} "
+                f"above the exact reduction's ({from_si(red.sigma, 'mN'):.3g} mN): raise "
+                "[optimise] population and nsga2_generations")
+        if nsga.sigma < red.sigma:
+            choice = nsga
+    return SensorOptimisation(choice, red, pareto, gap, combos, time.perf_counter() - t0)

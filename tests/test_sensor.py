@@ -1,0 +1,202 @@
+"""The sensor problem: the whole sensor (H, G, magnet grade, chip standoff and setting) that
+meets the study's requirements. The chosen sensor's field at the required loads is checked
+against magpylib (an independent field code), NSGA-II against the exact reduction, the verdict
+against designs that break a requirement."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import magtact
+from magtact.chip import SensorGrid
+from magtact.metamodel import prefitted_dir
+from magtact.study import MU0, StudyError, load_study
+
+pytestmark = pytest.mark.filterwarnings("ignore::magtact.optimise.FrontGapWarning")
+
+#: Small optimiser budgets for the publication's part of the chain (the sensor is under test).
+FAST = {"population": 24, "nsga2_generations": 12, "grid_n": 2, "sweep_n": 201,
+        "sweep_coarse": 21}
+
+
+def _study(**sections):
+    s = magtact.load("magone", **sections)
+    return replace(s, optimise=replace(s.optimise, **FAST))
+
+
+@pytest.fixture(scope="module")
+def result():
+    return magtact.design(_study(), models=prefitted_dir())
+
+
+def field_magpylib(study, H, t, theta):
+    """(B_x, B_z) [T] at the chip from docs/method.md §1 with magpylib: the magnet's centre
+    Δz0 = H + H_g − H_m above the body's base, moved by u_z = t (Δz_sat + H_m − H − H_g) and
+    u_r = −u_z tan θ; the chip ``[hall] standoff`` below the base."""
+    magpy = pytest.importorskip("magpylib")
+    m, b = study.magnet, study.body
+    u_z = t * (study.loading.dz_sat + m.H_m - H - b.H_g)
+    u_r = -u_z * np.tan(theta)
+    centre = H + b.H_g - m.H_m + u_z + study.hall.standoff
+    out = np.empty((2, t.size))
+    for i in range(t.size):
+        magnet = magpy.magnet.Cylinder(dimension=(2 * m.R_m, m.H_m),
+                                       polarization=(0, 0, MU0 * m.M_z),
+                                       position=(u_r[i], 0.0, centre[i]))
+        B = magnet.getB((0.0, 0.0, 0.0))
+        out[:, i] = B[0], B[2]
+    return out
+
+
+def assert_reads_required_loads(result, n=(60, 15)):
+    """The chosen sensor's field at every load up to the required normal force, from
+    magpylib, lies inside the range of its chip setting."""
+    a = result.chosen
+    study = a.study
+    d = a.design
+    T, TH = (v.ravel() for v in np.meshgrid(np.linspace(0, d.t_m, n[0]),
+                                            np.linspace(0, d.theta_m, n[1]), indexing="ij"))
+    _, F_z = result.models.forces(T, TH, d.H, d.G)
+    keep = F_z <= study.requirements.F_z
+    assert keep.sum() > 0.3 * keep.size  # the required loads are a good part of the region
+    B = field_magpylib(study, d.H, T[keep], TH[keep])
+    assert np.abs(B[0]).max() <= a.chip.range_x and np.abs(B[1]).max() <= a.chip.range_z
+    return B
+
+
+def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_card(result):
+    B = assert_reads_required_loads(result)
+    a = result.chosen
+    assert np.abs(B[1]).max() > 0.5 * a.chip.range_z  # it uses its range
+    rows = result.card["rows"]
+    req = [r.statement for r in a.verdict.requirements]
+    assert [r[0] for r in rows[:len(req)]] == req
+    assert req[0] == "reads 0–5 N normal without saturating"
+    assert a.verdict.met and rows[0][1].startswith("yes, saturates at")
+    # the original MagOne design fails the range requirement, and the card says so
+    o = result.original.verdict
+    assert not o["normal"].met and o["normal"].margin < 0
+    assert rows[0][2].startswith("no: the chip saturates at")
+    # the parts: a catalogue grade, a standoff in its levels, a setting fast enough
+    s = result.sensor_design.choice
+    assert s.grade in result.study.design.grades and a.parts.grade == s.grade
+    assert a.study.magnet.M_z == pytest.approx(
+        magtact.parts.grade(s.grade).M_z(MU0)[0], rel=1e-12)
+    assert 0 <= s.standoff <= 3e-3 + 1e-12 and a.standoff == s.standoff
+    assert a.chip.figures.rate >= 100 and s.feasible
+    # the design's noise over the required loads is the sensor problem's objective
+    assert a.verdict.sigma_r == pytest.approx(s.sigma_r, rel=0.05)
+    assert a.verdict.sigma_z == pytest.approx(s.sigma_z, rel=0.05)
+
+
+def test_a_slow_heavy_specification_gets_its_rate_and_range():
+    study = _study(requirements={"F_z_N": 2.0, "rate_Hz": 100.0})
+    r = magtact.design(study, models=prefitted_dir())
+    a = r.chosen
+    assert a.chip.figures.rate >= 100 and a.verdict.met
+    assert a.design.F_z_max >= 2.0 and a.verdict["normal"].margin > 0
+    assert_reads_required_loads(r)
+    # a lighter specification buys a lower noise than the 5 N one
+    five = magtact.design(_study(), models=prefitted_dir())
+    assert r.sensor_design.choice.sigma < five.sensor_design.choice.sigma
+
+
+def test_an_impossible_specification_names_the_requirement_and_the_best_reached():
+    with pytest.raises(magtact.MagtactError,
+                       match=r"requirements\.F_z_N = 50 N.*Best reachable: .*F_z,max = "):
+        magtact.design(_study(requirements={"F_z_N": 50.0}), models=prefitted_dir())
+    with pytest.raises(StudyError, match=r"\[requirements\.rate_Hz\] 2000 Hz is above"):
+        load_study_with(requirements={"rate_Hz": 2000.0})
+
+
+def load_study_with(**sections):
+    return magtact.load("magone", **sections)
+
+
+def test_a_force_constraint_that_would_not_take_effect_is_refused():
+    with pytest.raises(StudyError, match=r"\[constraints\.F_z_c_N\] 4 N would not take effect.*"
+                                         r"requirements\.F_z_N"):
+        magtact.load("magone", constraints={"F_z_c_N": 4.0})
+    s = magtact.load("magone", constraints={"F_z_c_N": 4.0, "source": "values"})
+    assert s.constraints.F_z_c == 4.0
+    s = magtact.load("magone", requirements={"F_z_N": 3.0, "F_r_N": 0.1})
+    assert (s.constraints.F_z_c, s.constraints.F_r_c) == (3.0, -0.1)
+
+
+def test_evaluate_reports_each_requirement_with_its_margin(result):
+    # a taller, stiffer body: shear turns unstable below 0.25 N
+    a = result.evaluate(H_mm=4.11, G_kPa=29.4)
+    assert not a.verdict["shear"].met and a.verdict["shear"].margin < 0
+    assert a.verdict["shear"].margin == pytest.approx(-a.design.F_r_min - 0.25, rel=1e-12)
+    assert "shear turns unstable" in a.verdict["shear"].answer
+    # the original design: the chip saturates long before 5 N
+    o = result.evaluate(H_mm=3.0, G_kPa=29.4, standoff_mm=0.0)
+    assert not o.verdict["normal"].met and "saturates at 1.5" in o.verdict["normal"].answer
+    # a weaker magnet farther away reads more of the load
+    far = result.evaluate(H_mm=3.0, G_kPa=29.4, grade="N35", standoff_mm=2.5)
+    assert far.verdict.F_saturation > o.verdict.F_saturation
+    assert far.parts.grade == "N35" and far.standoff == pytest.approx(2.5e-3)
+    with pytest.raises(magtact.MagtactError, match="grade"):
+        result.evaluate(H_mm=3.0, G_kPa=29.4, grade="N99")
+
+
+def test_nsga2_meets_the_exact_reduction_and_is_seeded():
+    from magtact.optimise import (
+        WARN_GAP_SENSOR,
+        exact_sensor_reduction,
+        sensor_nsga2,
+        sensor_space,
+        sweep,
+    )
+
+    study = _study(design={"grades": ["N35", "N42", "N52"], "standoff_mm": [0.0, 1.5]})
+    models = magtact.models_for(study, models=prefitted_dir())[0]
+    space = sensor_space(models, study, sweep(models, study))
+    red, combos = exact_sensor_reduction(models, study, space)
+    assert combos == 16 * 3 * len(space.options) and red.feasible
+    first = sensor_nsga2(models, study, space)
+    best = np.hypot(first.sigma_r, first.sigma_z).min()
+    assert abs(best - red.sigma) / red.sigma <= WARN_GAP_SENSOR
+    again = sensor_nsga2(models, study, space)
+    for name in ("H", "G", "standoff", "grade", "option", "sigma_r", "sigma_z"):
+        np.testing.assert_array_equal(getattr(first, name), getattr(again, name))
+
+
+def test_the_reduction_is_exact_in_G_on_its_grid():
+    """On a grid of one height, the least σ over G from the breakpoints equals a brute-force
+    scan of G; G_range is the smallest G whose required loads avoid every saturated point."""
+    from magtact.optimise._sensor import _Noise
+
+    rng = np.random.default_rng(1)
+    shape = (1, 6, 3)
+    f_z = np.sort(rng.uniform(0, 1e-4, shape), axis=1)
+    f_z[:, 0] = 0.0
+    b = np.linspace(0.01, 0.06, 6)[None, :, None] * np.ones(shape) / 1e6  # per unit M_z
+    j = rng.uniform(1, 3, shape + (2, 2))
+    grid = SensorGrid(np.zeros(shape), np.zeros(shape), -f_z, f_z, 0.2 * b, b, j)
+    M_z, F_z = 1e6, 2.0
+    G_range = float(grid.G_range(M_z, 1.0, 0.035, F_z)[0])
+    sat = M_z * b > 0.035
+    before = np.concatenate([np.zeros((1, 1, 3)), f_z[:, :-1]], axis=1)
+    assert G_range == pytest.approx(1.02 * (F_z / before[sat]).max(), rel=1e-12)
+    G_low = np.array([G_range])
+    value, G_best = _Noise(grid, (1e-6, 2e-6)).least(M_z, G_low, 1e6, F_z)
+    scan = np.geomspace(G_range, 1e6, 200_001)
+    s_r, s_z = grid.sigma(scan, np.full(scan.size, M_z), np.full(scan.size, 1e-6),
+                          np.full(scan.size, 2e-6), F_z)
+    brute = np.hypot(s_r, s_z).min()
+    assert value[0] <= brute * (1 + 1e-6) and value[0] >= brute * (1 - 1e-3)
+    s_r, s_z = grid.sigma(G_best, [M_z], [1e-6], [2e-6], F_z)
+    assert np.hypot(s_r, s_z)[0] == pytest.approx(value[0], rel=1e-9)
+
+
+def test_the_publication_preset_keeps_the_publications_problem():
+    p = load_study("magone-publication")
+    assert p.optimise.problem == "publication" and p.optimise.objective == "gamma"
+    assert not p.constraints.chip_range and p.design.grades == () and p.design.standoff[1] == 0
+    assert load_study("magone-printed").optimise.problem == "publication"
+    s = load_study("magone")
+    assert s.optimise.problem == "sensor" and s.requirements.F_z == 5.0
