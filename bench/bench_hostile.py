@@ -21,8 +21,16 @@ finished run's stage folder. Each case ends in one of:
 ``traceback``         any other exception, or a refusal whose message is not one line;
 ``hang``              no answer within ``--timeout`` seconds (the worker is killed and restarted).
 
-Writes the counts per reader to ``bench/results/hostile.json``; all but ``clean`` and
-``accepted`` should be zero.
+The designer's own inputs (:func:`designer_cases`): seed studies of ``magtact budget --seeds``
+(devices, a FIFO, a large file, generated JSON), press files (generated cells, 10,001 and 10⁶
+rows) and unit fits (random readings, 10,000 presses of a real unit), options that cannot take
+effect and the one form of ``--noise-uT``, the temperature change against the remanence
+coefficient, quoted CSV cells, numbers of other types, unit mistakes in study keys, the study
+check against the commands' rules, and any reading through the compiled ``force.h``.
+
+Writes the counts per reader to ``bench/results/hostile.json``, with the peak resident memory
+of the worker and of the processes it started (no process may exceed 2 GB); all but ``clean``
+and ``accepted`` should be zero.
 
     nice -n 10 python bench/bench_hostile.py            # ~3 min on the 2-core machine
 """
@@ -42,6 +50,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
 OUTCOMES = ("clean", "accepted", "wrongly_accepted", "traceback", "hang")
+#: No process of the benchmark may hold more resident memory than this [MB].
+RSS_LIMIT_MB = 2048
 
 
 # ---- generating the cases ---------------------------------------------------------------------
@@ -114,13 +124,14 @@ def safety_cases(n: int) -> dict[str, list]:
                                               st.booleans()), small, 11),
         "command_in_use": list(tc.COMMANDS),
         "command_in_run": list(tc.COMMANDS),
-    }
+    } | designer_cases(n)
 
 
 #: Kinds whose cases start a process of their own (a run to kill, a run holding the lock): their
 #: time limit is this multiple of ``--timeout``.
 SLOW = {"killed_runs": 6, "concurrent_runs": 6, "user_files": 3, "file_modes": 3,
-        "command_user_files": 3, "command_in_use": 6, "command_in_run": 3}
+        "command_user_files": 3, "command_in_use": 6, "command_in_run": 3, "press_fits": 18,
+        "option_effect": 6, "press_files": 3, "firmware_readings": 3}
 KILL_POINTS = ["stage:field", "stage:doe", "stage:optimise", "swap", "move:1", "move:4",
                "move:9", "move:18"]
 PATH_KINDS = ("loop", "fifo", "folder", "broken-link")
@@ -134,8 +145,8 @@ MESSAGE_CASES = [
     (["validate", "--n-grid", "1000000"], "'--n-grid'"),
     (["validate", "--floor", "1.5"], "--floor must be in [0, 1)"),
     (["validate", "--floor", "-1"], "--floor must be in [0, 1)"),
-    (["study", "magone_printed"], "presets: magone, magone-printed"),
-    (["study", "MagOne"], "presets: magone, magone-printed"),
+    (["study", "magone_printed"], "no preset has that name (presets: magone, "),
+    (["study", "MagOne"], "no preset has that name (presets: magone, "),
     (["fit", "--out", "x", "--generations", "0"], "'--generations'"),
     (["validate", "--mesh", "huge"], "--mesh must be one of"),
     (["validate", "--solver", "fem"], "--solver must be 'exact' or 'fe'"),
@@ -642,6 +653,361 @@ def _command_in_run(tmp: Path, command) -> tuple[str, str]:
     return outcome
 
 
+# ---- what a designer types or flashes (in the worker) ------------------------------------------
+def designer_cases(n: int) -> dict[str, list]:
+    """Kinds of the designer's own inputs: seed studies, press files and their fit, options
+    that cannot take effect, pairs of settings, quoted cells, numbers given as other types,
+    unit mistakes, the study check, and readings fed to the firmware header."""
+    from hypothesis import strategies as st
+
+    small = max(n // 10, 20)
+    json_leaf = st.one_of(st.none(), st.booleans(), st.integers(-10**30, 10**30),
+                          st.floats(allow_nan=False, allow_infinity=False), st.text(max_size=8))
+    json_doc = st.recursive(json_leaf, lambda c: st.one_of(
+        st.lists(c, max_size=4), st.dictionaries(st.sampled_from(
+            ["spread", "jacobian", "published", "acc_f_r", "acc_f_z", "max", "n", "x"]), c,
+            max_size=4)), max_leaves=20)
+    cell = st.one_of(st.floats(-1e3, 1e3).map(repr), st.floats().map(repr),
+                     st.sampled_from(["1e308", "-1e308", "nan", "inf", "", "\"0.5", "0.5\"",
+                                      "\"0.5\"", "1_0", "0x10", "35", "2500", "-3e5", "١"]),
+                     st.text(alphabet="0123456789.eE+-\" ", max_size=8))
+    plausible = sorted(PLAUSIBLE_KEY_UNITS)
+    return {
+        "seeds_files": [("device", "/dev/zero"), ("device", "/dev/urandom"), ("fifo", ""),
+                        ("large", ""), ("link", "/dev/zero")]
+                       + [("json", d) for d in generate(json_doc, small, 21)],
+        "press_files": [("rows", n_rows) for n_rows in (10_001, 1_000_000)]
+                       + [("cells", c) for c in generate(st.lists(cell, min_size=6,
+                                                                   max_size=6), small, 22)],
+        "press_fits": [("random", seed) for seed in range(10)] + [("large", 10_000)],
+        "option_effect": OPTION_EFFECT_CASES,
+        "physical_pairs": generate(st.tuples(st.floats(1e-3, 200.0), st.floats(-1.0, 1.0),
+                                             st.sampled_from(["custom", "N35", "N52"])),
+                                   small, 23),
+        "csv_quotes": generate(st.text(alphabet="0.5\"', ", min_size=1, max_size=8), small, 24),
+        "number_types": ["3", b"3", True, None, [3.0], 3 + 0j, "nan", float("nan"), 3, 3.0,
+                         "٣", object()],
+        "unit_mistakes": generate(st.tuples(st.sampled_from(plausible), st.floats(0.0, 1.0),
+                                            st.integers(-1, 2)), small, 25),
+        "study_check": generate(st.tuples(st.integers(1, 6), st.integers(1, 6),
+                                          st.integers(0, 12), st.floats(1.5, 100.0),
+                                          st.floats(1.0, 60.0)), small, 26),
+        "firmware_readings": generate(st.tuples(st.sampled_from(["any", "near rest"]), st.lists(
+            st.one_of(st.floats(), st.floats(-0.1, 0.1),
+                      st.sampled_from([0.0, -0.0, 1e-300, 1e300])),
+            min_size=3, max_size=3)), small, 27),
+    }
+
+
+#: The study keys of the unit-mistake check and the unit of each (section.setting -> unit).
+PLAUSIBLE_KEY_UNITS = {
+    "body.R": "mm", "body.H_g": "mm", "magnet.R_m": "mm", "magnet.H_m": "mm",
+    "material.G_ref": "kPa", "magnet.M_z": "A_per_m", "design.G_original": "kPa",
+    "design.H_original": "mm",
+}
+#: (arguments, fragment): options that cannot take effect or take one form in two commands.
+OPTION_EFFECT_CASES = [
+    (["calibrate", "--out", "{tmp}", "--H", "3", "--G", "22.57", "--fit", ""],
+     "--fit cannot take effect without --presses"),
+    (["calibrate", "--out", "{tmp}", "--H", "3", "--G", "22.57", "--fit", "G_scale"],
+     "--fit cannot take effect without --presses"),
+    (["calibrate", "--out", "{tmp}", "--H", "3", "--G", "22.57", "--model-error", "0.1"],
+     "--model-error cannot take effect without --presses"),
+    (["calibrate", "--out", "{tmp}", "--H", "3", "--G", "22.57", "--noise-uT", "1;2"],
+     "--noise-uT must be 'X,Z' or one number"),
+    (["budget", "--H", "3", "--G", "22.57", "--noise-uT", "1;2"],
+     "--noise-uT must be 'X,Z' or one number"),
+    (["calibrate", "--out", "{tmp}", "--H", "3", "--G", "22.57", "--noise-uT", "0.5,2e5"],
+     "--noise-uT must be between"),
+    (["budget", "--H", "3", "--G", "22.57", "--noise-uT", "0.5,2e5"],
+     "--noise-uT must be between"),
+    (["budget", "--H", "0.003", "--G", "22.57"], "did you give metres?"),
+    (["calibrate", "--out", "{tmp}", "--H", "3", "--G", "22570"], "did you give pascals?"),
+    (["budget", "--H", "3", "--G", "22.57", "--noise-uT", "2,3"], None),
+]
+
+_CACHE: dict = {}
+
+
+def _seeds_files(tmp: Path, case) -> tuple[str, str]:
+    import math
+    import os
+
+    from magtact._errors import MagtactError
+    from magtact.cli._budget import _seeds
+
+    kind, value = case
+    if kind in ("device", "link"):
+        path = Path(value)
+        if kind == "link":
+            path = tmp / "seeds.json"
+            path.symlink_to(value)
+        code, text = _main(["budget", "--H", "3", "--G", "22.57", "--seeds", str(path)])
+        if code != 2 or "Traceback" in text:
+            return "traceback", text[:200]
+        assert "is a device" in text, text[:300]
+        return "clean", text[:200]
+    path = tmp / "seeds.json"
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "large":
+        with path.open("wb") as fh:
+            fh.truncate(50_000_000)
+    else:
+        path.write_text(json.dumps(value), encoding="utf-8")
+    try:
+        data = _seeds(path)
+    except MagtactError as exc:
+        return _refusal(exc, "--seeds")
+    for entry in data["spread"].values():
+        for acc in entry.values():
+            assert math.isfinite(acc["max"]) and 0 <= acc["max"] <= 1e3, acc
+    return "accepted", ""
+
+
+def _press_files(tmp: Path, case) -> tuple[str, str]:
+    import math
+
+    from magtact.calibration import PRESS_COLUMNS, read_presses
+    from magtact.calibration._unit import MAX_FIELD, MAX_FORCE, MAX_PRESSES
+    from magtact.validation import DataError
+
+    kind, value = case
+    path = tmp / "presses.csv"
+    with path.open("w", encoding="utf-8") as fh:
+        fh.write(",".join(PRESS_COLUMNS) + "\n")
+        if kind == "rows":
+            fh.write("0,0,0.03,0,0,0\n" * value)
+        else:
+            fh.write(",".join(value) + "\n")
+    try:
+        p = read_presses(path)
+    except DataError as exc:
+        return _refusal(exc, "presses.csv")
+    assert len(p) <= MAX_PRESSES, len(p)
+    assert all(math.isfinite(v) for v in [*p.B.ravel(), *p.F.ravel()])
+    assert abs(p.B).max() <= MAX_FIELD and abs(p.F).max() <= MAX_FORCE
+    return "accepted", ""
+
+
+def _design_map():
+    if "smap" not in _CACHE:
+        from magtact.calibration import sensor_map
+        from magtact.metamodel import load_models, prefitted_dir
+        from magtact.optimise import per_design
+        from magtact.study import load_study
+
+        s = load_study(None)
+        ms = load_models(prefitted_dir())
+        _CACHE["smap"] = sensor_map(ms, s, 3e-3, 22.57e3, design=per_design(ms, 3e-3, 22.57e3, s))
+    return _CACHE["smap"]
+
+
+def _press_fits(tmp: Path, case) -> tuple[str, str]:
+    """Presses of a unit fitted: random readings (refused, or fitted to finite parameters),
+    and 10,000 presses of a real unit (the largest file allowed: memory linear in the
+    presses)."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from magtact._errors import MagtactError
+    from magtact.calibration import Presses, UnitParameters, calibrate_unit
+
+    kind, value = case
+    smap = _design_map()
+    rng = np.random.default_rng(value)
+    if kind == "random":
+        n = int(rng.integers(2, 30))
+        B = rng.uniform(-0.05, 0.05, (n, 3))
+        F = rng.uniform(-5.0, 5.0, (n, 3))
+    else:
+        unit = replace(smap, field_source="exact").with_unit(UnitParameters(0.9, 1.02,
+                                                                            (1e-4, 0, 0)))
+        L = smap.region_samples(value, seed=1)
+        B, F = unit.at_load(0.95 * L[:, 0], 0.95 * L[:, 1], L[:, 2])
+        B = B + rng.normal(0, 1e-6, B.shape)
+    try:
+        cal = calibrate_unit(smap, Presses(B, F))
+    except MagtactError as exc:
+        return _refusal(exc, "presses")
+    assert np.isfinite(cal.unit.vector()).all()
+    if kind == "large":
+        assert abs(cal.unit.G_scale - 0.9) < 1e-2 and abs(cal.unit.B_scale - 1.02) < 1e-2
+    return "accepted", ""
+
+
+def _option_effect(tmp: Path, case) -> tuple[str, str]:
+    args, fragment = case
+    code, text = _main([str(tmp / "o") if a == "{tmp}" else a for a in args])
+    if fragment is None:  # the one form of --noise-uT, accepted, replacing the chip's figure
+        assert code == 0, text[:300]
+        assert "in place of the chip's own figure" in " ".join(text.split()), text[:300]
+        return "accepted", ""
+    assert code != 0, f"{args} accepted"
+    if code != 2 or "Traceback" in text:
+        return "traceback", text[:200]
+    assert fragment in " ".join(text.split()), text[:300]
+    return "clean", text[:200]
+
+
+def _physical_pairs(tmp: Path, case) -> tuple[str, str]:
+    from magtact.parts import grade
+    from magtact.study import StudyError, study_from_dict
+
+    delta_T, tc_pct, name = case
+    data = {"environment": {"delta_T_K": delta_T, "remanence_tc_pct_per_K": tc_pct},
+            "magnet": {"grade": name}}
+    beyond = abs(delta_T * tc_pct / 100) > 0.5 or (
+        name != "custom" and delta_T > grade(name).max_temperature_C - 20.0)
+    try:
+        study_from_dict(data)
+    except StudyError as exc:
+        assert beyond, f"refused {case}: {exc}"
+        return _refusal(exc, "[environment.delta_T_K]")
+    assert not beyond, f"accepted {case}"
+    return "accepted", ""
+
+
+def _csv_quotes(tmp: Path, case) -> tuple[str, str]:
+    import csv
+
+    import test_hostile_values as hv
+    from magtact.validation import DataError, read_experiment
+
+    row = f"-0.5,0.001,{case},0.01,-0.5"
+    try:
+        cells = next(csv.reader([row], strict=True))
+        strict_ok = True
+    except csv.Error:
+        strict_ok, cells = False, []
+    paths = [hv.table(tmp, "ok.csv", [-0.5 * k for k in range(5)], 2),
+             hv.table(tmp, "bad.csv", [-0.5 * k for k in range(5)])]
+    lines = paths[1].read_text().splitlines()
+    lines[4] = row  # the second sample (after two metadata lines and the header)
+    paths[1].write_text("\n".join(lines) + "\n")
+    try:
+        read_experiment(paths)
+    except DataError as exc:
+        return _refusal(exc, "bad.csv")
+    assert strict_ok and len(cells) == 5, f"accepted {row!r}"
+    return "accepted", ""
+
+
+def _number_types(tmp: Path, case) -> tuple[str, str]:
+    import numbers
+
+    from magtact._errors import MagtactError
+    from magtact.study import checked_si
+
+    try:
+        si = checked_si(case, "mm", "H_mm")
+    except MagtactError as exc:
+        return _refusal(exc, "H_mm")
+    assert isinstance(case, numbers.Real) and not isinstance(case, bool), repr(case)
+    assert si == case / 1000
+    return "accepted", ""
+
+
+def _unit_mistakes(tmp: Path, case) -> tuple[str, str]:
+    """A key's original value written as if in a neighbouring unit (power -1, 0, 1 or 2 of
+    its factor): refused naming the key and the unit when implausible, never refused naming
+    a key the file does not give."""
+    from magtact.study import StudyError, load_study, study_from_dict, to_si
+    from magtact.study._units import NEIGHBOURS, PLAUSIBLE
+
+    name, pick, power = case
+    section, setting = name.split(".")
+    unit = PLAUSIBLE_KEY_UNITS[name]
+    base = getattr(getattr(load_study(None), section), setting)
+    label, factor = NEIGHBOURS[unit][int(pick * len(NEIGHBOURS[unit])) % len(NEIGHBOURS[unit])]
+    written = base / to_si(1.0, unit) / factor ** power
+    key = f"{section}.{setting}_{unit}"
+    _, lo, hi = PLAUSIBLE[unit]
+    mistaken = not lo <= abs(to_si(written, unit)) <= hi and power == 1
+    try:
+        study_from_dict({section: {key.split(".")[1]: written}})
+    except StudyError as exc:
+        text = str(exc)
+        assert key in text, f"{key} not named: {text[:300]}"
+        if mistaken:
+            assert label in text, f"{label} not suggested: {text[:300]}"
+        return _refusal(exc, key)
+    assert not mistaken, f"accepted {key} = {written} ({label})"
+    return "accepted", ""
+
+
+def _study_check(tmp: Path, case) -> tuple[str, str]:
+    from magtact.study import StudyError, check_study, holdout_limit, load_study
+
+    n_theta, n_H, holdout, far_r, far_z = case
+    path = tmp / "s.toml"
+    path.write_text(f"[doe]\nn_theta = {n_theta}\nn_H = {n_H}\n[metamodel]\nholdout_paths = "
+                    f"{holdout}\n[magnetics]\nfar_r = {far_r!r}\nfar_z = {far_z!r}\n")
+    try:
+        s = load_study(path)
+    except StudyError as exc:
+        return _refusal(exc, "s.toml")
+    m, f = s.magnet, s.magnetics
+    bad = (holdout > holdout_limit(n_theta, n_H) or far_r * m.R_m <= m.R_m + f.near
+           or far_z * m.H_m <= m.H_m / 2 + f.near)
+    code, text = _main(["study", str(path)])
+    try:
+        check_study(s)
+        checked = True
+    except StudyError:
+        checked = False
+    assert checked == (code == 0) == (not bad), (case, code, text[:200])
+    if bad:
+        if code != 2 or "Traceback" in text:
+            return "traceback", text[:200]
+        return "clean", text[:200]
+    return "accepted", ""
+
+
+def _firmware_readings(tmp: Path, case) -> tuple[str, str]:
+    """Readings of any value through the compiled header (double): rc 0, 1 or 2, every output
+    finite, zero unless rc is 0."""
+    import math
+    import subprocess
+
+    if "fw" not in _CACHE:
+        from magtact.calibration import c_header, firmware_approximation
+
+        smap = _design_map()
+        choice = firmware_approximation(smap, (4.6e-5, 9.0e-5), degrees=(12,), table_sizes=(),
+                                        n_test=2000)
+        folder = Path(tempfile.mkdtemp())
+        (folder / "force.h").write_text(c_header(choice.chosen, smap, choice,
+                                                 noise=(1e-6, 1e-6)))
+        (folder / "m.c").write_text(
+            "#include <stdio.h>\n#include <stdlib.h>\n#include \"force.h\"\n"
+            "int main(int argc, char **argv)\n{\n    MAGTACT_REAL o[3];\n    int rc;\n"
+            "    (void)argc;\n    rc = magtact_force(strtod(argv[1], NULL), strtod(argv[2], "
+            "NULL), strtod(argv[3], NULL), NULL, o);\n"
+            "    printf(\"%d %.17g %.17g %.17g\\n\", rc, o[0], o[1], o[2]);\n    return 0;\n}\n")
+        subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-o",
+                        str(folder / "m"), str(folder / "m.c"), "-lm"], check=True)
+        _CACHE["fw"] = folder / "m"
+    mode, case = case
+    if mode == "near rest":  # the rest field plus up to 5 µT (clipped) per axis
+        from magtact.calibration._firmware import rest_field
+
+        rest = rest_field(_design_map())
+        case = [float(r + 5e-6 * max(-1.0, min(1.0, v / 0.1))) if math.isfinite(v) else v
+                for r, v in zip(rest, case, strict=True)]
+    run = subprocess.run([str(_CACHE["fw"]), *(repr(float(v)) for v in case)],
+                         capture_output=True, text=True, check=True, timeout=10)
+    rc, *out = run.stdout.split()
+    out = [float(v) for v in out]
+    assert rc in ("0", "1", "2"), run.stdout
+    assert all(math.isfinite(v) for v in out), (case, run.stdout)
+    assert rc == "0" or out == [0.0, 0.0, 0.0], (case, run.stdout)
+    if any(not math.isfinite(v) for v in case) or not case[2] > 0:
+        assert rc == "2", (case, run.stdout)
+    return ("accepted" if rc == "0" else "clean"), run.stdout.strip()
+
+
 SAFETY = {"user_files": _user_files, "killed_runs": _killed_runs,
           "concurrent_runs": _concurrent_runs, "ordered_settings": _ordered_settings,
           "holdout_paths": _holdout, "csv_numbers": _csv_numbers, "shared_range": _shared_range,
@@ -649,7 +1015,11 @@ SAFETY = {"user_files": _user_files, "killed_runs": _killed_runs,
           "model_files": _model_files, "not_a_file": _not_a_file, "broken_pipe": _broken_pipe,
           "file_modes": _file_modes, "command_user_files": _command_user_files,
           "command_outputs": _command_outputs, "command_in_use": _command_in_use,
-          "command_in_run": _command_in_run}
+          "command_in_run": _command_in_run, "seeds_files": _seeds_files,
+          "press_files": _press_files, "press_fits": _press_fits, "option_effect": _option_effect,
+          "physical_pairs": _physical_pairs, "csv_quotes": _csv_quotes,
+          "number_types": _number_types, "unit_mistakes": _unit_mistakes,
+          "study_check": _study_check, "firmware_readings": _firmware_readings}
 
 
 def worker(conn) -> None:
@@ -657,7 +1027,16 @@ def worker(conn) -> None:
         job = conn.recv()
         if job is None:
             return
-        conn.send(run_case(*job))
+        conn.send(peak_rss_mb() if job == "rss" else run_case(*job))
+
+
+def peak_rss_mb() -> tuple[float, float]:
+    """Peak resident memory [MB] of this process and of the largest of its finished children
+    (the runs and compilers a case starts)."""
+    import resource
+
+    return (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+            resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)
 
 
 # ---- the driver ---------------------------------------------------------------------------------
@@ -681,6 +1060,10 @@ class Pool:
         self.proc.join()
         self.start()
         return "hang", repr(case)[:200]
+
+    def rss(self) -> tuple[float, float]:
+        self.conn.send("rss")
+        return self.conn.recv()
 
     def close(self):
         self.conn.send(None)
@@ -719,17 +1102,28 @@ def main() -> None:
             counts[outcome] += 1
             if outcome in examples and len(examples[outcome]) < 5:
                 examples[outcome].append(detail)
+        worker_mb, children_mb = pool.rss()  # the worker's peak so far (restarted on a hang)
         results[kind] = {**counts, "slowest_case_s": round(slowest, 3),
                          "wall_time_s": round(time.perf_counter() - t0, 1),
+                         "peak_rss_worker_MB": round(worker_mb, 1),
+                         "peak_rss_children_MB": round(children_mb, 1),
                          "examples": {k: v for k, v in examples.items() if v}}
         print(kind, {k: v for k, v in results[kind].items() if k != "examples"}, flush=True)
     pool.close()
     total = {o: sum(r[o] for r in results.values()) for o in ("cases", *OUTCOMES)}
+    peak = max([peak_rss_mb()[0], *(max(r["peak_rss_worker_MB"], r["peak_rss_children_MB"])
+                                    for r in results.values())])
+    total["peak_rss_MB"] = round(peak, 1)
+    total["rss_limit_MB"] = RSS_LIMIT_MB
+    total["every_process_below_limit"] = peak < RSS_LIMIT_MB
     report = {
         "benchmark": "hostile inputs through the study, CSV and expression readers; the user's "
                      "files, killed and concurrent runs, ordered settings, numbers, messages, "
                      "exits and file modes; the per-stage commands over the user's files, "
-                     "folders in use and finished runs",
+                     "folders in use and finished runs; seed studies, press files and their "
+                     "fit, options that cannot take effect, pairs of settings, quoted cells, "
+                     "numbers of other types, unit mistakes, the study check and readings "
+                     "through the firmware header",
         "cases_per_reader": args.n, "hang_timeout_s": args.timeout,
         "generation_time_s": round(gen_time, 1),
         "wall_time_s": round(time.perf_counter() - start, 1),

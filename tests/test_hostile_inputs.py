@@ -216,6 +216,25 @@ def test_unit_fit_memory_grows_linearly_with_the_presses(smap):
     assert peak < 60e6, peak
 
 
+def test_presses_of_something_else_are_refused_not_fitted(smap):
+    """Readings of no unit of this design (uniform at random; a real unit's readings with the
+    chip's x and z columns swapped) leave residuals far above the noise: refused, saying so,
+    instead of a calibration."""
+    from dataclasses import replace
+
+    from magtact.calibration import Presses, calibrate_unit
+
+    rng = np.random.default_rng(4)
+    B, F = rng.uniform(-0.04, 0.04, (12, 3)), rng.uniform(-4.0, 4.0, (12, 3))
+    with pytest.raises(MagtactError, match="presses do not fit a unit of this design"):
+        calibrate_unit(smap, Presses(B, F))
+    L = smap.region_samples(12, seed=5)
+    B, F = replace(smap, field_source="exact").at_load(0.9 * L[:, 0], 0.9 * L[:, 1], L[:, 2])
+    with pytest.raises(MagtactError, match=r"do not fit a unit of this design: .* times their "
+                                           r"noise \(RMS"):
+        calibrate_unit(smap, Presses(B[:, ::-1], F))
+
+
 # ---- 3. options that cannot take effect --------------------------------------------------------
 @pytest.mark.parametrize(("args", "fragments"), [
     (["--fit", " , "], ["--fit cannot take effect without --presses"]),

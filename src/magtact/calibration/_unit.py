@@ -53,6 +53,10 @@ _SCALE = np.array([1.0, 1.0, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4, 1e-4])
 
 #: Columns of a press file, with their units.
 PRESS_COLUMNS = ("B_x_T", "B_y_T", "B_z_T", "F_x_N", "F_y_N", "F_z_N")
+#: Largest RMS of the fit's whitened residuals (residual / noise) of presses a unit's model
+#: explains: presses of a unit of this design leave about 1 (0.73 for FE presses of the
+#: bundled data at H = 3 mm), readings of something else hundreds.
+MAX_RMS_RESIDUAL = 10.0
 #: Most presses of one unit (a calibration uses tens; the fit's memory grows with their number).
 MAX_PRESSES = 10_000
 #: Largest field component of a press [T]: above the remanence of any permanent magnet (the
@@ -390,9 +394,10 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
     Raises
     ------
     MagtactError
-        For too few presses, an unknown parameter name, or presses that do not identify a
-        parameter: the message names it, its deviation from the fit's conditioning, and the
-        kind of press that would identify it best.
+        For too few presses, an unknown parameter name, presses the model does not explain
+        (whitened residuals above :data:`MAX_RMS_RESIDUAL` in RMS), or presses that do not
+        identify a parameter: the message names it, its deviation from the fit's
+        conditioning, and the kind of press that would identify it best.
     """
     unknown = [f for f in fit if f not in PARAMETERS]
     if unknown:
@@ -418,6 +423,17 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
     sol = least_squares(prob, x0, jac=prob.jac, method="trf", x_scale="jac", xtol=1e-12,
                         ftol=1e-12, gtol=1e-12, max_nfev=200, tr_solver="lsmr")
     theta, w = prob.unpack(sol.x)
+    fit_rms = float(np.sqrt(np.mean(sol.fun ** 2)))
+    if not fit_rms <= MAX_RMS_RESIDUAL:
+        B, F = _model(exact, theta, w)
+        rb = from_si(float(np.sqrt(np.mean((B - presses.B) ** 2))), "uT")
+        rf = from_si(float(np.sqrt(np.mean((F - presses.F) ** 2))), "mN")
+        raise MagtactError(
+            f"these {n} presses do not fit a unit of this design: the best fit leaves "
+            f"residuals of {fit_rms:.3g} times their noise (RMS {rb:.3g} µT against sigma_B "
+            f"{from_si(presses.sigma_B, 'uT'):.3g} µT, {rf:.3g} mN against sigma_F "
+            f"{from_si(presses.sigma_F, 'mN'):.3g} mN; at most {MAX_RMS_RESIDUAL:g} times). "
+            "Check the columns' units (T, N), the design (H, G) and the noise metadata")
     s = _std(*prob.blocks(sol.x)) * _SCALE[free]
     names = [p for p, f in zip(PARAMETERS, free, strict=True) if f]
     std = dict(zip(names, s.tolist(), strict=True))
