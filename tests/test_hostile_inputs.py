@@ -320,6 +320,24 @@ def test_numbers_given_as_anything_but_a_number_are_refused(value):
         checked_si(value, "kPa", "G_kPa")
 
 
+@pytest.mark.parametrize(("kwargs", "fragment"), [
+    ({"H_mm": "3", "G_kPa": 22.57}, "H_mm must be a number, got '3'"),
+    ({"H_mm": 3.0, "G_kPa": True}, "G_kPa must be a number, got True"),
+    ({"H_mm": 3.0, "G_kPa": 22.57, "M_z_A_per_m": "1.2e6"}, "M_z_A_per_m must be a number"),
+    ({"H_mm": 3.0, "G_kPa": 22570.0}, "did you give pascals?"),
+])
+def test_result_evaluate_refuses_text_and_unit_mistakes(kwargs, fragment):
+    """The designer's answer for a design: the numbers are checked before anything else."""
+    from dataclasses import fields, replace
+
+    from magtact import Result
+
+    result = replace(Result(**{f.name: None for f in fields(Result)}), study=load_study(None))
+    with pytest.raises(MagtactError) as info:
+        result.evaluate(**kwargs)
+    assert fragment in str(info.value)
+
+
 def test_numpy_numbers_are_numbers():
     assert checked_si(np.float32(3.0), "mm", "H_mm") == pytest.approx(3e-3)
     assert checked_si(np.int64(22), "kPa", "G_kPa") == 22e3
