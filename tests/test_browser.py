@@ -59,7 +59,7 @@ def forged(folder, tmp_path_factory) -> Path:
     shutil.copytree(folder, out)
     card_file = out / "optimise" / "card.json"
     card = json.loads(card_file.read_text(encoding="utf-8"))
-    card_file.write_text(json.dumps({"verdict": VERDICT, "parts": PARTS} | card),
+    card_file.write_text(json.dumps(card | {"verdict": VERDICT, "parts": PARTS}),
                          encoding="utf-8")
     build_report(out)
     return out
