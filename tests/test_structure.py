@@ -249,3 +249,27 @@ def test_no_backend_is_chosen_at_import():
                  if re.search(r"matplotlib\.use\(|import matplotlib\.pyplot|"
                               r"from matplotlib import pyplot", line)]
     assert offenders == []
+
+
+def test_the_chip_has_one_home():
+    """The setting choice, the range margin, the saturation scan and the check that the chip's
+    noise is known are each defined once, in ``magtact.chip``; no other module raises the
+    missing-noise error itself."""
+    import magtact
+
+    src = Path(magtact.__file__).parent
+    wanted = ("setting_for", "chip_margin", "saturation", "check_rest_field", "require_noise",
+              "chip_options", "with_setting")
+    homes = {name: [] for name in wanted}
+    raisers = []
+    for path in src.rglob("*.py"):
+        text = path.read_text(encoding="utf-8")
+        rel = path.relative_to(src).as_posix()
+        for name in wanted:
+            if re.search(rf"^def {name}\(", text, re.M):
+                homes[name].append(rel)
+        if re.search(r"StudyError\(\s*\"hall\.noise_x_uT\"", text) and "needs the" in text:
+            raisers.append(rel)
+    for name, where in homes.items():
+        assert len(where) == 1 and where[0].startswith("chip/"), (name, where)
+    assert raisers == ["chip/_options.py"]

@@ -473,7 +473,7 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
             r = study.requirements
             raise InfeasibleError(f"the requirements cannot be met (requirements.F_z_N = "
                                   f"{r.F_z:g} N, F_r_N = {r.F_r:g} N): {exc}") from None
-        return _sensor_result(models, study, opt, models_source, dataset)
+        return _sensor_result(models, study, opt, constraints, models_source, dataset)
     if study.geometric_variables:
         opt = optimise_geometry(models, study, constraints)
         values = dict(opt.choice.values)
@@ -503,13 +503,21 @@ def _weakest(study: Study) -> Study:
                    hall=replace(study.hall, standoff=standoff))
 
 
-def _sensor_result(models: ModelSet, study: Study, opt, models_source: str, dataset
-                   ) -> Result:
+def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_source: str,
+                   dataset) -> Result:
     """The sensor problem's :class:`Result`: the whole sensor (:func:`magtact.optimise.
-    optimise_sensor`) as the chosen design, the publication's optimisation kept beside it."""
+    optimise_sensor`) as the chosen design, the publication's optimisation kept beside it.
+    Forces given as constraints (``magtact optimise --Fzc``) become the required forces."""
+    from dataclasses import replace
+
     from .optimise import optimise_sensor
 
-    sensor = optimise_sensor(models, study, opt.reduction.table)
+    req = study.requirements
+    F_r, F_z = (-constraints.F_r_c, constraints.F_z_c)
+    k = 1.0 - constraints.tolerance
+    if (F_r * k, F_z * k) != (req.F_r, req.F_z):
+        study = replace(study, requirements=replace(req, F_r=F_r * k, F_z=F_z * k))
+    sensor = optimise_sensor(models, study, opt.reduction.table, constraints)
     c = sensor.choice
     chosen = _answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen")
     original = _answer(models, study, {"H": study.design.H_original,

@@ -1,16 +1,25 @@
-"""The Hall chip as part of a sensor design: the settings a design chooses from, what the chip
-reads of a design over the loads it must read, where it leaves its range, and its force noise
-(docs/method.md §10)."""
+"""The Hall chip as part of a sensor design (docs/method.md §10): the settings a design
+chooses from and the choice of one (:func:`setting_for`), the chip's range over a design's
+stable region (:func:`chip_margin`), along its paths (:func:`saturation`) and at rest
+(:func:`check_rest_field`), what it reads over the loads it must read and its force noise
+there (:func:`sensor_grid`), and the check that its noise is known (:func:`require_noise`).
+The chips' datasheet tables are :mod:`magtact.parts` data; the study's ``[hall]`` chip is
+:func:`magtact.study.hall_chip`."""
 
-from ._options import ChipOption, chip_options
+from ._options import ChipOption, chip_options, require_noise
+from ._range import Saturation, check_rest_field, chip_margin, saturation
 from ._reading import (
     N_T,
     N_THETA,
+    READ_MARGIN,
     SensorGrid,
     exact_field_models,
     sensor_grid,
     unit_magnet,
 )
+from ._setting import SettingChoice, setting_for, with_setting
 
-__all__ = ["N_T", "N_THETA", "ChipOption", "SensorGrid", "chip_options", "exact_field_models",
-           "sensor_grid", "unit_magnet"]
+__all__ = ["N_T", "N_THETA", "READ_MARGIN", "ChipOption", "Saturation", "SensorGrid",
+           "SettingChoice", "check_rest_field", "chip_margin", "chip_options",
+           "exact_field_models", "require_noise", "saturation", "sensor_grid", "setting_for",
+           "unit_magnet", "with_setting"]

@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass
 
 from ..parts import SettingFigures
-from ..study import Study, StudyError, candidate_settings, hall_chip, setting_figures
+from ..study import HallChip, Study, StudyError, candidate_settings, hall_chip, setting_figures
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,20 @@ class ChipOption:
     figures: SettingFigures | None = None
 
 
+def require_noise(chip: HallChip, what: str) -> tuple[float, float]:
+    """The chip's RMS field noise (σ_x, σ_z) [T] for ``what`` (words: "the sensor problem").
+
+    Raises
+    ------
+    StudyError
+        Naming ``hall.noise_x_uT`` where neither the study nor the chip's data give it.
+    """
+    if chip.noise is None:
+        raise StudyError("hall.noise_x_uT", f"{what} needs the {chip.name}'s RMS field noise: "
+                                            "give hall.noise_x_uT and hall.noise_z_uT (> 0)")
+    return chip.noise
+
+
 def chip_options(study: Study) -> list[ChipOption]:
     """The settings of the study's chip a design chooses from, one per range (see the module
     notes), among those the study's ``[hall]`` fields allow and that reach
@@ -45,12 +59,9 @@ def chip_options(study: Study) -> list[ChipOption]:
     """
     chip = hall_chip(study)
     if not chip.picked:
-        if chip.noise is None:
-            raise StudyError("hall.noise_x_uT", f"the sensor problem needs the {chip.name}'s RMS "
-                                                "field noise: give hall.noise_x_uT and "
-                                                "hall.noise_z_uT (> 0)")
+        noise = require_noise(chip, "the sensor problem")
         rate = chip.figures.rate if chip.figures is not None else math.nan
-        return [ChipOption(chip.range_x, chip.range_z, *chip.noise, rate, chip.setting,
+        return [ChipOption(chip.range_x, chip.range_z, *noise, rate, chip.setting,
                            chip.figures)]
     best: dict[tuple[float, float], SettingFigures] = {}
     for s in candidate_settings(study):

@@ -9,25 +9,24 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import minimize
 
-from ..doe import check_design
-from ..metamodel import ExactField, ModelSet
-from ..optimise import (
-    DesignResult,
+from ..chip import (
+    Saturation,
     SettingChoice,
     chip_margin,
-    per_design,
+    saturation,
     setting_for,
     with_setting,
 )
+from ..doe import check_design
+from ..metamodel import ModelSet
+from ..optimise import DesignResult, per_design
 from ..parts import SettingFigures, grade, silicones_around
 from ..sensitivity import force_noise
-from ..study import MU0, HallChip, Study, StudyError, from_si, hall_chip, mm, mt
+from ..study import MU0, HallChip, Study, from_si, hall_chip, mm, mt
 from ._verdict import Verdict, verdict
 
 #: Points per side of the grid over the stable box (the worst σ_F starts from its best point).
 N_BOX = 41
-#: Load levels and angles of the saturation scan along the paths.
-N_T, N_THETA = 201, 21
 
 
 @dataclass(frozen=True)
@@ -41,32 +40,6 @@ class Resolution:
     #: (t, θ [rad]) of each worst value.
     where_r: tuple[float, float]
     where_z: tuple[float, float]
-
-
-@dataclass(frozen=True)
-class Saturation:
-    """The largest field along the paths against the chip's range."""
-
-    B_max_x: float
-    B_max_z: float
-    #: First load t (and its θ, axis, forces [N]) at which the chip saturates; None: never.
-    t: float | None = None
-    theta: float | None = None
-    axis: str | None = None
-    F_r: float | None = None
-    F_z: float | None = None
-    #: :func:`magtact.optimise.chip_margin` over the design's stable region (≤ 0: the chip reads
-    #: all of it); NaN when not computed.
-    region_margin: float = float("nan")
-
-    @property
-    def saturates(self) -> bool:
-        return self.t is not None
-
-    @property
-    def in_region(self) -> bool:
-        """Whether the chip saturates inside the stable region (where the sensor is used)."""
-        return bool(self.region_margin > 0)
 
 
 @dataclass(frozen=True)
@@ -159,31 +132,6 @@ class DesignAnswer:
                 f"F_r,min = {d.F_r_min:.4g} N, F_z,max = {d.F_z_max:.4g} N")
 
 
-def check_rest_field(study: Study) -> None:
-    """Refuse a chip range below the field at rest of every design in the study's range.
-
-    The field at rest is weakest at the tallest body (the magnet farthest from the chip).
-
-    Raises
-    ------
-    StudyError
-        Naming ``hall.range_x_mT`` or ``hall.range_z_mT``.
-    """
-    chip = hall_chip(study)
-    H = study.design.H[1]
-    s = study.hall.standoff
-    below = f", the chip {mm(s):.3g} mm below the body" if s > 0 else ""
-    for axis, name in (("x", "B_r"), ("z", "B_z")):
-        b = abs(float(ExactField(study, name).value(0.0, 0.0, H)))
-        limit = chip.range_x if axis == "x" else chip.range_z
-        if b > limit:
-            raise StudyError(f"hall.range_{axis}_mT",
-                             f"{mt(limit):.4g} mT is below the field at rest of every design "
-                             f"(|B_{axis}| = {mt(b):.4g} mT even at the tallest, H = "
-                             f"{mm(H):.3g} mm{below}): the {chip.name} would read nothing but "
-                             "its limit")
-
-
 def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design",
            M_z: float | None = None) -> DesignAnswer:
     """The designer's answer for design (H [m], G [Pa][, M_z [A/m]]) with the study's
@@ -242,31 +190,6 @@ def resolution(models: ModelSet, study: Study, design: DesignResult, chip: HallC
         worst.append(best[0])
         where.append(best[1])
     return Resolution(float(s0[0]), float(s0[1]), worst[0], worst[1], where[0], where[1])
-
-
-def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChip
-               ) -> Saturation:
-    """The exact field along every path (t ∈ [0, 1], θ ∈ [0, θ_max]) against the chip's range.
-
-    A range below the field at rest shows as saturation at t = 0 (see
-    :func:`check_rest_field` for the study-wide check).
-    """
-    t = np.linspace(0.0, 1.0, N_T)
-    th = np.linspace(0.0, study.loading.theta_max, N_THETA)
-    T, TH = np.meshgrid(t, th, indexing="ij")
-    B = {"x": np.abs(ExactField(study, "B_r").value(T, TH, H)),
-         "z": np.abs(ExactField(study, "B_z").value(T, TH, H))}
-    limit = {"x": chip.range_x, "z": chip.range_z}
-    over = (B["x"] > limit["x"]) | (B["z"] > limit["z"])
-    out = dict(B_max_x=float(B["x"].max()), B_max_z=float(B["z"].max()))
-    if not over.any():
-        return Saturation(**out)
-    i = int(np.argmax(over.any(axis=1)))  # first load level with a saturated angle
-    j = int(np.argmax(over[i]))
-    axis = "x" if B["x"][i, j] > limit["x"] else "z"
-    F_r, F_z = models.forces(t[i], th[j], H, G)
-    return Saturation(**out, t=float(t[i]), theta=float(th[j]), axis=axis,
-                      F_r=float(F_r), F_z=float(F_z))
 
 
 def answer_json(a: DesignAnswer) -> dict:

@@ -13,8 +13,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from ..chip import sensor_grid
 from ..metamodel import ModelSet
 from ..optimise import DesignResult

@@ -6,8 +6,8 @@ reduction to a curve over H (:func:`exact_reduction`), the decision rule (:func:
 :func:`compare` two designs; :func:`optimise` runs it all.
 """
 
+from ..chip import SettingChoice, chip_margin, setting_for, with_setting
 from ._box import BatchOptimum, BoxOptimum, batch_optimum, box_optimum
-from ._chip import chip_margin
 from ._conditioning import ShearBoundConditioning, shear_bound_conditioning
 from ._design import (
     DesignMaps,
@@ -71,10 +71,11 @@ from ._sensor import (
     sensor_nsga2,
     sensor_space,
 )
-from ._setting import SettingChoice, best_setting, setting_for, sigma_objective, with_setting
+from ._setting import best_setting, sigma_objective
 
 __all__ = [
-    "WARN_GAP_SENSOR", "SensorDesign", "SensorOptimisation", "SensorPareto", "SensorSpace", "evaluate_designs",
+    "WARN_GAP_SENSOR", "SensorDesign", "SensorOptimisation", "SensorPareto", "SensorSpace",
+    "evaluate_designs",
     "exact_sensor_reduction", "optimise_sensor", "sensor_nsga2", "sensor_space",
     "SettingChoice", "best_setting", "setting_for", "sigma_objective", "with_setting",
     "DesignSet", "FrontGapWarning", "GeometricChoice", "GeometryOptimisation", "describe",

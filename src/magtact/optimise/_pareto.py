@@ -16,10 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import MagtactError
+from ..chip import chip_margin
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study, from_si, hall_chip
-from ._chip import chip_margin
 from ._design import DesignResult, HeightTable, as_responses, heights_batch, per_design
 
 

@@ -22,8 +22,8 @@ Two solvers answer it, and each checks the other:
   in how they search the heights and the discrete choices.
 
 The decision takes the least √(σ_F,r² + σ_F,z²) of each, and the lower of the two is the
-answer; NSGA-II's may not lie more than ``WARN_GAP`` above the reduction's. The standoff takes levels ``standoff_step``
-apart (boards and spacers come in steps).
+answer; NSGA-II's may not lie more than ``WARN_GAP`` above the reduction's. The standoff takes
+levels ``STANDOFF_STEP`` apart (boards and spacers come in steps).
 """
 
 from __future__ import annotations
@@ -80,10 +80,11 @@ class SensorSpace:
         return np.where(low <= high, low, np.inf)
 
 
-def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = None
-                 ) -> SensorSpace:
+def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = None,
+                 constraints: ForceConstraints | None = None) -> SensorSpace:
     """The choices of ``study``'s sensor problem (``table``: a sweep over the H range, computed
-    when not given)."""
+    when not given; ``constraints``: the force constraints, default the study's, whose normal
+    force is also the one the chip must read)."""
     d = study.design
     if d.grades:
         grades = tuple(d.grades)
@@ -99,9 +100,11 @@ def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = Non
     if table is None:
         table = sweep(models, study)
     order = np.argsort(table.H)
+    if constraints is None:
+        constraints = force_constraints(models, study)
+    F_z = constraints.F_z_c * (1.0 - constraints.tolerance)  # the force, not its tolerant bound
     return SensorSpace(grades, M_z, standoffs, tuple(chip_options(study)), d.H, d.G,
-                       table.take(order), force_constraints(models, study),
-                       study.requirements.F_z)
+                       table.take(order), constraints, F_z)
 
 
 @dataclass(frozen=True)
@@ -147,7 +150,7 @@ class SensorDesign:
         and setting."""
         from dataclasses import replace
 
-        from ._setting import with_setting
+        from ..chip import with_setting
 
         s = replace(study, magnet=replace(study.magnet, grade=self.grade, M_z=self.M_z),
                     hall=replace(study.hall, standoff=self.standoff))
@@ -455,8 +458,8 @@ class SensorOptimisation:
                                                  "evaluations": p.evaluations}}
 
 
-def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = None
-                    ) -> SensorOptimisation:
+def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = None,
+                    constraints: ForceConstraints | None = None) -> SensorOptimisation:
     """The sensor problem of ``study`` (see the module notes): the exact reduction and
     NSGA-II, the decision and their gap.
 
@@ -466,7 +469,7 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
         If NSGA-II's choice lies more than ``WARN_GAP`` above the exact reduction's.
     """
     t0 = time.perf_counter()
-    space = sensor_space(models, study, table)
+    space = sensor_space(models, study, table, constraints)
     red, combos = exact_sensor_reduction(models, study, space)
     pareto = sensor_nsga2(models, study, space) if red.feasible else None
     choice, gap = red, float("nan")

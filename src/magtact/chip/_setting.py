@@ -1,0 +1,117 @@
+"""The Hall chip's setting as a design choice (docs/method.md §10).
+
+For a design (H, G[, M_z]) the best setting of a chip with a setting table is the one with the
+lowest force noise whose range holds the exact field over the loads the sensor must read (the
+sensor problem: the stable region's points with G f_z ≤ ``[requirements] F_z_N``) or over
+the design's stable region t ≤ t_m, θ ≤ θ_m (the publication's problem; or over its loads
+t ≤ f t_m, f = ``[hall] read_fraction``), among the
+settings the study allows (its fixed ``[hall]`` fields) whose sample rate reaches
+``[requirements] rate_Hz``. The force noise of a setting is the root sum of squares of its worst
+σ_Fr and σ_Fz over the stable region, σ_F = √diag(J Σ_B Jᵀ) with Σ_B = diag(σ_x², σ_z²) at the
+upper end of the setting's noise interval (the end that holds under both assumptions). Ties go
+to the lower end, then to the faster setting. Where no setting holds the field, those that
+saturate at the largest load t compete, and the answer says so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import numpy as np
+
+from ..metamodel import ExactField, ModelSet
+from ..parts import ChipSetting, SettingFigures
+from ..sensitivity import dF_dB
+from ..study import Study, candidate_settings, setting_figures
+
+#: Points per side of the grid over the stable box on which settings are compared.
+N_GRID = 41
+
+
+@dataclass(frozen=True)
+class SettingChoice:
+    """The chip setting chosen for one design.
+
+    Attributes
+    ----------
+    figures : SettingFigures
+        LSB, range, noise (interval) and rate of the setting.
+    holds : bool
+        Whether its range holds the exact field over the stable region (the part of it
+        ``[hall] read_fraction`` asks for).
+    B_max_x, B_max_z : float
+        Largest |B_x|, |B_z| [T] over the stable region.
+    sigma_r_worst, sigma_z_worst : float
+        Worst σ_Fr, σ_Fz [N] on the comparison grid at the upper end of the noise.
+    considered : int
+        Settings compared (permitted, allowed by the study, fast enough, with a noise figure).
+    """
+
+    figures: SettingFigures
+    holds: bool
+    B_max_x: float
+    B_max_z: float
+    sigma_r_worst: float
+    sigma_z_worst: float
+    considered: int
+
+    @property
+    def setting(self) -> ChipSetting:
+        return self.figures.setting
+
+
+def setting_for(models: ModelSet, study: Study, design) -> SettingChoice | None:
+    """The best chip setting for a design whose extrema are computed (``design``: a
+    :class:`magtact.optimise.DesignResult`; see the module notes), or None for a chip without
+    a setting table."""
+    if study.hall.chip not in ("MLX90393", "TLV493D"):
+        return None
+    if design.M_z is not None:
+        study = replace(study, magnet=replace(study.magnet, M_z=float(design.M_z)))
+    H, G = design.H, design.G
+    T, TH = np.meshgrid(np.linspace(0.0, design.t_m, N_GRID),
+                        np.linspace(0.0, design.theta_m, N_GRID), indexing="ij")
+    Bx_t = np.abs(ExactField(study, "B_r").value(T, TH, H)).max(axis=1)  # per load level
+    Bz_t = np.abs(ExactField(study, "B_z").value(T, TH, H)).max(axis=1)
+    Bx, Bz = float(Bx_t.max()), float(Bz_t.max())
+    J = dF_dB(models, T, TH, H, G).reshape(-1, 2, 2) / design.field_scale
+    A = J**2  # (points, force, field axis)
+    figs = [f for f in (setting_figures(study, s) for s in candidate_settings(study))
+            if f.rate >= study.requirements.rate
+            and np.isfinite(f.sigma_x[1]) and np.isfinite(f.sigma_z[1])]
+    if not figs:  # the loader refuses a rate no allowed setting reaches
+        raise ValueError("no chip setting reaches the study's requirements.rate_Hz")
+    sx = np.array([[f.sigma_x[0], f.sigma_x[1]] for f in figs])  # (settings, end)
+    sz = np.array([[f.sigma_z[0], f.sigma_z[1]] for f in figs])
+    # worst σ_F per setting, end and force: max over points of √(A_kx σx² + A_kz σz²)
+    var = (A[None, None, :, :, 0] * sx[:, :, None, None] ** 2
+           + A[None, None, :, :, 1] * sz[:, :, None, None] ** 2)
+    worst = np.sqrt(np.nanmax(var, axis=2))  # (settings, end, force)
+    score = np.hypot(worst[..., 0], worst[..., 1])  # (settings, end)
+    rx = np.array([f.range_x for f in figs])
+    rz = np.array([f.range_z for f in figs])
+    over = (Bx_t[None, :] > rx[:, None]) | (Bz_t[None, :] > rz[:, None])  # (settings, t)
+    onset = np.where(over.any(axis=1), over.argmax(axis=1), N_GRID)  # first saturated level
+    if study.optimise.problem == "sensor":  # hold the field over the required loads
+        bx = np.abs(ExactField(study, "B_r").value(T, TH, H))
+        bz = np.abs(ExactField(study, "B_z").value(T, TH, H))
+        asked = G * models.f_z.value(T, TH, H) <= study.requirements.F_z  # (t, θ)
+        sat = (bx[None] > rx[:, None, None]) | (bz[None] > rz[:, None, None])
+        holds = ~(sat & asked[None]).any(axis=(1, 2))
+    else:
+        asked = T[:, 0] <= study.hall.read_fraction * design.t_m * (1 + 1e-12)  # levels
+        holds = onset >= int(asked.sum())
+    pool = holds if holds.any() else onset == onset.max()  # else those reading the farthest
+    idx = np.flatnonzero(pool)
+    rate = np.array([f.rate for f in figs])
+    order = np.lexsort((-rate[idx], score[idx, 0], score[idx, 1]))
+    k = int(idx[order[0]])
+    return SettingChoice(figs[k], bool(holds[k]), Bx, Bz, float(worst[k, 1, 0]),
+                         float(worst[k, 1, 1]), len(figs))
+
+
+def with_setting(study: Study, setting: ChipSetting) -> Study:
+    """``study`` with its ``[hall]`` chip setting fixed at ``setting``."""
+    if setting.gain_sel is None:
+        return study
+    return replace(study, hall=replace(study.hall, **{k: int(v) for k, v in
+                                                      setting.__dict__.items()}))
