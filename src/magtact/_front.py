@@ -461,9 +461,7 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
 
     own = study.geometry()
     sensor = study.optimise.problem == "sensor" and not study.geometric_variables
-    # before any work; the sensor problem at its weakest field (the weakest grade, the chip
-    # farthest away), where a chip that reads nothing but its limit may still read
-    check_rest_field(_weakest(study) if sensor else study.at(**own) if own else study)
+    check_rest_field(study.at(**own) if own else study)  # before any work
     if constraints is None:
         constraints = force_constraints(models, study)
     if sensor:
@@ -486,21 +484,6 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
     original = {"H": study.design.H_original, "G": study.design.G_original} | own
     return Result(study, models, models_source, opt, _answer(models, study, values, "chosen"),
                   _answer(models, study, original, "original"), values, dataset)
-
-
-def _weakest(study: Study) -> Study:
-    """``study`` with its sensor problem's weakest field: the lowest grade, the largest
-    standoff."""
-    from dataclasses import replace
-
-    from .parts import grade as catalogue_grade
-    from .study import MU0
-
-    d = study.design
-    M_z = min((catalogue_grade(g).M_z(MU0)[0] for g in d.grades), default=study.magnet.M_z)
-    standoff = d.standoff[1] if d.standoff[1] > 0 else study.hall.standoff
-    return replace(study, magnet=replace(study.magnet, M_z=M_z),
-                   hall=replace(study.hall, standoff=standoff))
 
 
 def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_source: str,

@@ -84,16 +84,34 @@ class Saturation:
         return bool(self.region_margin > 0)
 
 
+def _weakest(study: Study) -> Study:
+    """``study`` with its sensor problem's weakest field: the lowest grade, the largest
+    standoff."""
+    from dataclasses import replace
+
+    from ..parts import grade
+    from ..study import MU0
+
+    d = study.design
+    M_z = min((grade(g).M_z(MU0)[0] for g in d.grades), default=study.magnet.M_z)
+    standoff = d.standoff[1] if d.standoff[1] > 0 else study.hall.standoff
+    return replace(study, magnet=replace(study.magnet, M_z=M_z),
+                   hall=replace(study.hall, standoff=standoff))
+
+
 def check_rest_field(study: Study) -> None:
     """Refuse a chip range below the field at rest of every design in the study's range.
 
-    The field at rest is weakest at the tallest body (the magnet farthest from the chip).
+    The field at rest is weakest at the tallest body (the magnet farthest from the chip); in
+    the sensor problem also with the weakest grade and the chip at its largest standoff.
 
     Raises
     ------
     StudyError
         Naming ``hall.range_x_mT`` or ``hall.range_z_mT``.
     """
+    if study.optimise.problem == "sensor" and not study.geometric_variables:
+        study = _weakest(study)
     chip = hall_chip(study)
     H = study.design.H[1]
     s = study.hall.standoff

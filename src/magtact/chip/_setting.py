@@ -16,6 +16,7 @@ saturate at the largest load t compete, and the answer says so.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+
 import numpy as np
 
 from ..metamodel import ExactField, ModelSet
