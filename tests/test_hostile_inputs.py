@@ -417,6 +417,29 @@ def test_study_check_refuses_what_the_commands_refuse(tmp_path, refused, toml, k
         check_study(load_study(path))
 
 
+@pytest.mark.parametrize("data", [
+    {}, {"magnet": {"placement": "flush"}}, {"hall": {"standoff_mm": 2.5}},
+    {"design": {"H_mm": [2.0, 9.0]}, "loading": {"theta_max_rad": 0.2}},
+])
+def test_near_zone_reach_is_the_field_solvers(data):
+    """The reach :func:`check_study` holds near_mm to equals the Hall point's distance from the
+    magnet computed by the geometry's loading path, as the field solver measures it."""
+    from magtact.geometry import hall_from_magnet_centre, loading_path
+    from magtact.study._rules import near_zone_reach
+
+    s = study_from_dict(data)
+    T, TH, HH = np.meshgrid(s.t_levels, s.theta_levels, s.H_levels, indexing="ij")
+    x, z = hall_from_magnet_centre(s, *loading_path(s, T, TH, HH), HH)
+    m = s.magnet
+    gap = np.hypot(np.maximum(np.abs(x) - m.R_m, 0.0), np.maximum(np.abs(z) - m.H_m / 2, 0.0))
+    assert near_zone_reach(s) == pytest.approx(float(gap.max()), rel=1e-12)
+    ok = study_from_dict({**data, "magnetics": {"near_mm": 1e3 * gap.max() * 1.01}})
+    check_study(ok)
+    short = study_from_dict({**data, "magnetics": {"near_mm": 1e3 * gap.max() * 0.99}})
+    with pytest.raises(StudyError, match=r"\[magnetics.near_mm\] the Hall point reaches"):
+        check_study(short)
+
+
 def test_study_check_accepts_the_presets():
     for name in ("magone", "magone-printed"):
         check_study(load_study(name))

@@ -132,6 +132,40 @@ def check_field_mesh(s: Study, source=None) -> None:
                                             f"far_z = {f.far_z:g}", source)
 
 
+def near_zone_reach(s: Study) -> float:
+    """The farthest the Hall point gets from the magnet [m] over the DOE's paths (every t, θ and
+    H level): the distance from the magnet's surface, with the chip's standoff, as the field
+    solver measures it (docs/method.md §1: u_z = t (Δz_sat − Δz0), u_r = −u_z tan θ, the Hall
+    point at x = −u_r below the magnet's centre)."""
+    import numpy as np
+
+    b, mg, ld = s.body, s.magnet, s.loading
+    t, th, H = np.meshgrid(s.t_levels, s.theta_levels, s.H_levels, indexing="ij")
+    d0 = H + b.H_g - mg.H_m  # unloaded magnet–sensor distance Δz0
+    u_z = t * (ld.dz_sat - d0)
+    u_r = -u_z * np.tan(th)
+    centre = d0 + (0.0 if mg.placement == "covered" else mg.H_m / 2) + u_z + s.hall.standoff
+    gap = np.hypot(np.maximum(np.abs(u_r) - mg.R_m, 0.0), np.maximum(centre - mg.H_m / 2, 0.0))
+    return float(gap.max())
+
+
+def check_near_zone(s: Study, source=None) -> None:
+    """The finely meshed zone around the magnet (``[magnetics] near_mm``) must reach the Hall
+    point on every path of the DOE (:func:`near_zone_reach`).
+
+    Raises
+    ------
+    StudyError
+        Naming ``magnetics.near_mm``, the reach needed and the setting.
+    """
+    reach = near_zone_reach(s)
+    if reach > s.magnetics.near:
+        raise StudyError("magnetics.near_mm",
+                         f"the Hall point reaches {from_si(reach, 'mm'):.4g} mm from the magnet "
+                         f"on the DOE's paths, beyond the finely meshed zone near_mm = "
+                         f"{from_si(s.magnetics.near, 'mm'):g}; increase near_mm", source)
+
+
 def check_holdout(s: Study, n_theta: int | None = None, n_H: int | None = None,
                   data: str | None = None, source: str | None = None) -> None:
     """Refuse, before any work, more held-out paths (``[metamodel] holdout_paths``) than a fit
@@ -162,7 +196,8 @@ def check_study(s: Study, source: str | None = None) -> None:
     accept.
 
     * held-out paths within what the study's DOE allows (:func:`check_holdout`);
-    * the field's FE mesh settings among themselves (:func:`check_field_mesh`), when the
+    * the field's FE mesh settings among themselves (:func:`check_field_mesh`) and the near
+      zone around the magnet against the Hall point's reach (:func:`check_near_zone`), when the
       field is solved by FE (``[magnetics] solver = "fe"``).
 
     Raises
@@ -173,3 +208,4 @@ def check_study(s: Study, source: str | None = None) -> None:
     check_holdout(s, source=source)
     if s.magnetics.solver == "fe":
         check_field_mesh(s, source or f"study {s.name!r}")
+        check_near_zone(s, source or f"study {s.name!r}")
