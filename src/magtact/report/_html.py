@@ -270,6 +270,15 @@ def _glance(folder: Path, run_id: str | None) -> str:
              ("calibration", "calibration", "Calibration: error of the firmware map over the "
               "stable region, and the candidates' size against their error")]
     figs = []
+    explorer = _load_json(folder / "optimise" / "explorer.json")
+    if (isinstance(explorer, dict) and explorer.get("grid") and _of_run(folder / "optimise",
+                                                                        run_id)):
+        from ._fig_explorer import design_curves_png
+
+        figs.append(_figure_bytes(design_curves_png(explorer), "Resolution and normal range "
+                                  "over the base height at the chosen G, and where the chip "
+                                  "saturates inside the stable region (the explorer's numbers)",
+                                  "optimise/explorer.json"))
     for key, stem, caption in picks:
         png = folder / key / f"{stem}.png"
         if png.is_file() and _of_run(folder / key, run_id):
@@ -279,6 +288,14 @@ def _glance(folder: Path, run_id: str | None) -> str:
         return ""
     return ('<section id="glance"><h2>The figures a designer looks at</h2>'
             f'<div class="glance">{"".join(figs)}</div></section>')
+
+
+def _figure_bytes(png: bytes, caption: str, source: str) -> str:
+    import base64
+
+    data = base64.b64encode(png).decode("ascii")
+    return (f'<figure><img src="data:image/png;base64,{data}" alt="{_e(caption)}">'
+            f"<figcaption>{_e(caption)} <small>({_e(source)})</small></figcaption></figure>")
 
 
 def _inline(text) -> str:
