@@ -10,6 +10,7 @@ the visible text has no over-long number, sentinel, raw file key, Markdown or La
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -41,11 +42,22 @@ PARTS = [["magnet", "N45, 5 × 2 mm"], ["silicone", "Ecoflex 00-30"],
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory) -> Path:
-    """A results folder of ``magtact run`` on the built-in study (about 40 s)."""
-    out = tmp_path_factory.mktemp("browser") / "results"
-    done = subprocess.run([sys.executable, "-m", "magtact", "run", "--out", str(out)],
-                          capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr[-3000:]
+    """A results folder of ``magtact run`` on the built-in study (about 40 s), built once for
+    every test worker of the session (the workers share the base of their temporary folders;
+    the first builds it under a lock, the others wait and read)."""
+    import fcntl
+
+    base = tmp_path_factory.getbasetemp()
+    shared = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "browser-report"
+    shared.mkdir(exist_ok=True)
+    out = shared / "results"
+    with open(shared / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (shared / "built").is_file():
+            done = subprocess.run([sys.executable, "-m", "magtact", "run", "--out", str(out)],
+                                  capture_output=True, text=True, timeout=600)
+            assert done.returncode == 0, done.stderr[-3000:]
+            (shared / "built").write_text("ok")
     return out
 
 

@@ -19,6 +19,7 @@ UNITS: tuple[tuple[str, str], ...] = (
     ("_mN_per_uT", "mN/µT"), ("_N_per_T", "N/T"), ("_A_per_m", "A/m"),
     ("_MA_per_m", "MA/m"), ("_percent", "%"), ("_kPa", "kPa"), ("_MPa", "MPa"), ("_mm", "mm"),
     ("_mN", "mN"), ("_uT", "µT"), ("_mT", "mT"), ("_rad", "rad"), ("_deg", "°"), ("_Hz", "Hz"),
+    ("_pct_per_K", "%/K"), ("_pct", "%"),
     ("_N", "N"), ("_s", "s"), ("_Pa", "Pa"), ("_K", "K"),
 )
 #: Names whose reading is not mechanical.
@@ -50,16 +51,22 @@ def name(key: str) -> str:
     parts = [GREEK.get(p, p) for p in parts]
     head = parts[0]
     symbol = len(head) <= 2 or head in GREEK.values()
-    if symbol and len(parts) > 1 and all(p in SUBSCRIPTS or p.isdigit() for p in parts[1:]):
-        return head + "_" + ",".join(parts[1:])
+    k = 1
+    while symbol and k < len(parts) and (parts[k] in SUBSCRIPTS or parts[k].isdigit()):
+        k += 1
+    if k > 1:  # a symbol with its subscripts, then words: u_z_range → u_z range
+        return " ".join([head + "_" + ",".join(parts[1:k]), *parts[k:]])
     return " ".join(parts)
 
 
 def label(key: str) -> str:
-    """A file key as a reader sees it: name and ``[unit]``."""
-    base, unit = split_unit(str(key))
-    out = name(base) if "." not in base else " · ".join(name(p) for p in base.split("."))
-    return f"{out} [{unit}]" if unit else out
+    """A file key as a reader sees it: name and ``[unit]`` (each part of a dotted key with its
+    own unit: ``timings_s.total`` → ``timings [s] · total``)."""
+    out = []
+    for part in str(key).split("."):
+        base, unit = split_unit(part)
+        out.append(f"{name(base)} [{unit}]" if unit else name(base))
+    return " · ".join(out)
 
 
 def value_text(v) -> str:

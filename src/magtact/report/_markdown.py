@@ -83,13 +83,15 @@ def render_markdown(text: str, *, shift: int = 2, anchor_prefix: str | None = No
                     child.attrSet("href", "#" + anchor_prefix + href[1:])
             elif child.type == "image":
                 _embed(child, images)
-            elif child.type == "text":
-                child.content = round_text(child.content)
+            elif child.type == "text":  # numbers to 3 figures, no internal names
+                child.content = _SYMBOL.sub(r"Γ_\2", round_text(child.content))
         if tok.type == "fence" and tok.info.strip() == "math":
             tok.type, tok.content = "html_block", mathml(tok.content)
     return md.renderer.render(tokens, md.options, {})
 
 
+#: Internal names of the sensitivities in a stage's text (``gamma_r``), read as symbols.
+_SYMBOL = re.compile(r"\b(gamma|Gamma)_([rz])\b")
 #: A decimal number in LaTeX source (not a command's letters, not an exponent's sign alone).
 _LATEX_NUMBER = re.compile(r"(?<![\w.])\d+\.\d+(?:[eE][+-]?\d+)?|(?<![\w.])\d{6,}(?![\w.])")
 
