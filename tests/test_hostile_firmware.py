@@ -22,7 +22,8 @@ pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="no gcc on t
 
 #: The design of the README and an assumed chip noise of 1 µT per axis (not a datasheet's).
 H, G, NOISE = 3e-3, 22.57e3, 1e-6
-#: Rounding of the float32 build relative to the force range, as the header states.
+#: Rounding of an all-float32 build (MAGTACT_ACC float) relative to the force range, as the
+#: header states.
 FLOAT_ROUNDING = 2e-4
 FLAGS = ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
 OK, OUTSIDE, NO_FIELD = (C_RETURN[k] for k in ("MAGTACT_FORCE_OK", "MAGTACT_FORCE_OUTSIDE",
@@ -77,8 +78,8 @@ def _headers(setup):
 def _build(tmp_path, header: str, real: str, source: str = MAIN, name: str = "prog"):
     (tmp_path / "force.h").write_text(header, encoding="utf-8")
     (tmp_path / f"{name}.c").write_text(source, encoding="utf-8")
-    exe = tmp_path / f"{name}_{real}"
-    r = subprocess.run([*FLAGS, f"-DMAGTACT_REAL={real}", "-o", str(exe),
+    exe = tmp_path / f"{name}_{real.split()[0]}_{len(real)}"
+    r = subprocess.run([*FLAGS, *f"-DMAGTACT_REAL={real}".split(), "-o", str(exe),
                         str(tmp_path / f"{name}.c"), "-lm"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     return exe
@@ -94,7 +95,7 @@ def test_header_compiles_unused_and_in_two_files(setup, tmp_path):
     for key, header in _headers(setup).items():
         assert "static inline int magtact_force(" in header and "static int force" not in header
         assert "section 13" in header and "-lm" in header, key
-        for real in ("double", "float"):
+        for real in ("double", "float", "float -DMAGTACT_ACC=float"):
             _build(tmp_path, header, real, "#include \"force.h\"\nint main(void)\n{\n"
                                            "    return 0;\n}\n", "unused")
             # two files that include and call it, linked together: no symbol defined twice
@@ -106,7 +107,8 @@ def test_header_compiles_unused_and_in_two_files(setup, tmp_path):
                 "#include \"force.h\"\nint other(void);\nint main(void)\n{\n"
                 "    MAGTACT_REAL o[3];\n"
                 "    return magtact_force(0, 0, 1, NULL, o) + other() > 100;\n}\n")
-            r = subprocess.run([*FLAGS, f"-DMAGTACT_REAL={real}", "-o", str(tmp_path / "two"),
+            r = subprocess.run([*FLAGS, *f"-DMAGTACT_REAL={real}".split(), "-o",
+                                str(tmp_path / "two"),
                                 str(tmp_path / "two.c"), str(tmp_path / "other.c"), "-lm"],
                                capture_output=True, text=True)
             assert r.returncode == 0, (key, real, r.stderr)
@@ -116,7 +118,8 @@ def test_rest_field_within_noise_is_valid_and_near_zero_after_tare(setup, tmp_pa
     """The rest field ± the chip's noise (every corner and centre of the ±1 σ box, and 200
     readings uniform in it), on a unit whose chip reads a constant offset of 20 µT, 35 µT,
     -50 µT: after a tare at rest every reading is valid (rc 0) and its force within 3 σ_F of
-    zero (in float32 plus its rounding)."""
+    zero (in double, and with float tables and double sums; all-float builds add the
+    rounding of their sums)."""
     smap, sigma, choice = setup
     assert choice.reached
     header = c_header(choice.chosen, smap, choice, noise=(NOISE, NOISE))
@@ -128,14 +131,14 @@ def test_rest_field_within_noise_is_valid_and_near_zero_after_tare(setup, tmp_pa
     readings = rest + offset + noise
     lines = ["tare {:.17e} {:.17e} {:.17e}".format(*(rest + offset))]
     lines += ["read {:.17e} {:.17e} {:.17e}".format(*b) for b in readings]
-    for real in ("double", "float"):
+    # double; float tables with double sums (the default with float); all in float, which
+    # adds the rounding the header states (about 2e-4 of the force range from float sums)
+    for real in ("double", "float", "float -DMAGTACT_ACC=float"):
         out = _run(_build(tmp_path, header, real), lines)
         assert out[0, 0] == OK
         rc, F = out[1:, 0], out[1:, 1:]
         assert (rc == OK).all(), (real, np.flatnonzero(rc != OK))
-        # float32 adds the rounding the header states (about 2e-4 of the force range: its
-        # coefficients and sums are rounded to 24 bits); double is held to 3 σ_F alone
-        extra = 0.0 if real == "double" else FLOAT_ROUNDING * max(smap.ranges)
+        extra = FLOAT_ROUNDING * max(smap.ranges) if "ACC" in real else 0.0
         assert np.abs(np.hypot(F[:, 0], F[:, 1])).max() <= 3 * sigma[0] + extra, real
         assert np.abs(F[:, 2]).max() <= 3 * sigma[1] + extra, real
     # without the tare, the same offset puts the readings outside the band: not valid
@@ -166,7 +169,7 @@ def test_no_field_and_not_numbers_give_a_code_not_nan(setup, tmp_path):
            "nan 0 0.03", "0 0 nan", "inf 0 0.03", "0 0 inf", "0 -inf 0.03"]
     far = ["1 0 0.03", "0 0 1", "-0.5 0.5 0.2"]
     for key, header in _headers(setup).items():
-        for real in ("double", "float"):
+        for real in ("double", "float", "float -DMAGTACT_ACC=float"):
             out = _run(_build(tmp_path, header, real), [f"read {b}" for b in bad + far])
             assert np.isfinite(out).all(), (key, real)
             assert (out[:len(bad), 0] == NO_FIELD).all(), (key, real, out[:, 0])

@@ -504,11 +504,15 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
         " * MAGTACT_FORCE_NO_FIELD (2, out = 0) for bz <= MAGTACT_BZ_MIN (half the field at rest,\n"
         " * after the offset) or a reading that is not a finite number (no magnet above the\n"
         " * chip, the chip upside down, a bad read).\n"
-        " * Arithmetic in double by default; define MAGTACT_REAL as float before including for\n"
-        " * single precision (its rounding adds up to about 2e-4 of the force range). */\n"
+        " * Numbers are stored and returned as MAGTACT_REAL (double by default; define it as\n"
+        " * float before including for float32 tables, whose rounding is a few 1e-6 of the\n"
+        " * force range at degree 12); the sums are computed in MAGTACT_ACC (double by default, also\n"
+        " * with float tables: float sums add up to about 2e-4 of the force range, more than\n"
+        " * the noise near rest; define it as float where double arithmetic is too slow). */\n"
         "#ifndef MAGTACT_FORCE_H\n#define MAGTACT_FORCE_H\n#include <math.h>\n"
         "#include <stddef.h>\n"
         "#ifndef MAGTACT_REAL\n#define MAGTACT_REAL double\n#endif\n"
+        "#ifndef MAGTACT_ACC\n#define MAGTACT_ACC double\n#endif\n"
         + "".join(f"#define {k} {v}\n" for k, v in C_RETURN.items())
         + f"#define MAGTACT_REST_X ({rest[0]:.17g})\n#define MAGTACT_REST_Y ({rest[1]:.17g})\n"
         f"#define MAGTACT_REST_Z ({rest[2]:.17g})\n"
@@ -565,14 +569,15 @@ def _c_planar(a: Approximation) -> str:
     block += (f"{ind}MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(bx * bx + by * by));\n"
               f"{ind}MAGTACT_REAL fr = 0, fz = 0;\n{ind}int a, b;\n")
     if a.kind == "poly":
-        v = {"B_z": "bz", "1/B_z": "(MAGTACT_REAL)(1.0 / (double)bz)",
-             "B_z^(-1/3)": "(MAGTACT_REAL)(1.0 / cbrt((double)bz))"}[a.transform]
+        v = {"B_z": "bz", "1/B_z": "(MAGTACT_ACC)(1.0 / (double)bz)",
+             "B_z^(-1/3)": "(MAGTACT_ACC)(1.0 / cbrt((double)bz))"}[a.transform]
         terms = basis_terms(n)
         block += (
-            f"{ind}MAGTACT_REAL v = {v};\n"
-            f"{ind}MAGTACT_REAL xi = 2 * (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) - 1;\n"
-            f"{ind}MAGTACT_REAL eta = 2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1;\n"
-            f"{ind}MAGTACT_REAL tx[{n + 1}], ty[{n + 1}];\n{ind}int k;\n"
+            f"{ind}MAGTACT_ACC v = {v};\n"
+            f"{ind}MAGTACT_ACC xi = 2 * ((MAGTACT_ACC)br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g})"
+            " - 1;\n"
+            f"{ind}MAGTACT_ACC eta = 2 * (v - ({lo_v:.17g})) / ({hi_v - lo_v:.17g}) - 1;\n"
+            f"{ind}MAGTACT_ACC tx[{n + 1}], ty[{n + 1}], sr = 0, sz = 0;\n{ind}int k;\n"
             f"{ind}tx[0] = 1;\n{ind}ty[0] = 1;\n"
             + (f"{ind}tx[1] = xi;\n{ind}ty[1] = eta;\n"
                f"{ind}for (k = 2; k <= {n}; k++) {{\n"
@@ -580,8 +585,9 @@ def _c_planar(a: Approximation) -> str:
                f"{ind}    ty[k] = 2 * eta * ty[k - 1] - ty[k - 2];\n{ind}}}\n"
                if n >= 1 else "")
             + f"{ind}for (k = 0; k < {len(terms)}; k++) {{\n"
-            f"{ind}    MAGTACT_REAL t = tx[ti[k]] * ty[tj[k]];\n"
-            f"{ind}    fr += coef_r[k] * t;\n{ind}    fz += coef_z[k] * t;\n{ind}}}\n")
+            f"{ind}    MAGTACT_ACC t = tx[ti[k]] * ty[tj[k]];\n"
+            f"{ind}    sr += coef_r[k] * t;\n{ind}    sz += coef_z[k] * t;\n{ind}}}\n"
+            f"{ind}fr = (MAGTACT_REAL)sr;\n{ind}fz = (MAGTACT_REAL)sz;\n")
     else:
         block += (
             f"{ind}MAGTACT_REAL x = (br - ({lo_r:.17g})) / ({hi_r - lo_r:.17g}) * {n - 1};\n"
@@ -632,32 +638,32 @@ def _c_features(a: Approximation) -> tuple[str, str]:
     helper = (
         f"/* two sums of c[k] T_i(xi) T_j(eta) over the basis i + j <= {n} */\n"
         "static inline void magtact_force_cheb2(const MAGTACT_REAL *c1, const MAGTACT_REAL *c2,\n"
-        "                                       MAGTACT_REAL xi, MAGTACT_REAL eta,\n"
-        "                                       MAGTACT_REAL *s1, MAGTACT_REAL *s2)\n{\n"
+        "                                       MAGTACT_ACC xi, MAGTACT_ACC eta,\n"
+        "                                       MAGTACT_ACC *s1, MAGTACT_ACC *s2)\n{\n"
         + _c_index("ti", [i for i, _ in terms]) + _c_index("tj", [j for _, j in terms]) +
-        f"    MAGTACT_REAL tx[{n + 1}], ty[{n + 1}], a = 0, b = 0;\n    int k;\n"
+        f"    MAGTACT_ACC tx[{n + 1}], ty[{n + 1}], a = 0, b = 0;\n    int k;\n"
         "    tx[0] = 1;\n    ty[0] = 1;\n    tx[1] = xi;\n    ty[1] = eta;\n"
         f"    for (k = 2; k <= {n}; k++) {{\n"
         "        tx[k] = 2 * xi * tx[k - 1] - tx[k - 2];\n"
         "        ty[k] = 2 * eta * ty[k - 1] - ty[k - 2];\n    }\n"
         f"    for (k = 0; k < {len(terms)}; k++) {{\n"
-        "        MAGTACT_REAL t = tx[ti[k]] * ty[tj[k]];\n"
+        "        MAGTACT_ACC t = tx[ti[k]] * ty[tj[k]];\n"
         "        a += c1[k] * t;\n        b += c2[k] * t;\n    }\n"
         "    *s1 = a;\n    *s2 = b;\n}\n\n")
-    v = {"B_z": "cz", "1/B_z": "(MAGTACT_REAL)(1.0 / (double)cz)",
-         "B_z^(-1/3)": "(MAGTACT_REAL)(1.0 / cbrt((double)cz))"}[a.transform]
+    v = {"B_z": "cz", "1/B_z": "(MAGTACT_ACC)(1.0 / (double)cz)",
+         "B_z^(-1/3)": "(MAGTACT_ACC)(1.0 / cbrt((double)cz))"}[a.transform]
     ind = "        "
     block = (
         "    {\n"
         + _c_array("coef_p", st["coef_p"], ind) + _c_array("coef_q", st["coef_q"], ind)
         + _c_array("coef_r", a.coef_r, ind) + _c_array("coef_z", a.coef_z, ind) +
-        f"{ind}const MAGTACT_REAL s = {float(st['B_scale']):.17g}, g = "
+        f"{ind}const MAGTACT_ACC s = {float(st['B_scale']):.17g}, g = "
         f"{float(st['G_scale']):.17g};\n"
-        f"{ind}MAGTACT_REAL cx = (bx - ({b0[0]:.17g})) / s;\n"
-        f"{ind}MAGTACT_REAL cy = (by - ({b0[1]:.17g})) / s;\n"
-        f"{ind}MAGTACT_REAL cz = (bz - ({b0[2]:.17g})) / s;\n"
-        f"{ind}MAGTACT_REAL br = (MAGTACT_REAL)sqrt((double)(cx * cx + cy * cy));\n"
-        f"{ind}MAGTACT_REAL p, q1, qx, qy, q, fr, fz, v, ux = 1, uy = 0;\n"
+        f"{ind}MAGTACT_ACC cx = ((MAGTACT_ACC)bx - ({b0[0]:.17g})) / s;\n"
+        f"{ind}MAGTACT_ACC cy = ((MAGTACT_ACC)by - ({b0[1]:.17g})) / s;\n"
+        f"{ind}MAGTACT_ACC cz = ((MAGTACT_ACC)bz - ({b0[2]:.17g})) / s;\n"
+        f"{ind}MAGTACT_ACC br = (MAGTACT_ACC)sqrt((double)(cx * cx + cy * cy));\n"
+        f"{ind}MAGTACT_ACC p, q1, qx, qy, q, fr, fz, v, ux = 1, uy = 0;\n"
         f"{ind}if (!(cz > 0))  /* the unit's field offset leaves no field from the magnet */\n"
         f"{ind}    return MAGTACT_FORCE_NO_FIELD;\n"
         f"{ind}v = {v};\n"
@@ -667,13 +673,13 @@ def _c_features(a: Approximation) -> tuple[str, str]:
         f"{ind}if (br > 0) {{\n{ind}    ux = cx / br;\n{ind}    uy = cy / br;\n{ind}}}\n"
         f"{ind}p -= ({d[0]:.17g});\n"
         f"{ind}qx = q1 * ux - ({d[1]:.17g});\n{ind}qy = q1 * uy - ({d[2]:.17g});\n"
-        f"{ind}q = (MAGTACT_REAL)sqrt((double)(qx * qx + qy * qy));\n"
+        f"{ind}q = (MAGTACT_ACC)sqrt((double)(qx * qx + qy * qy));\n"
         f"{ind}magtact_force_cheb2(coef_r, coef_z,\n"
         f"{ind}                    2 * (p - ({lo_p:.17g})) / ({hi_p - lo_p:.17g}) - 1,\n"
         f"{ind}                    2 * (q - ({lo_q:.17g})) / ({hi_q - lo_q:.17g}) - 1, &fr, &fz);\n"
-        f"{ind}if (q > 0) {{\n{ind}    out[0] = g * fr * qx / q;\n"
-        f"{ind}    out[1] = g * fr * qy / q;\n{ind}}}\n"
-        f"{ind}out[2] = g * fz;\n"
+        f"{ind}if (q > 0) {{\n{ind}    out[0] = (MAGTACT_REAL)(g * fr * qx / q);\n"
+        f"{ind}    out[1] = (MAGTACT_REAL)(g * fr * qy / q);\n{ind}}}\n"
+        f"{ind}out[2] = (MAGTACT_REAL)(g * fz);\n"
         f"{ind}inside = p >= -{REGION_SLACK!r} && p <= {t_m:.17g} + {REGION_SLACK!r}\n"
         f"{ind}         && q <= (p > 0 ? p : 0) * {tan_m:.17g} + {REGION_SLACK!r};\n"
         "    }\n")
