@@ -109,3 +109,46 @@ def test_rescaling_is_exact_for_any_G_levels_and_magnetisation(ds, lo, span, n, 
     bad = out.copy(deep=True)
     bad["F_z"][...] = bad["F_z"] * 1.001
     assert find_shipped(study, bad) is None
+
+
+# ---- geometric data: a magnet size inside the data's range is answered by binding ----------
+@pytest.fixture(scope="module")
+def geometric(tmp_path_factory):
+    """The (H, R_m) data set of bench/ with a deliberately short fit standing in for a shipped
+    fit of geometric data (the plumbing, not the accuracy, is under test)."""
+    from pathlib import Path
+
+    from magtact.doe import load_dataset
+    from magtact.metamodel import fit_models, save_models
+    from magtact.study import load_study
+
+    root = Path(__file__).resolve().parents[1] / "bench"
+    ds = load_dataset(root / "results" / "geometry_doe.nc")
+    s = load_study(root / "magone_geometry.toml")
+    s = replace(s, metamodel=replace(s.metamodel, generations=2, population=40))
+    folder = tmp_path_factory.mktemp("geometric_fit")
+    save_models(fit_models(ds, s).model_set(s), folder)
+    return ds, folder
+
+
+def test_a_fixed_magnet_inside_geometric_data_is_served_by_its_fit(geometric, monkeypatch):
+    import magtact.metamodel._prefitted as P
+
+    ds, folder = geometric
+    monkeypatch.setattr(P, "SHIPPED", {"geo": "geometry_doe.nc"})
+    monkeypatch.setattr(P, "prefitted_dir", lambda name="magone": folder)
+    study = _study(magnet={"R_m_mm": 2.0})
+    assert differences(ds, study) == []
+    sel = select_metamodels(study, ds)
+    assert sel.shipped == folder and sel.fit is None
+    from magtact.metamodel import ExactField, load_models
+
+    fitted = load_models(folder)
+    t, th, H = 0.6, 0.2, 5e-3
+    assert float(sel.models.f_z.value(t, th, H)) == pytest.approx(
+        float(fitted.f_z.value(t, th, H, R_m=2e-3)), rel=1e-12)
+    assert float(sel.models.B_z.value(t, th, H)) == pytest.approx(
+        float(ExactField(study, "B_z").value(t, th, H)), rel=1e-12)
+    # outside the data's magnet radii it needs new mechanics
+    assert differences(ds, _study(magnet={"R_m_mm": 4.0}))[0].startswith(
+        "[magnet] R_m_mm = 4 outside the data's range [1.5, 3.5] mm")

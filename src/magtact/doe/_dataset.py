@@ -254,7 +254,12 @@ def data_study(ds):
     try:
         # only the sections a DOE depends on: settings added since the data set was written
         # (sensitivity, optimisation, ...) take their defaults
-        data = {k: v for k, v in tomllib.loads(text).items() if k in DOE_SECTIONS}
+        given = tomllib.loads(text)
+        data = {k: v for k, v in given.items() if k in DOE_SECTIONS}
+        # geometric design variables need the exact field: keep the settings that say so
+        for name, key in (("metamodel", "b_model"), ("sensitivity", "definition")):
+            if key in given.get(name, {}):
+                data[name] = {key: given[name][key]}
         return study_from_dict(data | {"base": "magone"})
     except Exception:  # a data set whose study no longer loads belongs to no study of today
         return "its study (the data set's study no longer loads)"

@@ -18,7 +18,7 @@ from dataclasses import asdict
 from importlib import resources
 from pathlib import Path
 
-from ..study import Study
+from ..study import Study, magone
 from ._fit import data_hash
 from ._io import load_models, save_model
 from ._model import RESPONSES, Metamodel, ModelSet
@@ -48,11 +48,14 @@ def _settings_match(study: Study, infos: dict, geometric: bool) -> bool:
     # over geometric data the field is the exact one whatever b_model asks (docs/method.md §7)
     ignore = _NEUTRAL | ({"b_model"} if geometric else set())
     wanted = {k: v for k, v in asdict(study.metamodel).items() if k not in ignore}
+    # a study that leaves the fit to magtact takes the one shipped for geometric data
+    default = geometric and wanted == {k: v for k, v in asdict(magone().metamodel).items()
+                                       if k not in ignore}
     for name, info in infos.items():
         if "settings" not in info and name in ("B_r", "B_z"):
             continue  # the exact field: nothing fitted
         settings = {k: v for k, v in info.get("settings", {}).items() if k not in ignore}
-        if settings != wanted:
+        if settings != wanted and not default:
             return False
         if name in ("f_r", "f_z") and \
                 info.get("definition", "jacobian") != study.sensitivity.definition:

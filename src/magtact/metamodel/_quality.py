@@ -54,7 +54,7 @@ class FitQuality:
         if not self.poor:
             return ("the metamodels' held-out accuracy is within the thresholds (R² ≥ "
                     f"{POOR_R2:g}, error ≤ {POOR_OVER_RANGE:.0%} of the range)")
-        parts = [f"{k}: held-out R² {self.held_out[k][0]:.3g}, error "
+        parts = [f"{k}: held-out R² {self.held_out[k][0]:.4g}, error "
                  f"{self.held_out[k][1]:.3g} of the range" for k in self.poor]
         return ("the answer rests on a poor fit (" + "; ".join(parts) + f"; thresholds R² ≥ "
                 f"{POOR_R2:g}, error ≤ {POOR_OVER_RANGE:.0%} of the range): fit again with a "
@@ -87,6 +87,6 @@ def fit_quality_rows(models, columns: int) -> list[list[str]]:
     q = fit_quality(models)
     if not q.is_poor:
         return []
-    cell = "poor fit: " + ", ".join(f"{k} held-out R² {q.held_out[k][0]:.3g}" for k in q.poor)
+    cell = "poor fit: " + ", ".join(f"{k} held-out R² {q.held_out[k][0]:.4g}" for k in q.poor)
     return [["metamodels (the answer rests on a poor fit; fit again with a larger budget)",
              *([cell] * columns)]]
