@@ -127,6 +127,12 @@ def test_the_real_card_shows_its_verdict_first(browser, folder):
     box = page.locator("#verdict ul").bounding_box()
     assert box is not None and box["y"] + box["height"] <= SCREEN
     assert page.locator("#verdict li").count() == len(card["verdict"])
+    marks = [li.inner_text()[0] for li in page.locator("#verdict li").all()]
+    assert marks == ["✓" if v["met"] else "✗" for v in card["verdict"]]
+    if card.get("parts"):
+        box = page.locator("table.parts").bounding_box()
+        assert box is not None and box["y"] + box["height"] <= SCREEN
+        assert page.locator("table.parts tr").count() == len(card["parts"])
 
 
 #: Elements past the page's right edge that no scrolling box of the page clips.
@@ -196,6 +202,12 @@ def test_the_explorer_reads_what_result_evaluate_gives(browser, folder, result, 
             assert got[key] is None, key
         else:
             assert got[key] == pytest.approx(value, rel=1e-6), key
+    # the verdict against the study's constraints, from Python's numbers
+    c = result.constraints
+    reads = s.F_z is None or s.F_z >= c.F_z_c
+    want_marks = ["✓" if ok else "✗" for ok in (d.F_z_max >= c.F_z_c, reads,
+                                                 d.F_r_min <= c.F_r_c)]
+    assert [li.inner_text()[0] for li in page.locator("#x-verdict li").all()] == want_marks
     # shown as Python writes a number (3 significant figures), in mN and N
     assert page.locator("#x-sigma-z").inner_text() == (f"{sig(1e3 * r.sigma_z_0)} / "
                                                        f"{sig(1e3 * r.sigma_z_worst)} mN")

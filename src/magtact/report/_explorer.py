@@ -196,14 +196,16 @@ function satText(g, c){
     ' N (t = ' + sig(g.sat_t) + '), ' + (g.saturates_in_region ? 'inside' : 'beyond') +
     ' the stable region';
 }
+// each requirement of the study against the numbers above: met or not
 function verdict(g, c){
   const k = D.constraints, out = [];
-  out.push([c.Fz >= k.F_z_c_N, 'normal range ≥ ' + sig(k.F_z_c_N) + ' N: ' + sig(c.Fz) + ' N']);
-  out.push([c.Fr <= k.F_r_c_N, 'shear range ≥ ' + sig(Math.abs(k.F_r_c_N)) + ' N: ' +
+  out.push([c.Fz >= k.F_z_c_N, 'normal range at least ' + sig(k.F_z_c_N) + ' N: ' +
+            sig(c.Fz) + ' N']);
+  const reads = !g.saturates || c.satFz >= k.F_z_c_N;
+  out.push([reads, 'reads 0–' + sig(k.F_z_c_N) + ' N normal without saturating: ' +
+            (g.saturates ? 'saturates at ' + sig(c.satFz) + ' N' : 'never saturates')]);
+  out.push([c.Fr <= k.F_r_c_N, 'shear range at least ' + sig(Math.abs(k.F_r_c_N)) + ' N: ' +
             sig(Math.abs(c.Fr)) + ' N']);
-  out.push([!g.saturates_in_region, g.saturates_in_region
-            ? 'the chip saturates inside the stable region, at F_z = ' + sig(c.satFz) + ' N'
-            : 'the chip reads the whole stable region']);
   return out;
 }
 function silicones(G_kPa){
