@@ -548,6 +548,84 @@ def geometry_section(r: Results) -> list[str]:
     return out
 
 
+def broad_section(r: Results) -> list[str]:
+    if "broad" not in r.files:
+        return []
+    b = r["broad"]
+    out = ["## The broad design space", "",
+           f"Source: {r.source('broad')} (`bench/bench_broad.py`). The space aimed at, "
+           f"`{b['studies']['full']}`: H over 2–10 mm, magnet diameters 3 and 6 mm, heights 1 "
+           "and 3 mm; the shipped space, `" + b["studies"]["shipped"] + "`: its half at the 3 mm "
+           "diameter (heights 1 and 3 mm), the part that completed on the shared machine.", ""]
+    a = b.get("assemble")
+    if a:
+        c = a["cache"]
+        out += [f"**Cost.** {a['paths_total']} structural paths and {a['fields_computed']} field "
+                f"solves for the shipped space ({a['sizes']}); the job cache holds "
+                f"{c['paths_cached']} paths of the full space, "
+                f"{c['path_job_wall_time_s_sum'] / 60:.0f} min of solver time in all "
+                f"({c['path_job_wall_time_s_min']:.0f}–{c['path_job_wall_time_s_max']:.0f} s "
+                f"per path with one worker at load averages of "
+                f"{a['load_average_at_start'][0]:.0f}–{a['load_average_at_end'][0]:.0f} from "
+                f"other work), first to last completion {c['first_to_last_completion_s'] / 60:.0f}"
+                " min.", ""]
+    f = b.get("fit")
+    if f:
+        rows = []
+        for name, acc in f["accuracy"].items():
+            for part in ("train", "test"):
+                x = acc.get(part)
+                if x:
+                    rows.append([name, "held out" if part == "test" else "training",
+                                 f"{x['r2']:.4f}", pct(x["max_abs_err_over_range"], 2),
+                                 pct(x["max_rel_err"], 1), str(x["n_points"])])
+        out += [f"**Metamodels over the broad space** (`{f['magtact_command']}`, "
+                f"{f['settings']['generations']} GP generations × "
+                f"{f['settings']['population']}, {f['wall_time_s']:.0f} s; the field is the "
+                "exact one; held out: whole (θ, H) paths):", ""]
+        out += table(["model", "points", "R²", "largest error / range", "largest rel. error",
+                      "n"], rows)
+        out += ["![parity of the broad fit](../src/magtact/metamodel/data/broad/parity.png)", ""]
+    sh = b.get("ship")
+    if sh:
+        out += [f"Shipped: `{sh['data']}` ({sh['data_bytes'] / 1e3:.0f} kB) and `{sh['fit']}` "
+                f"({sh['fit_bytes'] / 1e3:.0f} kB).", ""]
+    w = b.get("whatif")
+    if w:
+        out += ["**What-ifs answered from it** (`magtact.design`, no DOE; 1-minute load "
+                f"average {w['load_average'][0]:.1f}):", ""]
+        out += table(["study edit", "s", "H [mm]", "G [kPa]", "Γ_r,max [N/T]",
+                      "Γ_z,max [N/T]", "F_r,min [N]", "F_z,max [N]"],
+                     [[k, f"{v['wall_time_s']:.1f}", f"{v['chosen']['H_mm']:.3g}",
+                       f"{v['chosen']['G_kPa']:.3g}", f"{v['Gamma_r_max_N_per_T']:.3g}",
+                       f"{v['Gamma_z_max_N_per_T']:.3g}", f"{v['F_r_min_N']:.3g}",
+                       f"{v['F_z_max_N']:.3g}"] for k, v in w["cases"].items()])
+    m = b.get("mesh_correction")
+    if m:
+        rows = []
+        for h in ("H_3_mm", "H_7_mm"):
+            for key, label in (("F_z_t1_N", "F_z(t = 1)"), ("F_r_min_N", "min F_r")):
+                x = m[h][key]
+                rows.append([h[2:-3], label, f"{x['limit']:.4g}", spct(x["default_vs_limit"], 2),
+                             spct(x["corrected_vs_limit"], 2),
+                             spct(x["richardson_of_the_path_vs_limit"], 2)])
+        out += ["**A mesh correction of the bundled forces** (`python bench/bench_broad.py "
+                "mesh`): a multiplicative bridge c(θ, H), linear, fitted to the order-1 "
+                "Richardson values 2 F_accurate − F_default of 5 DOE paths (θ > 0, not the two "
+                "below), applied to the default mesh's forces of the held-out paths θ_max at "
+                "H = 3 and 7 mm and compared with the frontier's limits there (extrapolated from "
+                "`default` and `fine`, θ_max, G = 29.4 kPa):", ""]
+        out += table(["H [mm]", "force", "limit [N]", "default", "corrected",
+                      "Richardson of the path itself"], rows)
+        verdict = "adopted" if m["adopted"] else "not adopted: the bundled data stay uncorrected"
+        out += [f"Threshold for adopting it: F_z(t = 1) within {pct(m['adopt_if_F_z_t1_within'])}"
+                f" at both heights; worst {pct(m['worst_corrected_F_z_t1'], 2)}, so {verdict}. "
+                "Even each held-out path's own Richardson value from `default` and "
+                "`accurate` lies outside 1.5 % at 7 mm (last column), so no bridge fitted to "
+                "such values can reach it there.", ""]
+    return out
+
+
 def _spread_rows(p: dict) -> list[list[str]]:
     rows = []
     for d, figs in p["spread"].items():
@@ -621,7 +699,7 @@ def document(folder: Path) -> str:
              ""]
     for section in (field_section, mechanics_section, fit_section, gamma_section,
                     mesh_effect_section, frontier_section, optimise_section, geometry_section,
-                    publication_section, timing_section):
+                    broad_section, publication_section, timing_section):
         lines += section(r)
     return "\n".join(lines).rstrip() + "\n"
 

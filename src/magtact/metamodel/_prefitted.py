@@ -44,13 +44,16 @@ def _infos(folder: Path) -> dict | None:
     return infos
 
 
-def _settings_match(study: Study, infos: dict, geometric: bool) -> bool:
+def _settings_match(study: Study, infos: dict, geometric: bool, own: bool) -> bool:
+    """True if the shipped fit with ``infos`` serves ``study``'s fit settings: the same
+    settings, or, for a fit shipped for a data set other than the MagOne one (``own`` False),
+    a study that leaves the fit settings at magtact's defaults (that data set's fit is then
+    the one magtact made for it)."""
     # over geometric data the field is the exact one whatever b_model asks (docs/method.md §7)
     ignore = _NEUTRAL | ({"b_model"} if geometric else set())
     wanted = {k: v for k, v in asdict(study.metamodel).items() if k not in ignore}
-    # a study that leaves the fit to magtact takes the one shipped for geometric data
-    default = geometric and wanted == {k: v for k, v in asdict(magone().metamodel).items()
-                                       if k not in ignore}
+    default = not own and wanted == {k: v for k, v in asdict(magone().metamodel).items()
+                                     if k not in ignore}
     for name, info in infos.items():
         if "settings" not in info and name in ("B_r", "B_z"):
             continue  # the exact field: nothing fitted
@@ -74,7 +77,8 @@ def find_shipped(study: Study, ds) -> tuple[Path, float] | None:
     for folder_name, data_name in SHIPPED.items():
         folder = prefitted_dir(folder_name)
         infos = _infos(folder)
-        if infos is None or not _settings_match(study, infos, bool(geometry_dims(ds))):
+        if infos is None or not _settings_match(study, infos, bool(geometry_dims(ds)),
+                                                own=folder_name == "magone"):
             continue
         hashes = {info.get("data_hash") for info in infos.values() if "data_hash" in info}
         digest = digest or data_hash(ds)
