@@ -192,7 +192,8 @@ def test_the_explorer_reads_what_result_evaluate_gives(browser, folder, result, 
     page.locator("#x-G-number").fill(str(G_kPa))
     got = read_explorer(page)
     assert errors == []
-    a = result.evaluate(H_mm=got["H_mm"], G_kPa=G_kPa)
+    fixed = json.loads((folder / "optimise" / "explorer.json").read_text())["fixed"]
+    a = result.evaluate(H_mm=got["H_mm"], G_kPa=G_kPa, **fixed)  # magnet, standoff: chosen
     r, s, d = a.resolution, a.saturation, a.design
     want = {"sigma_r_worst": r.sigma_r_worst, "sigma_z_worst": r.sigma_z_worst,
             "sigma_r_0": r.sigma_r_0, "sigma_z_0": r.sigma_z_0,

@@ -319,13 +319,14 @@ def test_calibration_figure_shows_the_error_and_the_frontier(smap, sigma, firmwa
     shown = axes[1].collections[0].get_array().reshape(9, 9)
     np.testing.assert_allclose(shown, grid["err_z"] * 1e3)
     assert f"{sigma[1] * 1e3:.3g} mN" in axes[1].get_title()
-    assert axes[2].get_xlabel() == "size (bytes)"
+    assert axes[2].get_xlabel() == "size [bytes]"
     xs = np.concatenate([ln.get_xdata() for ln in axes[2].lines
                          if ln.get_label().split(" ")[0] in ("features", "poly", "table")])
     assert sorted(xs) == sorted(a.bytes for a in firmware.candidates)
 
 
 def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware, doe):
+    from magtact._display import sig
     from magtact.calibration import write_calibration_outputs
     from magtact.report import build_report
 
@@ -339,7 +340,7 @@ def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware, d
     section = html[html.index('id="calibration"'):]
     a = firmware.chosen
     assert f"{a.kind} ({a.bytes} bytes, {a.multiplies} multiplications)" in section
-    assert "3e-12 of the force range" in section and "reached" in section
+    assert f"{sig(3e-12)} of the force range" in section and "reached" in section
     assert ("Forces from the metamodels; what limits them: metamodels against the DOE&#x27;s "
             "FE forces at H") in section
     assert f"F_z {limit['F_z_mN']:.3g} mN" in section

@@ -14,7 +14,7 @@ H_g_mm = 6.0
 
 
 @pytest.mark.parametrize("command", [["fit", "--out", "OUT"], ["optimise", "--out", "OUT"],
-                                     ["compare", "3,29.4", "4,29.4", "--study"]])
+                                     ["compare", "3,29.4", "4,29.4"]])  # study: last
 def test_other_geometry_is_refused_with_what_to_run(tmp_path, capsys, monkeypatch, command):
     study = tmp_path / "tall.toml"
     study.write_text(TALL)

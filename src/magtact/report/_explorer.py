@@ -66,9 +66,15 @@ def explorer_data(result, n_H: int = N_H, n_pareto: int = N_PARETO) -> dict | No
     lo, hi = study.design.H
     heights = sorted({*(float(h) for h in np.linspace(lo, hi, n_H)), chosen.H, original.H})
     M_z = chosen.design.M_z
-    M_kw = {} if M_z is None else {"M_z_A_per_m": float(M_z)}
+    # the chosen design's magnet and chip standoff stay fixed while H and G move
+    fixed: dict = {} if M_z is None else {"M_z_A_per_m": float(M_z)}
+    if chosen.parts is not None and chosen.parts.grade not in (None, "custom") and (
+            chosen.parts.grade != study.magnet.grade):
+        fixed["grade"] = chosen.parts.grade
+    if "standoff" in result.variables:
+        fixed["standoff_mm"] = float(mm(result.variables["standoff"]))
     G_kPa = float(kpa(chosen.G))
-    grid = [_per_G(result.evaluate(H_mm=float(mm(H)), G_kPa=G_kPa, **M_kw)) for H in heights]
+    grid = [_per_G(result.evaluate(H_mm=float(mm(H)), G_kPa=G_kPa, **fixed)) for H in heights]
     p = result.pareto
     n = len(p.H)
     picks = sorted({int(round(k)) for k in np.linspace(0, n - 1, min(n, n_pareto))}) if n else []
@@ -78,7 +84,7 @@ def explorer_data(result, n_H: int = N_H, n_pareto: int = N_PARETO) -> dict | No
                  "Gamma_r_max": float(p.Gamma_r_max[k]), "Gamma_z_max": float(p.Gamma_z_max[k]),
                  "F_r_min": float(p.F_r_min[k]), "F_z_max": float(p.F_z_max[k])}
         if k in picks:
-            kw = {} if p.M_z is None else {"M_z_A_per_m": float(p.M_z[k])}
+            kw = fixed if p.M_z is None else fixed | {"M_z_A_per_m": float(p.M_z[k])}
             a = result.evaluate(H_mm=point["H_mm"], G_kPa=point["G_kPa"], **kw)
             point["card"] = _per_G(a) | {"G_kPa": point["G_kPa"]}
         pareto.append(point)
@@ -89,6 +95,7 @@ def explorer_data(result, n_H: int = N_H, n_pareto: int = N_PARETO) -> dict | No
         "format": FORMAT, "study": study.name,
         "G_kPa_range": [float(kpa(g)) for g in study.design.G],
         "G_kPa": G_kPa, "M_z_A_per_m": None if M_z is None else float(M_z),
+        "fixed": fixed, "magnet": None if chosen.parts is None else chosen.parts.grade,
         "chip": chosen.chip.name,
         "constraints": {"F_r_c_N": float(c.F_r_c), "F_z_c_N": float(c.F_z_c)},
         "chosen": {"H_mm": float(mm(chosen.H)), "G_kPa": float(kpa(chosen.G))},
@@ -133,8 +140,7 @@ def explorer_section(folder: Path) -> str:
 <p>Move the base height H and the shear modulus G: every number below is one Python computed
 (<code>Result.evaluate</code> on {len(heights)} heights, written to
 <code>optimise/explorer.json</code>) times G, which is exact; H takes the heights of that grid.
-M_z is the chosen design's{'' if data.get('M_z_A_per_m') is None else
-f" ({sig(data['M_z_A_per_m'] / 1e6)} MA/m)"}.</p>
+{_fixed_text(data)}</p>
 <div class="xctl"><label for="x-H">H [mm]</label>
 <input type="range" id="x-H" min="0" max="{len(heights) - 1}" step="1" value="{start}">
 <output id="x-H-value"></output>
@@ -152,6 +158,24 @@ f" ({sig(data['M_z_A_per_m'] / 1e6)} MA/m)"}.</p>
  aria-label="Pareto set"></svg><div id="x-card" class="xcard"></div></div></div>
 <script id="x-data" type="application/json">{payload}</script>
 <script>{_SCRIPT}</script></section>"""
+
+
+def _fixed_text(data: dict) -> str:
+    """What stays the chosen design's while H and G move, in words."""
+    fixed = data.get("fixed") or {}
+    parts = []
+    if data.get("magnet") not in (None, "custom"):
+        parts.append(f"the magnet ({_e(data['magnet'])})")
+    elif data.get("M_z_A_per_m") is not None:
+        parts.append(f"M_z ({sig(data['M_z_A_per_m'] / 1e6)} MA/m)")
+    else:
+        parts.append("the magnet")
+    if "standoff_mm" in fixed:
+        parts.append(f"the chip's standoff ({sig(fixed['standoff_mm'])} mm)")
+    verb = "is" if len(parts) == 1 else "are"
+    text = " and ".join(parts)
+    return (f"{text[0].upper()}{text[1:]} {verb} the chosen design's; the chip setting is "
+            "picked for each design as the optimisation picks it.")
 
 
 def _designs(n: int) -> str:

@@ -567,7 +567,7 @@ def _calibration(folder: Path) -> str:
             f"G = {_sig(design.get('G_kPa'))} kPa; "
             f"stable region t ≤ {_sig(design.get('t_m'))}, θ ≤ "
             f"{_sig(design.get('theta_m_rad'))} rad. Round trip F → B → F: largest error "
-            f"{_sig(d.get('round_trip_rel'), 2)} of the force range. Firmware map: "
+            f"{_sig(d.get('round_trip_rel'))} of the force range. Firmware map: "
             f"{_e(fw.get('kind'))} ({_fmt(fw.get('bytes'))} bytes, "
             f"{_fmt(fw.get('multiplies'))} multiplications), largest error over the region "
             f"F_r {_sig(fw.get('max_error_F_r_mN'))} mN, F_z {_sig(fw.get('max_error_F_z_mN'))}"
