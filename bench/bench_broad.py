@@ -38,9 +38,10 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
-STUDIES = {"shipped": HERE / "magtact_broad.toml", "full": HERE / "magtact_broad_full.toml"}
-DOE_DIRS = {"shipped": RESULTS / "broad_doe", "full": RESULTS / "broad_full_doe"}
-FIT_DIR = RESULTS / "broad_fit"
+STUDIES = {"3x1": HERE / "magtact_broad_3x1.toml", "H_m": HERE / "magtact_broad.toml",
+           "full": HERE / "magtact_broad_full.toml"}
+DOE_DIRS = {k: RESULTS / f"broad_{k}_doe" for k in STUDIES}
+FIT_DIRS = {k: RESULTS / f"broad_{k}_fit" for k in STUDIES}
 CACHE = RESULTS / "broad_cache"
 OUT = RESULTS / "broad.json"
 SHIP_DATA = ROOT / "src" / "magtact" / "doe" / "data" / "broad_doe.nc"
@@ -117,9 +118,10 @@ def doe(which: str, workers: int, section: str = "doe") -> None:
     print(f"DOE: {wall:.0f} s -> {out / 'doe.nc'}")
 
 
-def fit() -> None:
-    cmd = _magtact("fit", str(STUDIES["shipped"]), "--data",
-                   str(DOE_DIRS["shipped"] / "doe.nc"), "--out", str(FIT_DIR))
+def fit(which: str) -> None:
+    FIT_DIR = FIT_DIRS[which]
+    cmd = _magtact("fit", str(STUDIES[which]), "--data",
+                   str(DOE_DIRS[which] / "doe.nc"), "--out", str(FIT_DIR))
     load_start = os.getloadavg()
     start = time.perf_counter()
     subprocess.run(cmd, check=True, cwd=ROOT)
@@ -130,23 +132,25 @@ def fit() -> None:
         held[name] = info["accuracy"]
     from magtact.study import load_study
 
-    _update("fit", {"command": "python bench/bench_broad.py fit",
+    _update("fit", {"command": f"python bench/bench_broad.py fit --study {which}",
+                    "study": str(STUDIES[which].relative_to(ROOT)),
                     "magtact_command": " ".join(["magtact", *cmd[3:]]),
-                    "settings": dict(vars(load_study(STUDIES["shipped"]).metamodel)),
+                    "settings": dict(vars(load_study(STUDIES[which]).metamodel)),
                     "wall_time_s": wall, "load_average_at_start": load_start,
                     "load_average_at_end": os.getloadavg(), "accuracy": held})
     print(json.dumps(held, indent=1))
 
 
-def ship() -> None:
-    shutil.copy2(DOE_DIRS["shipped"] / "doe.nc", SHIP_DATA)
+def ship(which: str) -> None:
+    shutil.copy2(DOE_DIRS[which] / "doe.nc", SHIP_DATA)
     SHIP_FIT.mkdir(parents=True, exist_ok=True)
-    for src in sorted(FIT_DIR.iterdir()):
-        if src.suffix in (".json", ".md", ".png", ".svg"):
+    for src in sorted(FIT_DIRS[which].iterdir()):
+        if src.suffix in (".json", ".md", ".png", ".svg") and not src.name.startswith("."):
             shutil.copy2(src, SHIP_FIT / src.name)
     sizes = {"data_bytes": SHIP_DATA.stat().st_size,
              "fit_bytes": sum(p.stat().st_size for p in SHIP_FIT.iterdir())}
-    _update("ship", {"command": "python bench/bench_broad.py ship",
+    _update("ship", {"command": f"python bench/bench_broad.py ship --study {which}",
+                     "study": str(STUDIES[which].relative_to(ROOT)),
                      "data": str(SHIP_DATA.relative_to(ROOT)),
                      "fit": str(SHIP_FIT.relative_to(ROOT)), **sizes})
     print(sizes)
@@ -161,8 +165,9 @@ def whatif() -> None:
         "3 x 1 mm magnet": {"magnet": {"R_m_mm": 1.5, "H_m_mm": 1.0}},
         "3 x 1 mm magnet, H in [3, 9] mm": {"magnet": {"R_m_mm": 1.5, "H_m_mm": 1.0},
                                              "design": {"H_mm": [3.0, 9.0]}},
-        "3 x 2 mm magnet, H in [2, 10] mm": {"magnet": {"R_m_mm": 1.5, "H_m_mm": 2.0},
-                                              "design": {"H_mm": [2.0, 10.0]}},
+        "3 x 1 mm N52 magnet, H in [2, 10] mm": {"magnet": {"R_m_mm": 1.5, "H_m_mm": 1.0,
+                                                            "grade": "N52"},
+                                                 "design": {"H_mm": [2.0, 10.0]}},
     }
     out = {}
     for label, edit in cases.items():
@@ -249,9 +254,11 @@ def main() -> None:
     if a.step == "doe":
         doe(a.study, a.workers)
     elif a.step == "assemble":
-        doe("shipped", a.workers, section="assemble")
+        doe(a.study, a.workers, section="assemble")
+    elif a.step in ("fit", "ship"):
+        {"fit": fit, "ship": ship}[a.step](a.study)
     else:
-        {"fit": fit, "ship": ship, "whatif": whatif, "mesh": mesh}[a.step]()
+        {"whatif": whatif, "mesh": mesh}[a.step]()
 
 
 if __name__ == "__main__":

@@ -152,3 +152,22 @@ def test_a_fixed_magnet_inside_geometric_data_is_served_by_its_fit(geometric, mo
     # outside the data's magnet radii it needs new mechanics
     assert differences(ds, _study(magnet={"R_m_mm": 4.0}))[0].startswith(
         "[magnet] R_m_mm = 4 outside the data's range [1.5, 3.5] mm")
+
+
+# ---- the broad data set shipped with magtact ---------------------------------------------
+def test_a_catalogue_magnet_and_a_tall_body_are_answered_from_the_broad_data():
+    """A 3 x 1 mm magnet over H in [3, 9] mm: no DOE, the broad data set and its shipped fit;
+    the same study with the MagOne magnet needs new mechanics, named."""
+    from magtact.metamodel import prefitted_dir
+
+    study = _study(magnet={"R_m_mm": 1.5, "H_m_mm": 1.0, "grade": "N45"},
+                   design={"H_mm": [3.0, 9.0], "G_kPa": [15.0, 45.0]})
+    ds = bundled_for(study)
+    assert ds.attrs["rescaled_from"] == "broad_doe.nc"
+    assert float(ds["H"].min()) <= 3e-3 and float(ds["H"].max()) >= 9e-3
+    sel = select_metamodels(study, ds)
+    assert sel.shipped == prefitted_dir("broad") and sel.fit is None
+    assert not sel.poor_fit, sel.quality.message()
+    with pytest.raises(MagtactError, match=r"needs new mechanics: \[design\] H_mm = \[3, 9\] "
+                                           r"reaches outside the data's heights \[3, 7\] mm"):
+        bundled_for(_study(design={"H_mm": [3.0, 9.0]}))
