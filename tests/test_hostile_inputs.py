@@ -288,15 +288,23 @@ def test_temperature_span_and_coefficient_beyond_the_magnet(env, grade, fragment
 def test_temperature_within_the_grade_is_accepted():
     s = study_from_dict({"environment": {"delta_T_K": 55.0}, "magnet": {"grade": "N52"}})
     assert s.environment.delta_T == 55.0
+    # a custom magnet weaker than any NdFeB grade (a ferrite's 0.4 T): its limit is not known
+    s = study_from_dict({"environment": {"delta_T_K": 100.0},
+                         "magnet": {"M_z_A_per_m": 0.4 / 1.257e-6}})
+    assert s.environment.delta_T == 100.0
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
 @given(st.floats(1e-3, 200.0), st.floats(-1.0, 1.0))
 def test_remanence_change_oracle(delta_T, tc_pct):
-    """Refused exactly when |α ΔT| exceeds 50 %, the message naming the key."""
+    """Refused exactly when |α ΔT| exceeds 50 % or ΔT takes the MagOne magnet (custom, μ0 M_z
+    = 1.51 T: sintered NdFeB) beyond the N series' 80 °C from 20 °C, the message naming the
+    key."""
     data = {"environment": {"delta_T_K": delta_T, "remanence_tc_pct_per_K": tc_pct}}
     if abs(delta_T * tc_pct / 100) > 0.5:
         study_refused(data, "environment.delta_T_K", "changes the remanence by")
+    elif delta_T > 60.0:
+        study_refused(data, "environment.delta_T_K", "sintered NdFeB", "at most 60 K")
     else:
         assert study_from_dict(data).environment.delta_T == pytest.approx(delta_T)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from ._errors import StudyError
 from ._model import Study, holdout_limit
-from ._units import PLAUSIBLE_KEYS, from_si, unit_mistake
+from ._units import MU0, PLAUSIBLE_KEYS, from_si, unit_mistake
 
 #: Room temperature [°C] a study's temperature change ``[environment] delta_T_K`` starts from
 #: (an assumption: the catalogue of ``parts/data/magnets.toml`` states no reference
@@ -83,8 +83,8 @@ def check_physical(s: Study, source) -> None:
 
     * The temperature change and the remanence's coefficient: the change α ΔT must stay
       within :data:`MAX_REMANENCE_CHANGE` (a linear coefficient holds for small changes), and
-      for a catalogue grade ΔT from :data:`ROOM_C` must stay within the grade's largest working
-      temperature (``parts/data/magnets.toml``: 80 °C for the N series).
+      ΔT from :data:`ROOM_C` must stay within the magnet's largest working temperature
+      (:func:`working_limit`; ``parts/data/magnets.toml``: 80 °C for the N series).
     """
     env = s.environment
     change = env.remanence_tc * env.delta_T
@@ -96,17 +96,31 @@ def check_physical(s: Study, source) -> None:
                          f"{100 * change:+.3g} %: no magnet keeps a linear reversible "
                          f"coefficient that far (at most ±{100 * MAX_REMANENCE_CHANGE:g} % is "
                          "accepted); give a smaller temperature change or coefficient", source)
-    if s.magnet.grade != "custom":
-        from ..parts import grade
+    limit = working_limit(s)
+    if limit is not None and env.delta_T > limit[0] - ROOM_C:
+        raise StudyError("environment.delta_T_K",
+                         f"{env.delta_T:g} K above {ROOM_C:g} °C takes the magnet ({limit[1]}) "
+                         f"beyond its working temperature of {limit[0]:g} °C (the catalogue's "
+                         f"limit); at most {limit[0] - ROOM_C:g} K", source)
 
-        g = grade(s.magnet.grade)
-        span = g.max_temperature_C - ROOM_C
-        if env.delta_T > span:
-            raise StudyError("environment.delta_T_K",
-                             f"{env.delta_T:g} K above {ROOM_C:g} °C takes the magnet "
-                             f"(magnet.grade = {s.magnet.grade!r}) beyond its working "
-                             f"temperature of {g.max_temperature_C:g} °C (the catalogue's "
-                             f"limit); at most {span:g} K", source)
+
+def working_limit(s: Study) -> tuple[float, str] | None:
+    """The magnet's largest working temperature [°C] and what it is taken as: its catalogue
+    grade's, or, for a custom magnet whose remanence μ0 M_z is at least the weakest catalogue
+    grade's (sintered NdFeB; ``parts/data/magnets.toml`` lists the N series only), the N
+    series' limit; None for a weaker custom magnet (its material is not known)."""
+    from ..parts import GRADES, grade
+
+    mg = s.magnet
+    if mg.grade != "custom":
+        return grade(mg.grade).max_temperature_C, f"magnet.grade = {mg.grade!r}"
+    weakest = min(GRADES.values(), key=lambda g: g.B_r_min)
+    B_r = MU0 * mg.M_z
+    if B_r < weakest.B_r_min:
+        return None
+    top = max(g.max_temperature_C for g in GRADES.values())
+    return top, (f"custom, B_r = μ0 M_z = {B_r:.3g} T: sintered NdFeB, taken as the "
+                 f"catalogue's N series")
 
 
 def check_field_mesh(s: Study, source=None) -> None:
