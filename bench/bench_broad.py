@@ -15,6 +15,7 @@ Steps (each writes its part of ``bench/results/broad.json``)::
     python bench/bench_broad.py ship       # copy data and fit into the package
     python bench/bench_broad.py whatif     # what-ifs answered from the shipped data, timed
     python bench/bench_broad.py mesh       # the mesh correction, measured (no FE solve)
+    python bench/bench_broad.py runs       # magtact run of the first what-ifs, timed
 
 ``doe`` and ``assemble`` run ``magtact doe`` with one worker through the job cache
 ``bench/results/broad_cache`` (a rerun reuses every finished path). The cache keys hash the
@@ -244,10 +245,56 @@ def mesh() -> None:
     print(json.dumps(rows, indent=1), "adopted:", worst <= ADOPT_F_Z)
 
 
+#: The what-ifs a designer first tried, as study edits of the built-in MagOne study.
+RUNS = {
+    "silicone Dragon Skin 10": {"material": {"silicone": "Dragon Skin 10"}},
+    "grade N52": {"magnet": {"grade": "N52"}},
+    "G range 10-60 kPa": {"design": {"G_kPa": [10.0, 60.0]}},
+    "H range 3.5-6.5 mm": {"design": {"H_mm": [3.5, 6.5], "H_original_mm": 4.0}},
+    "3 x 1 mm magnet, H range 3-9 mm": {"magnet": {"R_m_mm": 1.5, "H_m_mm": 1.0},
+                                        "design": {"H_mm": [3.0, 9.0]}},
+    "silicone, grade, G range, chip setting, constraints at once": {
+        "material": {"silicone": "Dragon Skin 10"}, "magnet": {"grade": "N52"},
+        "design": {"G_kPa": [10.0, 60.0]},
+        "hall": {"gain_sel": 0, "res": 1, "osr": 1, "dig_filt": 2},
+        "constraints": {"source": "values", "F_r_c_N": -0.3, "F_z_c_N": 4.0}},
+}
+
+
+def runs() -> None:
+    """``magtact run`` of each what-if: its wall time, its stages and where its DOE came from."""
+    import tempfile
+
+    import tomli_w
+
+    out = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for n, (label, edit) in enumerate(RUNS.items()):
+            study = Path(tmp) / f"s{n}.toml"
+            study.write_text(tomli_w.dumps({"base": "magone", "name": label, **edit}))
+            folder = Path(tmp) / f"r{n}"
+            load = os.getloadavg()
+            start = time.perf_counter()
+            proc = subprocess.run(_magtact("run", str(study), "--out", str(folder)),
+                                  cwd=ROOT, capture_output=True, text=True)
+            wall = time.perf_counter() - start
+            manifest = json.loads((folder / "run.json").read_text()) \
+                if (folder / "run.json").is_file() else {}
+            out[label] = {
+                "edit": edit, "exit_status": proc.returncode, "wall_time_s": wall,
+                "load_average_at_start": load, "doe_source": manifest.get("doe_source"),
+                "stages": {s["key"]: {"status": s["status"], "wall_time_s": s["wall_time_s"],
+                                      "message": s["message"][:300]}
+                           for s in manifest.get("stages", [])},
+                "stderr_tail": proc.stderr[-600:]}
+            print(label, f"{wall:.0f} s", proc.returncode, manifest.get("doe_source"))
+    _update("runs", {"command": "python bench/bench_broad.py runs", "cases": out})
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("step", choices=("doe", "assemble", "fit", "ship", "whatif", "mesh"))
+    p.add_argument("step", choices=("doe", "assemble", "fit", "ship", "whatif", "mesh", "runs"))
     p.add_argument("--study", choices=tuple(STUDIES), default="full")
     p.add_argument("--workers", type=int, default=1)
     a = p.parse_args()
@@ -258,7 +305,7 @@ def main() -> None:
     elif a.step in ("fit", "ship"):
         {"fit": fit, "ship": ship}[a.step](a.study)
     else:
-        {"whatif": whatif, "mesh": mesh}[a.step]()
+        {"whatif": whatif, "mesh": mesh, "runs": runs}[a.step]()
 
 
 if __name__ == "__main__":

@@ -65,13 +65,15 @@ def test_every_python_entry_point_refuses(result, ds, H_mm):
     from magtact.budget import error_budget
     from magtact.calibration import calibrate, sensor_map
     from magtact.designer import answer
+    from magtact.optimise import force_constraints
 
     H = H_mm * 1e-3
     calls = [lambda: result.evaluate(H_mm=H_mm, G_kPa=29.4),
              lambda: answer(result.models, result.study, H, 29.4e3),
              lambda: error_budget(result.models, result.study, H, 29.4e3, dataset=ds),
              lambda: sensor_map(result.models, result.study, H, 29.4e3),
-             lambda: calibrate(result.models, result.study, H, 29.4e3, noise=(1e-7, 1e-7))]
+             lambda: calibrate(result.models, result.study, H, 29.4e3, noise=(1e-7, 1e-7)),
+             lambda: force_constraints(result.models, result.study, reference=(H, 29.4e3))]
     for call in calls:
         with pytest.raises(MagtactError, match=f"H = {H_mm:g} mm lies outside"):
             call()

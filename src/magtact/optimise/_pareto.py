@@ -17,6 +17,7 @@ import numpy as np
 
 from .._errors import MagtactError
 from ..chip import chip_margin
+from ..doe import check_design
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study, from_si, hall_chip
@@ -94,6 +95,7 @@ def force_constraints(models: Responses | ModelSet, study: Study, *, F_r_c: floa
         if study.geometric_variables:  # a reference design has the study's own geometry
             geometry = study.geometry()
             models, study = as_responses(models).models.at(**geometry), study.at(**geometry)
+        check_design(study, reference[0])  # a reference outside the data: extrapolated
         d = per_design(models, reference[0], reference[1], study)
         return ForceConstraints(k * d.F_r_min, k * d.F_z_max, "reference", d, c.G_tolerance)
     return ForceConstraints(k * (c.F_r_c if F_r_c is None else float(F_r_c)),
