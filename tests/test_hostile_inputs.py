@@ -99,6 +99,22 @@ def test_seeds_that_are_not_a_seed_study_are_refused(tmp_path, refused):
         refused(base, f"--seeds {path}", fragment)
 
 
+def test_study_write_does_not_read_a_large_file_it_would_not_replace(tmp_path, refused,
+                                                                     monkeypatch):
+    """``magtact study --write FILE`` compares an existing FILE with the study through the
+    capped reader: a 5 GB (sparse) file is refused unread."""
+    import magtact._files as files
+
+    big = tmp_path / "big.toml"
+    with big.open("wb") as fh:
+        fh.truncate(5_000_000_000)
+    reads = []
+    real = files.os.read
+    monkeypatch.setattr(files.os, "read", lambda fd, n: reads.append(n) or real(fd, n))
+    refused(["study", "--write", str(big)], "the file exists and magtact does not replace it")
+    assert not reads
+
+
 def test_the_capped_reader_reads_at_most_its_cap(tmp_path):
     """A regular file is read whole up to the cap; one byte more is refused, and a device that
     claims size 0 is refused before a byte is read."""

@@ -27,11 +27,23 @@ def study_command(
     text = s.to_toml()
     if write is not None and write.is_dir():
         raise MagtactError(f"--write {write}: Is a directory")
-    # an existing file is the user's (its comments, its order): never replaced
-    same = write is not None and write.is_file() and write.read_bytes() == text.encode()
+    # an existing file is the user's (its comments, its order): never replaced; it is the same
+    # study only if it holds exactly these bytes (read no further than their length)
+    same = write is not None and write.is_file() and _holds(write, text.encode())
     if write is not None and not same and (write.exists() or write.is_symlink()):
         raise MagtactError(f"--write {write}: the file exists and magtact does not replace it; "
                            "remove it or name another file")
     typer.echo(text)
     if write is not None and not same:
         write_text(write, text)
+
+
+def _holds(path: Path, data: bytes) -> bool:
+    """Whether the regular file ``path`` holds exactly ``data`` (read through the size-capped
+    reader: a larger file is not read)."""
+    from .._files import UnreadableFile, read_bytes_capped
+
+    try:
+        return read_bytes_capped(path, len(data)) == data
+    except UnreadableFile:
+        return False
