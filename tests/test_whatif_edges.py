@@ -142,3 +142,13 @@ def test_a_short_fit_turns_the_metamodel_stage_to_a_warning(ds, short_fit, tmp_p
     (rec,) = pipeline._run_stages(ctx, "test", {}, 0.0)
     assert rec.status == "warning"
     assert any(n.startswith("WARNING: the answer rests on a poor fit") for n in rec.notes)
+
+
+def test_the_fit_command_says_a_short_fit_is_poor(tmp_path):
+    study = tmp_path / "short.toml"
+    study.write_text('base = "magone"\n[metamodel]\ngenerations = 1\npopulation = 20\n'
+                     'retries = 0\nlocal_iterations = 0\n')
+    out = CliRunner().invoke(app, ["fit", str(study), "--out", str(tmp_path / "fit")])
+    assert out.exit_code == 0, out.output
+    text = " ".join(out.output.split())
+    assert "warning: the answer rests on a poor fit" in text

@@ -58,4 +58,9 @@ def fit(
     tables().print(tab)
     console.print(f"wrote {len(files)} files (models, metamodels.md, figures) to {out}",
                   highlight=False)
+    from ..metamodel import fit_quality  # a poor fit is said, not only written
+
+    quality = fit_quality(result.model_set(s))
+    if quality.is_poor:
+        console.print(f"[bold yellow]warning:[/] {quality.message()}", highlight=False)
 
