@@ -67,11 +67,13 @@ def setup(models):
 
 
 def _headers(setup):
-    """The chosen approximation and one candidate of each other kind and transform."""
+    """The chosen approximation, one candidate of each kind and one of each transform (the
+    C code differs by kind and by the transform of B_z only)."""
     smap, _, choice = setup
     picked = {("chosen", choice.chosen.kind, choice.chosen.transform): choice.chosen}
     for a in choice.candidates:
-        picked.setdefault((a.kind, a.transform), a)
+        if a.kind not in {k[0] for k in picked} or a.transform not in {k[1] for k in picked}:
+            picked.setdefault((a.kind, a.transform), a)
     return {k: c_header(a, smap, choice, noise=(NOISE, NOISE)) for k, a in picked.items()}
 
 
