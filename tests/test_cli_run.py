@@ -107,9 +107,9 @@ def test_run_end_to_end_with_stand_in_doe(tmp_path, monkeypatch):
     its constraints are set so that the stand-in's forces can meet them."""
     import magtact.doe
     from conftest import synthetic_doe
-    from magtact.study import Constraints
+    from magtact.study import Requirements
 
-    study_file = fast_study(tmp_path, constraints=Constraints(F_r_c=-0.05, F_z_c=1.0))
+    study_file = fast_study(tmp_path, requirements=Requirements(F_r=0.05, F_z=1.0, rate=0.0))
     ds = synthetic_doe(load_study(study_file), n_t=6)
     monkeypatch.setattr(magtact.doe, "load_bundled", lambda: ds)
     check_run(tmp_path, study_file)
