@@ -200,3 +200,12 @@ def test_the_publication_preset_keeps_the_publications_problem():
     assert load_study("magone-printed").optimise.problem == "publication"
     s = load_study("magone")
     assert s.optimise.problem == "sensor" and s.requirements.F_z == 5.0
+
+
+def test_a_standoff_with_fitted_field_models_is_refused_in_the_publications_problem():
+    with pytest.raises(StudyError, match=r"\[hall\.standoff_mm\] .*b_model = 'exact'"):
+        magtact.load("magone-publication", hall={"standoff_mm": 1.0})
+    s = magtact.load("magone-publication", hall={"standoff_mm": 1.0},
+                     metamodel={"b_model": "exact"})
+    assert s.hall.standoff == pytest.approx(1e-3)
+    assert magtact.load("magone", hall={"standoff_mm": 1.0}).hall.standoff == pytest.approx(1e-3)

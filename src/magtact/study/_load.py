@@ -118,6 +118,7 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
         sections[name] = _section(name, getattr(base, name), data.get(name, {}), complete, source)
     study = _apply_parts(replace(base, **top, **sections), data.get("magnet", {}), source)
     study = _apply_requirements(study, base, source)
+    _check_standoff(study, source)
     try:
         _check_consistency(study, source)
         check_physical(study, source)
@@ -167,6 +168,17 @@ def _apply_requirements(s: Study, base: Study, source) -> Study:
                              f"'requirements' the force is requirements.{own} ({abs(derived):g} "
                              "N); change that, or set constraints.source = 'values'", source)
     return replace(s, constraints=replace(c, F_r_c=-r.F_r, F_z_c=r.F_z))
+
+
+def _check_standoff(s: Study, source) -> None:
+    """A chip below the body in the publication's problem needs the exact field: fitted field
+    models hold at the chip's place in the DOE (the body's base)."""
+    if (s.hall.standoff > 0 and s.optimise.problem == "publication"
+            and s.metamodel.b_model == "fit"):
+        raise StudyError("hall.standoff_mm", "a chip below the body needs the exact field in "
+                                             "the publication's problem: set metamodel.b_model "
+                                             "= 'exact' (the sensor problem uses it always)",
+                         source)
 
 
 def _check_hall(s: Study, source) -> None:
