@@ -145,7 +145,9 @@ def _run_geometry(study: Study, **kw) -> xr.Dataset:
         except DOEFailed as exc:
             failures += exc.failures
             part = exc.dataset
-        parts.append(part.expand_dims({k: [v] for k, v in geometry.items()}, axis=-1))
+        # one new dimension per geometric variable, after the DOE's own (any number of them)
+        parts.append(part.expand_dims({k: [v] for k, v in geometry.items()})
+                     .transpose(..., *geometry))
     ds = xr.combine_by_coords(parts, combine_attrs="drop_conflicts")
     for k in levels:
         ds[k].attrs.update(units="m", long_name=GEOMETRY_NAMES[k])

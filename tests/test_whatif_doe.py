@@ -1,0 +1,43 @@
+"""The DOE over two geometric design variables at once (the broad space: R_m and H_m), with
+stand-in solvers of known form."""
+
+from dataclasses import replace
+
+import numpy as np
+
+from conftest import fake_field, fake_path, run
+from magtact.doe import load_dataset, save_dataset
+from magtact.study import study_from_dict
+
+
+def magnet_path(study, H, theta, *, G=None, mesh=None, t=None, vtu=None):
+    """Stand-in forces scaled by R_m [mm] + 10 H_m [mm] (each geometry its own value)."""
+    res = fake_path(study, H, theta, G=G, t=t)
+    k = study.magnet.R_m * 1e3 + 10 * study.magnet.H_m * 1e3
+    return replace(res, F_r=res.F_r * k, F_z=res.F_z * k)
+
+
+def magnet_field(study, t, theta, H, solver="fe"):
+    B_r, B_z = fake_field(study, t, theta, H, solver)
+    k = study.magnet.R_m * 1e3 + 10 * study.magnet.H_m * 1e3
+    return B_r * k, B_z * k
+
+
+def test_two_geometric_variables_give_one_dimension_each(tmp_path):
+    s = study_from_dict({"doe": {"n_t": 3, "n_theta": 2, "n_H": 2, "n_G": 2, "n_R_m": 2,
+                                 "n_H_m": 2},
+                         "design": {"R_m_mm": [1.5, 3.0], "H_m_mm": [1.0, 3.0]},
+                         "metamodel": {"b_model": "exact"}})
+    ds = run(s, tmp_path, path_solver=magnet_path, field_solver=magnet_field)
+    assert ds["F_z"].dims == ("t", "theta", "H", "G", "R_m", "H_m")
+    assert ds["B_z"].dims == ("t", "theta", "H", "R_m", "H_m")
+    assert ds.attrs["run_paths_total"] == 2 * 2 * 4
+    for i, R_m in enumerate(s.geometry_levels["R_m"]):
+        for j, H_m in enumerate(s.geometry_levels["H_m"]):
+            sub = run(s.at(R_m=R_m, H_m=H_m), tmp_path, path_solver=magnet_path,
+                      field_solver=magnet_field)
+            for name in ("F_z", "F_r", "B_z", "u_z"):
+                np.testing.assert_array_equal(ds[name].isel(R_m=i, H_m=j).values,
+                                              sub[name].values)
+    back = load_dataset(save_dataset(ds, tmp_path / "g.nc"))
+    np.testing.assert_array_equal(back["F_r"].values, ds["F_r"].values)
