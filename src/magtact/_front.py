@@ -344,10 +344,12 @@ class Result:
             files = self.write_into(o.folder, figures=figures, budget=budget)
         return [o.final(p) for p in files]
 
-    def write_into(self, out: str | Path, figures: bool = True, budget: bool = True
-                   ) -> list[Path]:
+    def write_into(self, out: str | Path, figures: bool = True, budget: bool = True,
+                   explorer: bool = False) -> list[Path]:
         """:meth:`write` straight into ``out``, for a caller that already holds the folder
-        (a command's or a run's staging folder): no lock, no check of what is there."""
+        (a command's or a run's staging folder): no lock, no check of what is there. With
+        ``explorer`` also the report's design explorer (``explorer.json``, a grid of
+        :meth:`evaluate`)."""
         from .budget import write_budgets
         from .optimise import write_geometry_outputs, write_optimise_outputs
         from .report import (
@@ -371,9 +373,9 @@ class Result:
         files.append(write_card([self.chosen, self.original], out, self.constraints,
                                 rtol=self.study.optimise.active_rtol, study=self.study,
                                 extra_rows=self._budget_rows()))
-        explorer = write_explorer(self, out) if figures else None  # the report's explorer
-        if explorer is not None:
-            files.append(explorer)
+        grid = write_explorer(self, out) if explorer else None  # for the report's explorer
+        if grid is not None:
+            files.append(grid)
         if budget and self.budgets is not None:
             files.append(write_budgets(self.budgets, self.study, out,
                                        figures=budget_figures if figures else None))

@@ -345,7 +345,8 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
             ctx.log(f"      WARNING: {w.message}")
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    result.write_into(ctx.folder / "optimise", budget=False)  # the budget is a stage of its own
+    # the budget is a stage of its own; the explorer's grid is for the report
+    result.write_into(ctx.folder / "optimise", budget=False, explorer=True)
     ctx.result = result
     if ctx.study.geometric_variables:
         r = result.optimisation

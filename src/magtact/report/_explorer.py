@@ -2,12 +2,13 @@
 the chip saturates and the verdict read live, offline.
 
 The page computes no physics. Python evaluates the designer's answer
-(:meth:`magtact.Result.evaluate`) on a grid of base heights H at one shear modulus and writes
-every number per unit G into ``optimise/explorer.json``; the browser multiplies by G, which is
-exact: the forces, Γ and σ_F are G times a function of H (docs/method.md §7), and the field,
-hence where along the paths the chip saturates and which chip setting a design uses, does not
-depend on G. H moves over the grid's heights only, so every number the page shows is one that
-Python computed. The Pareto set's points carry their own design card, evaluated the same way.
+(:meth:`magtact.Result.evaluate`) on a grid of designs (H, G) and writes every number into
+``optimise/explorer.json`` (per unit G, with the G it was computed at, so the file states the
+forces' proportionality to G); the sliders move over the grid's heights and moduli, so every
+number the page shows is one Python computed. G is a grid axis, not a factor: with a force
+requirement the chip setting a design uses depends on G (the load that must be read grows as
+the body softens), so σ_F is not G times one function of H. The Pareto set's points carry
+their own design card, evaluated the same way.
 """
 
 from __future__ import annotations
@@ -24,10 +25,11 @@ from ._fragments import load_json
 from ._labels import sig
 
 FORMAT = "magtact-explorer/1"
-#: Base heights of the grid (the chosen and the original H are added to them).
-N_H = 7
+#: Base heights and shear moduli of the grid (the chosen and the original design's are added).
+N_H = 5
+N_G = 5
 #: Pareto points given a design card in the explorer (evenly spaced along the set).
-N_PARETO = 8
+N_PARETO = 4
 
 
 def _per_G(answer) -> dict:
@@ -51,13 +53,14 @@ def _per_G(answer) -> dict:
     return out
 
 
-def explorer_data(result, n_H: int = N_H, n_pareto: int = N_PARETO) -> dict | None:
+def explorer_data(result, n_H: int = N_H, n_G: int = N_G, n_pareto: int = N_PARETO
+                  ) -> dict | None:
     """The explorer's numbers of a :class:`magtact.Result` (None over geometric design
     variables, where a design is more than H, G and M_z).
 
-    Every design is evaluated at the chosen design's G (and M_z); each number is stored per
-    unit G (``F_z_max`` [N/Pa], ``sigma_z_worst`` [N/Pa], ``sat_F_z`` [N/Pa] ...), so that
-    ``value × G`` is the answer at any G.
+    ``grid[k][j]`` is the answer at (``H_mm[k]``, ``G_kPa[j]``) with the chosen design's magnet
+    and chip standoff; each force-like number is stored per unit G (``F_z_max`` [N/Pa],
+    ``sigma_z_worst`` [N/Pa], ``sat_F_z`` [N/Pa] ...): times that G it is the answer.
     """
     study = result.study
     if study.geometric_variables:
@@ -73,8 +76,12 @@ def explorer_data(result, n_H: int = N_H, n_pareto: int = N_PARETO) -> dict | No
         fixed["grade"] = chosen.parts.grade
     if "standoff" in result.variables:
         fixed["standoff_mm"] = float(mm(result.variables["standoff"]))
-    G_kPa = float(kpa(chosen.G))
-    grid = [_per_G(result.evaluate(H_mm=float(mm(H)), G_kPa=G_kPa, **fixed)) for H in heights]
+    glo, ghi = study.design.G
+    moduli = sorted({*(float(g) for g in np.linspace(glo, ghi, n_G)), chosen.G, original.G})
+    G_levels = [float(kpa(g)) for g in moduli]
+    H_levels = [float(mm(h)) for h in heights]
+    grid = [[_per_G(result.evaluate(H_mm=h, G_kPa=g, **fixed)) for g in G_levels]
+            for h in H_levels]
     p = result.pareto
     n = len(p.H)
     picks = sorted({int(round(k)) for k in np.linspace(0, n - 1, min(n, n_pareto))}) if n else []
@@ -93,8 +100,8 @@ def explorer_data(result, n_H: int = N_H, n_pareto: int = N_PARETO) -> dict | No
     c = result.constraints
     return {
         "format": FORMAT, "study": study.name,
-        "G_kPa_range": [float(kpa(g)) for g in study.design.G],
-        "G_kPa": G_kPa, "M_z_A_per_m": None if M_z is None else float(M_z),
+        "H_mm": H_levels, "G_kPa": G_levels,
+        "M_z_A_per_m": None if M_z is None else float(M_z),
         "fixed": fixed, "magnet": None if chosen.parts is None else chosen.parts.grade,
         "chip": chosen.chip.name,
         "constraints": {"F_r_c_N": float(c.F_r_c), "F_z_c_N": float(c.F_z_c)},
@@ -121,11 +128,10 @@ def explorer_section(folder: Path) -> str:
     data = load_json(folder / "explorer.json")
     if not isinstance(data, dict) or data.get("format") != FORMAT or not data.get("grid"):
         return ""
-    grid = data["grid"]
-    heights = [g["H_mm"] for g in grid]
+    heights, moduli = data["H_mm"], data["G_kPa"]
     chosen = data["chosen"]
     start = min(range(len(heights)), key=lambda k: abs(heights[k] - chosen["H_mm"]))
-    lo, hi = data["G_kPa_range"]
+    start_G = min(range(len(moduli)), key=lambda j: abs(moduli[j] - chosen["G_kPa"]))
     rows = [("x-sigma-r", "shear resolution σ_Fr, unloaded / worst"),
             ("x-sigma-z", "normal resolution σ_Fz, unloaded / worst"),
             ("x-Fz", "normal force range (largest F_z in the stable region)"),
@@ -137,17 +143,15 @@ def explorer_section(folder: Path) -> str:
                     for i, t in rows)
     payload = json.dumps(data, ensure_ascii=True).replace("</", "<\\/")
     return f"""<section id="explorer"><h2>Design explorer</h2>
-<p>Move the base height H and the shear modulus G: every number below is one Python computed
-(<code>Result.evaluate</code> on {len(heights)} heights, written to
-<code>optimise/explorer.json</code>) times G, which is exact; H takes the heights of that grid.
-{_fixed_text(data)}</p>
+<p>Move the base height H and the shear modulus G over a grid of {len(heights)} × {len(moduli)}
+designs: every number below is one Python computed (<code>Result.evaluate</code>, written to
+<code>optimise/explorer.json</code>). {_fixed_text(data)}</p>
 <div class="xctl"><label for="x-H">H [mm]</label>
 <input type="range" id="x-H" min="0" max="{len(heights) - 1}" step="1" value="{start}">
 <output id="x-H-value"></output>
 <label for="x-G">G [kPa]</label>
-<input type="range" id="x-G" min="{lo}" max="{hi}" step="any" value="{chosen['G_kPa']}">
-<input type="number" id="x-G-number" min="{lo}" max="{hi}" step="any"
- value="{chosen['G_kPa']}" aria-label="G [kPa]">
+<input type="range" id="x-G" min="0" max="{len(moduli) - 1}" step="1" value="{start_G}">
+<output id="x-G-value"></output>
 <button type="button" id="x-chosen">chosen design</button>
 <button type="button" id="x-original">original design</button></div>
 <div class="xgrid"><div><table class="xtable">{table}</table>
@@ -237,11 +241,10 @@ function silicones(G_kPa){
   return names.length ? names.join(', ') : 'none in the catalogue';
 }
 function update(){
-  const k = Number($('x-H').value), g = D.grid[k];
-  let G_kPa = Number($('x-G-number').value);
-  if (!isFinite(G_kPa)) return;
-  const c = cardOf(g, G_kPa);
-  put('x-H-value', sig(g.H_mm) + ' mm', {value: g.H_mm});
+  const k = Number($('x-H').value), j = Number($('x-G').value), g = D.grid[k][j];
+  const G_kPa = D.G_kPa[j], c = cardOf(g, G_kPa);
+  put('x-H-value', sig(D.H_mm[k]) + ' mm', {value: D.H_mm[k]});
+  put('x-G-value', sig(G_kPa) + ' kPa', {value: G_kPa});
   put('x-sigma-r', sig(c.sr0 * 1e3) + ' / ' + sig(c.srw * 1e3) + ' mN',
       {zero: c.sr0, worst: c.srw});
   put('x-sigma-z', sig(c.sz0 * 1e3) + ' / ' + sig(c.szw * 1e3) + ' mN',
@@ -259,18 +262,17 @@ function update(){
     ul.appendChild(li);
   }
 }
-function setDesign(H_mm, G_kPa){
+// the grid design nearest to (H, G)
+function nearest(levels, v){
   let best = 0;
-  D.grid.forEach((g, k) => {
-    if (Math.abs(g.H_mm - H_mm) < Math.abs(D.grid[best].H_mm - H_mm)) best = k;
-  });
-  $('x-H').value = best; $('x-G').value = G_kPa; $('x-G-number').value = G_kPa; update();
+  levels.forEach((x, k) => { if (Math.abs(x - v) < Math.abs(levels[best] - v)) best = k; });
+  return best;
+}
+function setDesign(H_mm, G_kPa){
+  $('x-H').value = nearest(D.H_mm, H_mm); $('x-G').value = nearest(D.G_kPa, G_kPa); update();
 }
 $('x-H').addEventListener('input', update);
-$('x-G').addEventListener('input', () => { $('x-G-number').value = $('x-G').value; update(); });
-$('x-G-number').addEventListener('input', () => {
-  $('x-G').value = $('x-G-number').value; update();
-});
+$('x-G').addEventListener('input', update);
 $('x-chosen').addEventListener('click', () => setDesign(D.chosen.H_mm, D.chosen.G_kPa));
 $('x-original').addEventListener('click', () => setDesign(D.original.H_mm, D.original.G_kPa));
 // the Pareto set: Γ_r,max (x) against Γ_z,max (y)
@@ -287,8 +289,10 @@ function card(p){
                 ['F_z range', sig(p.F_z_max) + ' N'], ['F_r range', sig(p.F_r_min) + ' N']];
   if (p.card) {
     const c = cardOf(p.card, p.G_kPa);
-    rows.push(['σ_Fr, σ_Fz worst', sig(c.srw * 1e3) + ', ' + sig(c.szw * 1e3) + ' mN']);
-    rows.push(['saturation', satText(p.card, c)]);
+    // Γ and the forces above are NSGA-II's; these two are Result.evaluate's at the point
+    rows.push(['σ_Fr, σ_Fz worst (the magnet and standoff above the grid)',
+               sig(c.srw * 1e3) + ', ' + sig(c.szw * 1e3) + ' mN']);
+    rows.push(['saturation (the same)', satText(p.card, c)]);
   }
   const div = $('x-card'); div.innerHTML = '';
   const t = document.createElement('table');
@@ -299,7 +303,8 @@ function card(p){
   }
   div.appendChild(t);
   const btn = document.createElement('button'); btn.type = 'button';
-  btn.textContent = 'explore this design'; btn.onclick = () => setDesign(p.H_mm, p.G_kPa);
+  btn.textContent = 'explore the nearest grid design';
+  btn.onclick = () => setDesign(p.H_mm, p.G_kPa);
   div.appendChild(btn);
 }
 if (P.length) {

@@ -13,10 +13,11 @@ def draw_design_curves(data: dict):
     """Two panels over H at the chosen design's G: σ_F worst (shear and normal) [mN], and the
     normal force range F_z,max with the force at which the chip saturates inside the stable
     region and the constraint F_z,c [N]. Returns the figure."""
-    grid = data["grid"]
-    G = 1e3 * data["G_kPa"]
-    H = [g["H_mm"] for g in grid]
-    chosen = data["chosen"]["H_mm"]
+    chosen, G_kPa = data["chosen"]["H_mm"], data["chosen"]["G_kPa"]
+    j = min(range(len(data["G_kPa"])), key=lambda i: abs(data["G_kPa"][i] - G_kPa))
+    grid = [row[j] for row in data["grid"]]  # the column of the chosen G
+    G = 1e3 * data["G_kPa"][j]
+    H = data["H_mm"]
     with style():
         fig, (left, right) = subplots(1, 2, figsize=(9.0, 3.0))
         for key, label, colour in (("sigma_r_worst", "σ_Fr, worst", "C0"),
@@ -41,7 +42,7 @@ def draw_design_curves(data: dict):
         right.set_xlabel("base height H [mm]")
         right.set_ylabel("normal force [N]")
         right.legend(frameon=False, fontsize=7)
-        fig.suptitle(f"over H at the chosen G = {data['G_kPa']:.3g} kPa (forces and σ_F ∝ G)")
+        fig.suptitle(f"over H at the chosen G = {G / 1e3:.3g} kPa")
     return fig
 
 
