@@ -139,6 +139,18 @@ def test_the_calibration_prints_its_target_and_firmware(result):
     assert "shear angle θ [rad]" in labels and "largest error / $\\sigma_F$" in labels
 
 
+def test_the_result_card_leads_with_its_verdict_and_parts(result):
+    card = result.card
+    text = str(card)
+    assert isinstance(card, dict) and len(text.splitlines()) <= MAX_LINES
+    if result.chosen.verdict is not None:
+        assert [v["met"] for v in card["verdict"]] == [
+            r.met for r in result.chosen.verdict.requirements]
+        first = text.splitlines()[1].strip()
+        assert first.startswith("✓" if card["verdict"][0]["met"] else "✗")
+    assert "<table>" in card._repr_html_()
+
+
 def test_the_card_prints_its_verdict_and_parts_first_in_25_lines():
     rows = [[f"row {k}", f"{k + 0.123456:.6f} mN", "x"] for k in range(40)]
     card = Card({"header": ["", "chosen", "original"], "rows": rows,

@@ -158,8 +158,13 @@ class Result:
         header, rows = card_rows([self.chosen, self.original], self.constraints,
                                  rtol=self.study.optimise.active_rtol)
         from ._display import Card
+        from .report import parts_list
 
-        return Card({"header": header, "rows": rows + self._budget_rows()})
+        doc = {"header": header, "rows": rows + self._budget_rows()}
+        if self.chosen.verdict is not None:  # the verdict and the parts lead, as in card.json
+            doc = {"verdict": self.chosen.verdict.to_json(),
+                   "parts": parts_list(self.chosen)} | doc
+        return Card(doc)
 
     @cached_property
     def budgets(self) -> tuple[Budget, Budget] | None:

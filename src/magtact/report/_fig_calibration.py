@@ -17,7 +17,7 @@ def draw_calibration(fig, cal) -> list:
     size in bytes (1 = the target, filled marks: on the frontier).
     """
     # room between the panels: a colour bar's label never meets the next panel's axis label
-    axes = fig.subplots(1, 3, gridspec_kw={"wspace": 0.55})
+    axes = fig.subplots(1, 3, gridspec_kw={"wspace": 0.12})
     g = cal.grid
     a = cal.firmware.chosen
     for ax, key, sigma, name in ((axes[0], "err_r", cal.sigma_F[0], "F_r"),

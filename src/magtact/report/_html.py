@@ -84,7 +84,7 @@ li.met{border-color:#2a8a3e!important;background:#eef8f0}
 li.unmet{border-color:#c0392b!important;background:#fcecea}
 table.parts td,table.parts th{text-align:left}
 .glance{display:grid;grid-template-columns:repeat(auto-fit,minmax(420px,1fr));gap:1em}
-.glance figure img{max-width:100%;max-height:440px}
+.glance figure img{max-width:100%;max-height:440px}.glance .span{grid-column:1/-1}
 .xctl{display:flex;flex-wrap:wrap;gap:.6em;align-items:center;margin:.5em 0}
 .xctl input[type=range]{width:220px}.xctl input[type=number]{width:7em}
 .xgrid{display:grid;grid-template-columns:minmax(0,3fr) minmax(0,2fr);gap:1em}
@@ -283,7 +283,9 @@ def _glance(folder: Path, run_id: str | None) -> str:
         png = folder / key / f"{stem}.png"
         if png.is_file() and _of_run(folder / key, run_id):
             captions = _load_json(folder / key / "captions.json") or {}
-            figs.append(_figure(png, caption or captions.get(stem)))
+            shown = _figure(png, caption or captions.get(stem))
+            # a wide figure (three panels in a row) takes the whole width
+            figs.append(f'<div class="span">{shown}</div>' if stem == "calibration" else shown)
     if not figs:
         return ""
     return ('<section id="glance"><h2>The figures a designer looks at</h2>'
