@@ -90,7 +90,9 @@ def test_run_end_to_end_on_bundled_data(tmp_path):
     s = load_study(None)  # real FE data: the exact field for B, a modest GP budget for f
     study_file = fast_study(tmp_path, metamodel=replace(
         s.metamodel, b_model="exact", generations=20, population=400, max_length=40,
-        retries=2, holdout_paths=2))
+        retries=2, holdout_paths=2), optimise=replace(
+        s.optimise, population=48, ga_generations=3, nsga2_generations=25, grid_n=4,
+        sweep_n=101))  # NSGA-II within the front gap on a short fit
     check_run(tmp_path, study_file)
     # the front door on the run's models chooses what the run chose (one chain)
     import magtact
