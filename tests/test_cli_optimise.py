@@ -60,7 +60,10 @@ def test_optimise_writes_design_tables_and_figures(tmp_path, model_dir, small_st
     for name in ("pareto.csv", "reduction.csv", "pareto_set.png", "maps_objectives.svg",
                  "maps_constraints.png"):
         assert (out / name).is_file()
-    assert "Chosen design" in result.output
+    # the sensor problem (the default) reads the constraints' forces as its requirements
+    assert "Chosen sensor" in result.output and "0–4 N normal" in result.output
+    sensor = json.loads((out / "sensor.json").read_text())["chosen"]
+    assert 3 <= sensor["H_mm"] <= 7 and sensor["G_kPa"] >= sensor["G_force_kPa"]
 
 
 def test_constraints_from_a_reference_design(tmp_path, model_dir, small_study):

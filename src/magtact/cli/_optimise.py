@@ -111,9 +111,35 @@ def print_card(card: dict | None, stdout: Console | None = None) -> None:
     (stdout or tables()).print(table)
 
 
+def print_sensor(result, stdout: Console | None = None) -> None:
+    """Print the chosen sensor of the sensor problem beside the exact reduction's (rich table
+    on standard output)."""
+    sd = result.sensor_design
+    r = result.study.requirements
+    table = Table(title=f"Chosen sensor ({result.study.name})",
+                  caption=f"requirements: 0–{r.F_z:.3g} N normal, 0–{r.F_r:.3g} N shear, "
+                          f"{r.rate:.3g} Hz; NSGA-II {100 * sd.gap:.2g} % from the exact "
+                          "reduction" if sd.gap == sd.gap else "")
+    table.add_column("quantity", justify="left")
+    table.add_column("chosen", justify="right")
+    table.add_column("exact reduction", justify="right")
+    a, b = sd.choice.to_json(), sd.reduction_choice.to_json()
+    for label, key in (("H [mm]", "H_mm"), ("G [kPa]", "G_kPa"), ("magnet grade", "magnet_grade"),
+                       ("chip standoff [mm]", "standoff_mm"), ("chip setting", "chip_setting"),
+                       ("σ_F,r over the required loads [mN]", "sigma_Fr_mN"),
+                       ("σ_F,z over the required loads [mN]", "sigma_Fz_mN")):
+        table.add_row(escape(label), *(v if isinstance(v, str) else sig(v)
+                                       for v in (a[key], b[key])))
+    (stdout or tables()).print(table)
+
+
 def print_choice(result, stdout: Console | None = None) -> None:
     """Print the chosen design of a :class:`magtact.Result` beside the exact reduction's
-    choice, and the constraints used (rich table on standard output)."""
+    choice, and the constraints used (rich table on standard output); in the sensor problem
+    the chosen sensor (:func:`print_sensor`)."""
+    if getattr(result, "sensor_design", None) is not None:
+        print_sensor(result, stdout)
+        return
     opt, c = result.optimisation, result.constraints
     table = Table(title=f"Chosen design ({result.study.name}; "
                         f"{result.study.sensitivity.definition} Γ)",
