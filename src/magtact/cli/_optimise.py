@@ -123,13 +123,15 @@ def print_sensor(result, stdout: Console | None = None) -> None:
     table.add_column("quantity", justify="left")
     table.add_column("chosen", justify="right")
     table.add_column("exact reduction", justify="right")
-    a, b = sd.choice.to_json(), sd.reduction_choice.to_json()
-    for label, key in (("H [mm]", "H_mm"), ("G [kPa]", "G_kPa"), ("magnet grade", "magnet_grade"),
-                       ("chip standoff [mm]", "standoff_mm"), ("chip setting", "chip_setting"),
-                       ("σ_F,r over the required loads [mN]", "sigma_Fr_mN"),
-                       ("σ_F,z over the required loads [mN]", "sigma_Fz_mN")):
-        table.add_row(escape(label), *(v if isinstance(v, str) else sig(v)
-                                       for v in (a[key], b[key])))
+    rows = (("H [mm]", lambda d: sig(from_si(d.H, "mm"))),
+            ("G [kPa]", lambda d: sig(from_si(d.G, "kPa"))),
+            ("magnet grade", lambda d: d.grade),
+            ("chip standoff [mm]", lambda d: sig(from_si(d.standoff, "mm"))),
+            ("chip setting", lambda d: d.option.words),
+            ("σ_F,r over the required loads [mN]", lambda d: sig(from_si(d.sigma_r, "mN"))),
+            ("σ_F,z over the required loads [mN]", lambda d: sig(from_si(d.sigma_z, "mN"))))
+    for label, cell in rows:
+        table.add_row(escape(label), cell(sd.choice), cell(sd.reduction_choice))
     (stdout or tables()).print(table)
 
 
