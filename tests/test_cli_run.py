@@ -46,13 +46,15 @@ def small_firmware_sweep(monkeypatch):
     monkeypatch.setattr(pipeline, "RUN_CALIBRATION", {"degrees": (6,), "table_sizes": (32,)})
 
 
-def check_run(tmp_path, study_file):
-    """Run the study; every stage ok, every figure embedded, report rebuilt from the folder."""
+def check_run(tmp_path, study_file, may_warn=()):
+    """Run the study; every stage ok (those of ``may_warn`` ok or warning), every figure
+    embedded, report rebuilt from the folder."""
     out = tmp_path / "results"
     result = CliRunner().invoke(app, ["run", str(study_file), "--out", str(out)])
     manifest = json.loads((out / "run.json").read_text())
     statuses = {s["key"]: (s["status"], s["message"]) for s in manifest["stages"]}
-    assert all(st == "ok" for st, _ in statuses.values()), statuses
+    assert all(st == "ok" or (k in may_warn and st == "warning")
+               for k, (st, _) in statuses.items()), statuses
     assert result.exit_code == 0, result.output
     html = (out / "report.html").read_text(encoding="utf-8")
     srcs = re.findall(r'<img src="([^"]+)"', html)
@@ -113,5 +115,6 @@ def test_run_end_to_end_with_stand_in_doe(tmp_path, monkeypatch):
 
     study_file = fast_study(tmp_path, requirements=Requirements(F_r=0.05, F_z=1.0, rate=0.0))
     ds = synthetic_doe(load_study(study_file), n_t=6)
-    monkeypatch.setattr(magtact.doe, "load_bundled", lambda: ds)
-    check_run(tmp_path, study_file)
+    monkeypatch.setattr(magtact.doe, "bundled_for", lambda study, advice=None: ds)
+    # its 5-generation fit of the stand-in is a poor fit, and the stage says so
+    check_run(tmp_path, study_file, may_warn=("metamodel",))
