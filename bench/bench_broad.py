@@ -9,13 +9,14 @@ was; they are ``bench/magtact_broad.toml``, the data set and fit shipped with ma
 
 Steps (each writes its part of ``bench/results/broad.json``)::
 
-    nohup nice -n 5 python bench/bench_broad.py doe --study full > bench/results/broad_doe.log 2>&1 &
+    nohup nice -n 5 python bench/bench_broad.py doe --study full > broad_doe.log 2>&1 &
     python bench/bench_broad.py assemble   # the shipped study's data set from the job cache
     python bench/bench_broad.py fit        # magtact fit over it; held-out error
     python bench/bench_broad.py ship       # copy data and fit into the package
     python bench/bench_broad.py whatif     # what-ifs answered from the shipped data, timed
     python bench/bench_broad.py mesh       # the mesh correction, measured (no FE solve)
     python bench/bench_broad.py runs       # magtact run of the first what-ifs, timed
+    python bench/bench_broad.py quick      # one design's answer from the broad data, timed
 
 ``doe`` and ``assemble`` run ``magtact doe`` with one worker through the job cache
 ``bench/results/broad_cache`` (a rerun reuses every finished path). The cache keys hash the
@@ -245,6 +246,38 @@ def mesh() -> None:
     print(json.dumps(rows, indent=1), "adopted:", worst <= ADOPT_F_Z)
 
 
+def quick() -> None:
+    """The what-if of one design inside the broad space, without the optimisation: the study's
+    models from the bundled data (identity check, exact rescaling, shipped fit) and the
+    designer's answer at H = 9 mm, G = 30 kPa with a 3 x 1 mm N52 magnet; each step timed in a
+    fresh process (imports included)."""
+    code = (
+        "import time; t0 = time.perf_counter()\n"
+        "import magtact\n"
+        "from magtact.designer import answer\n"
+        "from magtact.study import study_from_dict\n"
+        "t1 = time.perf_counter()\n"
+        "s = study_from_dict({'base': 'magone', 'magnet': {'R_m_mm': 1.5, 'H_m_mm': 1.0, "
+        "'grade': 'N52'}, 'design': {'H_mm': [2.0, 10.0]}})\n"
+        "m, source, ds = magtact.models_for(s)\n"
+        "t2 = time.perf_counter()\n"
+        "a = answer(m, s, 9e-3, 30e3)\n"
+        "t3 = time.perf_counter()\n"
+        "import json; print(json.dumps({'import_s': t1 - t0, 'models_s': t2 - t1, "
+        "'answer_s': t3 - t2, 'total_s': t3 - t0, 'source': source, "
+        "'data': ds.attrs.get('rescaled_from'), 'Gamma_r_max_N_per_T': a.design.Gamma_r_max, "
+        "'F_z_max_N': a.design.F_z_max}))\n")
+    load = os.getloadavg()
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                          text=True, check=True)
+    wall = time.perf_counter() - start
+    res = json.loads(proc.stdout.strip().splitlines()[-1])
+    _update("quick", {"command": "python bench/bench_broad.py quick", "wall_time_s": wall,
+                      "load_average_at_start": load, **res})
+    print(f"{wall:.1f} s", res)
+
+
 #: The what-ifs a designer first tried, as study edits of the built-in MagOne study.
 RUNS = {
     "silicone Dragon Skin 10": {"material": {"silicone": "Dragon Skin 10"}},
@@ -294,7 +327,8 @@ def runs() -> None:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("step", choices=("doe", "assemble", "fit", "ship", "whatif", "mesh", "runs"))
+    p.add_argument("step", choices=("doe", "assemble", "fit", "ship", "whatif", "mesh", "runs",
+                                    "quick"))
     p.add_argument("--study", choices=tuple(STUDIES), default="full")
     p.add_argument("--workers", type=int, default=1)
     a = p.parse_args()
@@ -305,7 +339,7 @@ def main() -> None:
     elif a.step in ("fit", "ship"):
         {"fit": fit, "ship": ship}[a.step](a.study)
     else:
-        {"whatif": whatif, "mesh": mesh, "runs": runs}[a.step]()
+        {"whatif": whatif, "mesh": mesh, "runs": runs, "quick": quick}[a.step]()
 
 
 if __name__ == "__main__":

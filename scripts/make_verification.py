@@ -552,23 +552,33 @@ def broad_section(r: Results) -> list[str]:
     if "broad" not in r.files:
         return []
     b = r["broad"]
+    shipped = b.get("ship", {}).get("study", "none")
     out = ["## The broad design space", "",
            f"Source: {r.source('broad')} (`bench/bench_broad.py`). The space aimed at, "
            f"`{b['studies']['full']}`: H over 2–10 mm, magnet diameters 3 and 6 mm, heights 1 "
-           "and 3 mm; the shipped space, `" + b["studies"]["shipped"] + "`: its half at the 3 mm "
-           "diameter (heights 1 and 3 mm), the part that completed on the shared machine.", ""]
+           f"and 3 mm (48 structural paths). The space shipped, `{shipped}`: its first sub-DOE, "
+           "a 3 × 1 mm magnet over H 2–10 mm, the part that completed on the shared machine.",
+           ""]
+    fd = b.get("full_doe")
+    if fd:
+        out += [f"**The full DOE** ({fd['workers']} worker, nice {fd['nice']}): "
+                f"{fd['paths_cached']} of {fd['paths_total']} paths in the job cache, "
+                f"{fd['path_job_wall_time_s_sum'] / 60:.0f} min of solver time "
+                f"({fd['path_job_wall_time_s_min']:.0f}–{fd['path_job_wall_time_s_max']:.0f} s "
+                f"per path), {fd['first_to_last_completion_s'] / 60:.0f} min from the first to "
+                f"the last; stopped {fd['stopped']}. Per sub-DOE:", ""]
+        out += table(["magnet", "paths"], [[k, v] for k, v in fd["sub_does"].items()])
+        out += [f"Resume: {fd['resume']}.", ""]
     a = b.get("assemble")
     if a:
         c = a["cache"]
-        out += [f"**Cost.** {a['paths_total']} structural paths and {a['fields_computed']} field "
-                f"solves for the shipped space ({a['sizes']}); the job cache holds "
-                f"{c['paths_cached']} paths of the full space, "
-                f"{c['path_job_wall_time_s_sum'] / 60:.0f} min of solver time in all "
+        out += [f"**Cost of the shipped space.** {a['paths_total']} structural paths (all from the "
+                f"job cache of the full DOE) and {a['fields_computed']} field solve; the paths "
+                f"took {c['path_job_wall_time_s_sum'] / 60:.0f} min of solver time "
                 f"({c['path_job_wall_time_s_min']:.0f}–{c['path_job_wall_time_s_max']:.0f} s "
-                f"per path with one worker at load averages of "
-                f"{a['load_average_at_start'][0]:.0f}–{a['load_average_at_end'][0]:.0f} from "
-                f"other work), first to last completion {c['first_to_last_completion_s'] / 60:.0f}"
-                " min.", ""]
+                "per path, one worker, 1-minute load average from other work "
+                f"{a['load_average_at_start'][0]:.0f}), {c['first_to_last_completion_s'] / 60:.0f}"
+                " min from the first to the last.", ""]
     f = b.get("fit")
     if f:
         rows = []
@@ -579,7 +589,8 @@ def broad_section(r: Results) -> list[str]:
                     rows.append([name, "held out" if part == "test" else "training",
                                  f"{x['r2']:.4f}", pct(x["max_abs_err_over_range"], 2),
                                  pct(x["max_rel_err"], 1), str(x["n_points"])])
-        out += [f"**Metamodels over the broad space** (`{f['magtact_command']}`, "
+        command = f["magtact_command"].replace(str(ROOT) + "/", "")
+        out += [f"**Metamodels over the broad space** (`{command}`, "
                 f"{f['settings']['generations']} GP generations × "
                 f"{f['settings']['population']}, {f['wall_time_s']:.0f} s; the field is the "
                 "exact one; held out: whole (θ, H) paths):", ""]
@@ -600,6 +611,28 @@ def broad_section(r: Results) -> list[str]:
                        f"{v['chosen']['G_kPa']:.3g}", f"{v['Gamma_r_max_N_per_T']:.3g}",
                        f"{v['Gamma_z_max_N_per_T']:.3g}", f"{v['F_r_min_N']:.3g}",
                        f"{v['F_z_max_N']:.3g}"] for k, v in w["cases"].items()])
+    q = b.get("quick")
+    if q:
+        out += [f"**One design's what-if** (`python bench/bench_broad.py quick`: a 3 × 1 mm N52 "
+                f"magnet at H = 9 mm, G = 30 kPa, in a fresh process): {q['wall_time_s']:.1f} s "
+                f"in all at a 1-minute load average of {q['load_average_at_start'][0]:.1f} "
+                f"(imports {q['import_s']:.1f} s, the models from `{q['data']}` "
+                f"{q['models_s']:.2f} s, the designer's answer {q['answer_s']:.1f} s).", ""]
+    runs = b.get("runs")
+    if runs:
+        rows = []
+        for k, v in runs["cases"].items():
+            st = v["stages"]
+            rows.append([k, f"{v['wall_time_s']:.0f}", str(v["exit_status"]),
+                         f"{v['load_average_at_start'][0]:.1f}",
+                         *(f"{st[s]['wall_time_s']:.1f}" if s in st else "—"
+                           for s in ("doe", "metamodel", "optimise")),
+                         ", ".join(f"{s}: {x['status']}" for s, x in st.items()
+                                   if x["status"] != "ok") or "all ok"])
+        out += ["**`magtact run` of the first what-ifs** (`python bench/bench_broad.py runs`; "
+                "no DOE computed in any of them):", ""]
+        out += table(["study edit", "total [s]", "exit", "load", "DOE [s]", "metamodels [s]",
+                      "optimisation [s]", "stages not ok"], rows)
     m = b.get("mesh_correction")
     if m:
         rows = []
