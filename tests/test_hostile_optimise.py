@@ -37,7 +37,7 @@ def test_pipeline_says_the_disagreement_in_the_report(monkeypatch, tmp_path):
     from magtact import pipeline
 
     class FakeResult:
-        def write_into(self, folder, budget=True):
+        def write_into(self, folder, budget=True, explorer=False):
             return []
 
     def fake_solve(models, study, constraints=None, models_source="", dataset=None):
