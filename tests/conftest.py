@@ -215,3 +215,30 @@ def shipped_models():
 def models(shipped_models):
     """The models a test works with: the shipped ones unless its module defines others."""
     return shipped_models
+
+
+@pytest.fixture
+def refused(capsys, monkeypatch):
+    """Run the command line's entry point on ``args``; check exit 2, one message holding every
+    fragment, no traceback; return the message."""
+    import signal
+    import sys
+
+    def check(args, *fragments):
+        from magtact.cli import main
+
+        monkeypatch.setattr(sys, "argv", ["magtact", *args])
+        handler = signal.getsignal(signal.SIGTERM)
+        try:
+            with pytest.raises(SystemExit) as exit_:
+                main()
+        finally:
+            signal.signal(signal.SIGTERM, handler)
+        captured = capsys.readouterr()
+        assert exit_.value.code == 2, captured
+        text = " ".join((captured.err + captured.out).split())
+        assert "Traceback" not in text
+        for f in fragments:
+            assert f in text, (f, text)
+        return text
+    return check

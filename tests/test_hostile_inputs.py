@@ -15,8 +15,6 @@ and why, on instances of its own.
 from __future__ import annotations
 
 import os
-import signal
-import sys
 import tracemalloc
 
 import numpy as np
@@ -31,30 +29,6 @@ from magtact.study._units import NEIGHBOURS, PLAUSIBLE, unit_mistake
 from magtact.validation import DataError
 
 PRESS_HEADER = "B_x_T,B_y_T,B_z_T,F_x_N,F_y_N,F_z_N"
-
-
-@pytest.fixture
-def refused(capsys, monkeypatch):
-    """Run the command line on ``args``: exit 2, one message holding every fragment, no
-    traceback; return the message."""
-    def check(args, *fragments):
-        from magtact.cli import main
-
-        monkeypatch.setattr(sys, "argv", ["magtact", *args])
-        handler = signal.getsignal(signal.SIGTERM)
-        try:
-            with pytest.raises(SystemExit) as exit_:
-                main()
-        finally:
-            signal.signal(signal.SIGTERM, handler)
-        captured = capsys.readouterr()
-        assert exit_.value.code == 2, captured
-        text = " ".join((captured.err + captured.out).split())
-        assert "Traceback" not in text
-        for f in fragments:
-            assert f in text, (f, text)
-        return text
-    return check
 
 
 def study_refused(data, key, *fragments) -> str:

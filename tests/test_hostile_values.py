@@ -40,30 +40,6 @@ def table(tmp_path, name, u_z_mm, repeat=1, cell=None):
     return path
 
 
-@pytest.fixture
-def refused(capsys, monkeypatch):
-    """Run the command line's entry point on ``args``; check exit 2, one message holding every
-    fragment, no traceback; return the message."""
-    def check(args, *fragments):
-        from magtact.cli import main
-
-        monkeypatch.setattr(sys, "argv", ["magtact", *args])
-        handler = signal.getsignal(signal.SIGTERM)
-        try:
-            with pytest.raises(SystemExit) as exit_:
-                main()
-        finally:
-            signal.signal(signal.SIGTERM, handler)
-        captured = capsys.readouterr()
-        assert exit_.value.code == 2, captured
-        text = " ".join((captured.err + captured.out).split())
-        for f in fragments:
-            assert f in text, (f, text)
-        assert "Traceback" not in text
-        return text
-    return check
-
-
 # ---- ordered pairs of settings ---------------------------------------------------------------
 #: (smaller key, larger key): a study must keep smaller <= larger (strictly below for growth).
 PAIRS = [("mechanics.dt_min", "mechanics.dt_max"), ("mechanics.dt_initial", "mechanics.dt_max"),
