@@ -663,7 +663,7 @@ def _spread_rows(p: dict) -> list[list[str]]:
     rows = []
     for d, figs in p["spread"].items():
         for f in figs.values():
-            if "min" in f and f.get("min") is not None:
+            if "min" in f and f.get("min") is not None and f.get("n", 1) > 0:  # measured
                 mm = f.get("max_over_min")
                 rows.append([d, f["label"], f["unit"], f"{f['min']:.4g}", f"{f['max']:.4g}",
                              "∞" if mm is None or mm == float("inf") else f"{mm:.3g}"])
