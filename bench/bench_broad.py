@@ -50,6 +50,12 @@ SHIP_DATA = ROOT / "src" / "magtact" / "doe" / "data" / "broad_doe.nc"
 SHIP_FIT = ROOT / "src" / "magtact" / "metamodel" / "data" / "broad"
 
 
+
+def _command(cmd: list[str]) -> str:
+    """The magtact command line of ``cmd`` with paths relative to the repository (the record
+    must not depend on where the checkout lies)."""
+    return " ".join(["magtact", *(a.replace(str(ROOT) + "/", "") for a in cmd[3:])])
+
 def _update(section: str, values: dict) -> None:
     out = json.loads(OUT.read_text()) if OUT.is_file() else {}
     out.update({"benchmark": "the broad bundled design space",
@@ -103,7 +109,7 @@ def doe(which: str, workers: int, section: str = "doe") -> None:
     jobs = [j for j in json.loads(attrs["jobs"]) if "job_wall_time" in j]
     _update(section, {
         "command": f"python bench/bench_broad.py {section} --study {which}",
-        "magtact_command": " ".join(["magtact", *cmd[3:]]),
+        "magtact_command": _command(cmd),
         "study": str(STUDIES[which].relative_to(ROOT)),
         "workers": workers, "wall_time_s": wall, "load_average_at_start": load_start,
         "load_average_at_end": os.getloadavg(), "sizes": sizes,
@@ -136,7 +142,7 @@ def fit(which: str) -> None:
 
     _update("fit", {"command": f"python bench/bench_broad.py fit --study {which}",
                     "study": str(STUDIES[which].relative_to(ROOT)),
-                    "magtact_command": " ".join(["magtact", *cmd[3:]]),
+                    "magtact_command": _command(cmd),
                     "settings": dict(vars(load_study(STUDIES[which]).metamodel)),
                     "wall_time_s": wall, "load_average_at_start": load_start,
                     "load_average_at_end": os.getloadavg(), "accuracy": held})
