@@ -208,3 +208,15 @@ def test_a_standoff_with_fitted_field_models_is_refused_in_the_publications_prob
                      metamodel={"b_model": "exact"})
     assert s.hall.standoff == pytest.approx(1e-3)
     assert magtact.load("magone", hall={"standoff_mm": 1.0}).hall.standoff == pytest.approx(1e-3)
+
+
+def test_a_chip_without_a_noise_figure_is_refused_before_the_work(monkeypatch):
+    from magtact import _front
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the optimisation ran")
+
+    monkeypatch.setattr("magtact.optimise.optimise", no_work)
+    study = magtact.load("magone", hall={"chip": "TLE493D"})
+    with pytest.raises(StudyError, match=r"\[hall\.noise_x_uT\] the sensor problem needs"):
+        _front.solve(magtact.models_for(study, models=prefitted_dir())[0], study)

@@ -469,6 +469,10 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
     own = study.geometry()
     sensor = study.optimise.problem == "sensor" and not study.geometric_variables
     check_rest_field(study.at(**own) if own else study)  # before any work
+    if sensor:  # a chip whose noise is not known, before any work
+        from .chip import chip_options
+
+        chip_options(study)
     if constraints is None:
         constraints = force_constraints(models, study)
     if sensor:
