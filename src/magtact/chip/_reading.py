@@ -90,16 +90,19 @@ class SensorGrid:
         need = np.where(sat, need, 0.0)
         return need.reshape(need.shape[0], -1).max(axis=1) * (1.0 + READ_MARGIN)
 
+    def unit_noise(self, noise_x, noise_z) -> np.ndarray:
+        """Force noise per unit G / M_z at every point, shape (n, N_T, N_THETA, 2) (F_r, F_z):
+        σ_F,k = √(j_kx² σ_x² + j_kz² σ_z²); ``noise_x``, ``noise_z`` [T RMS] scalars or (n,)."""
+        sx, sz = (np.asarray(v, float).reshape(-1, 1, 1, 1) for v in (noise_x, noise_z))
+        return np.sqrt(self.j[..., 0] ** 2 * sx ** 2 + self.j[..., 1] ** 2 * sz ** 2)
+
     def sigma(self, G, M_z, noise_x, noise_z, F_z: float) -> tuple[np.ndarray, np.ndarray]:
         """Worst σ_Fr, σ_Fz [N] over the required loads (G f_z ≤ F_z) with field noise
         (σ_x, σ_z) [T RMS]; arrays of shape (n,)."""
-        G, M_z, sx, sz = (np.asarray(v, float).reshape(-1, 1, 1)
-                          for v in (G, M_z, noise_x, noise_z))
+        G, M_z = (np.asarray(v, float).reshape(-1, 1, 1) for v in (G, M_z))
         with np.errstate(invalid="ignore"):  # G = inf: no design, σ inf
             region = G * self.f_z <= F_z
-        scale = G / M_z
-        s = np.sqrt(self.j[..., 0] ** 2 * sx[..., None] ** 2
-                    + self.j[..., 1] ** 2 * sz[..., None] ** 2) * scale[..., None]
+        s = self.unit_noise(noise_x, noise_z) * (G / M_z)[..., None]
         s = np.where(region[..., None], s, 0.0)
         worst = s.reshape(s.shape[0], -1, 2).max(axis=1)
         return worst[:, 0], worst[:, 1]

@@ -244,7 +244,7 @@ class _Noise:
     def __init__(self, grid: SensorGrid, noise: tuple[float, float]):
         n = grid.f_z.shape[0]
         f = grid.f_z.reshape(n, -1)
-        S = np.sqrt(grid.j[..., 0] ** 2 * noise[0] ** 2 + grid.j[..., 1] ** 2 * noise[1] ** 2)
+        S = grid.unit_noise(*noise)
         order = np.argsort(f, axis=1, kind="stable")
         self.f = np.take_along_axis(f, order, axis=1)
         cm = np.maximum.accumulate(np.take_along_axis(S.reshape(n, -1, 2), order[..., None],
