@@ -242,3 +242,16 @@ def refused(capsys, monkeypatch):
             assert f in text, (f, text)
         return text
     return check
+
+
+def deny_open(monkeypatch, locked) -> None:
+    """Make ``os.open`` of the file ``locked`` fail as an unreadable file does (whatever the
+    user's rights: the tests may run as root)."""
+    real_open = os.open
+
+    def deny(path, *args, **kwargs):
+        if str(path) == str(locked):
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", deny)

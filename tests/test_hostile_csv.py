@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 import subprocess
 import sys
 import tempfile
@@ -21,6 +20,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from conftest import deny_open
 from magtact.validation import DataError, read_experiment
 from magtact.validation._io import MAX_MESSAGE, MIN_SAMPLES, PHYSICAL_RANGE
 
@@ -86,14 +86,7 @@ def test_folder_and_unreadable_files(tmp_path, monkeypatch):
     refused([good(tmp_path, "a.csv", 1), tmp_path], f"{tmp_path}: not a file: it is a folder")
     locked = good(tmp_path, "locked.csv", 2)
 
-    real_open = os.open
-
-    def deny(path, *args, **kwargs):
-        if str(path) == str(locked):
-            raise PermissionError(13, "Permission denied", str(path))
-        return real_open(path, *args, **kwargs)
-
-    monkeypatch.setattr(os, "open", deny)
+    deny_open(monkeypatch, locked)
     refused([locked], "locked.csv: cannot be read: Permission denied")
 
 

@@ -9,7 +9,6 @@ nothing else may escape and nothing may take long.
 from __future__ import annotations
 
 import math
-import os
 import tempfile
 from dataclasses import fields
 from pathlib import Path
@@ -19,6 +18,7 @@ import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from conftest import deny_open
 from magtact.study import PHYSICAL, Study, StudyError, load_study, magone, study_from_dict
 from magtact.study._load import MAX_DATA_POINTS, MAX_FIELD_POINTS, MAX_FILE_BYTES, MAX_PATHS
 from magtact.study._model import SECTIONS, key_of
@@ -69,14 +69,7 @@ def test_folder_unreadable_and_oversized_files(tmp_path, monkeypatch):
     refused(big, "file", f"at most {MAX_FILE_BYTES:,}")
     locked = write(tmp_path, 'name = "x"\n', "locked.toml")
 
-    real_open = os.open
-
-    def deny(path, *args, **kwargs):
-        if str(path) == str(locked):
-            raise PermissionError(13, "Permission denied", str(path))
-        return real_open(path, *args, **kwargs)
-
-    monkeypatch.setattr(os, "open", deny)
+    deny_open(monkeypatch, locked)
     msg = refused(locked, "file", "cannot be read: Permission denied")
     assert msg.startswith(str(locked))
 
