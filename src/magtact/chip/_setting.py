@@ -71,8 +71,9 @@ def setting_for(models: ModelSet, study: Study, design) -> SettingChoice | None:
     H, G = design.H, design.G
     T, TH = np.meshgrid(np.linspace(0.0, design.t_m, N_GRID),
                         np.linspace(0.0, design.theta_m, N_GRID), indexing="ij")
-    Bx_t = np.abs(ExactField(study, "B_r").value(T, TH, H)).max(axis=1)  # per load level
-    Bz_t = np.abs(ExactField(study, "B_z").value(T, TH, H)).max(axis=1)
+    bx = np.abs(ExactField(study, "B_r").value(T, TH, H))  # (t, θ)
+    bz = np.abs(ExactField(study, "B_z").value(T, TH, H))
+    Bx_t, Bz_t = bx.max(axis=1), bz.max(axis=1)  # per load level
     Bx, Bz = float(Bx_t.max()), float(Bz_t.max())
     J = dF_dB(models, T, TH, H, G).reshape(-1, 2, 2) / design.field_scale
     A = J**2  # (points, force, field axis)
@@ -93,8 +94,6 @@ def setting_for(models: ModelSet, study: Study, design) -> SettingChoice | None:
     over = (Bx_t[None, :] > rx[:, None]) | (Bz_t[None, :] > rz[:, None])  # (settings, t)
     onset = np.where(over.any(axis=1), over.argmax(axis=1), N_GRID)  # first saturated level
     if study.optimise.problem == "sensor":  # hold the field over the required loads
-        bx = np.abs(ExactField(study, "B_r").value(T, TH, H))
-        bz = np.abs(ExactField(study, "B_z").value(T, TH, H))
         asked = G * models.f_z.value(T, TH, H) <= study.requirements.F_z  # (t, θ)
         sat = (bx[None] > rx[:, None, None]) | (bz[None] > rz[:, None, None])
         holds = ~(sat & asked[None]).any(axis=(1, 2))
