@@ -41,6 +41,12 @@ def test_model_version_and_settings_change_the_key(monkeypatch):
     # settings a path does not read leave its key alone
     other = replace(study, constraints=replace(study.constraints, F_z_c=4.0))
     assert _keys(other) == (field, paths)
+    # the relaxation's Prony terms: the quasi-static path reads the relaxed material only
+    relaxing = replace(study, material=replace(study.material, relaxation_g1=0.3,
+                                               relaxation_tau1=2.0))
+    assert _keys(relaxing) == (field, paths)
+    stiffer = replace(study, material=replace(study.material, bulk_ratio=2 * study.material.bulk_ratio))
+    assert set(_keys(stiffer)[1]).isdisjoint(paths)
 
 
 def test_a_comment_in_the_mechanics_does_not_change_the_key(tmp_path):

@@ -120,6 +120,10 @@ def digest(payload: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:40]
 
 
+#: Material settings the quasi-static structural path does not read (the viscoelastic budget's).
+RELAXATION_FIELDS = ("relaxation_g1", "relaxation_tau1", "relaxation_g2", "relaxation_tau2")
+
+
 def _section(study: Study, name: str, drop: tuple[str, ...] = ()) -> dict:
     d = dataclasses.asdict(getattr(study, name))
     return {k: v for k, v in d.items() if k not in drop}
@@ -134,7 +138,9 @@ def path_key_inputs(study: Study, solver: dict) -> dict:
         "body": _section(study, "body"),
         "magnet": _section(study, "magnet"),
         "loading": _section(study, "loading", drop=("theta_max",)),
-        "material": _section(study, "material"),
+        # the quasi-static path reads the long-term (relaxed) material: the relaxation's
+        # Prony terms change no path, so they do not invalidate the cached paths
+        "material": _section(study, "material", drop=RELAXATION_FIELDS),
         "mechanics": _section(study, "mechanics"),
     }
 
