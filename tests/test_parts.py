@@ -179,6 +179,32 @@ def test_grade_and_size_set_the_magnet_and_conflicts_are_refused():
         assert 1.1 < g.B_r_min < g.B_r < g.B_r_max < 1.5
 
 
+#: The sizes inside the broad data set's magnet space that vendor listings were found for.
+BROAD_SIZES = {"3x1", "3x2", "3x3", "4x1", "4x2", "4x3", "5x1", "6x1", "6x2", "6x3"}
+
+
+def test_every_catalogue_size_has_its_dimensions_and_a_source():
+    """Each size is '<D>x<H>' with D_mm, H_mm > 0 and a source; the broad space (D 3–6 mm,
+    H 1–3 mm) holds at least the sizes cited from vendor listings."""
+    import tomllib
+    from importlib import resources
+
+    from magtact.parts import SIZES
+
+    raw = tomllib.loads(resources.files("magtact.parts").joinpath("data", "magnets.toml")
+                        .read_text("utf-8"))["sizes"]
+    assert set(raw) == set(SIZES)
+    for name, v in raw.items():
+        assert v["D_mm"] > 0 and v["H_mm"] > 0, name
+        assert isinstance(v["source"], str) and v["source"].strip(), name
+        assert name == f"{v['D_mm']:g}x{v['H_mm']:g}"
+        s = SIZES[name]
+        assert (s.R_m, s.H_m) == pytest.approx((0.5e-3 * v["D_mm"], 1e-3 * v["H_mm"]))
+        assert s.source == v["source"]
+    broad = {k for k, v in raw.items() if 3 <= v["D_mm"] <= 6 and 1 <= v["H_mm"] <= 3}
+    assert broad >= BROAD_SIZES
+
+
 @pytest.mark.parametrize(("table", "key", "listed"), [
     ({"magnet": {"grade": "N60"}}, "magnet.grade", "N52"),
     ({"magnet": {"size": "4x4"}}, "magnet.size", "5x2"),
