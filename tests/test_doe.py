@@ -232,3 +232,7 @@ def test_cli_doe_reports_failed_jobs(tmp_path, monkeypatch):
     (fail,) = json.loads((tmp_path / "o" / "doe_failures.json").read_text())
     assert "H=7 mm" in fail["job"] and "RuntimeError" in fail["traceback"]
     assert not (tmp_path / "o" / "doe.nc").exists()
+    partial = load_dataset(tmp_path / "o" / "doe_partial.nc")  # the finished jobs, NaN elsewhere
+    assert partial.attrs["complete"] == 0 and "H=7 mm" in partial.attrs["failed_jobs"]
+    assert np.isnan(partial.F_r.isel(theta=1, H=1)).all()
+    assert "doe_partial.nc: magtact fit leaves out up to 10%" in " ".join(res.output.split())

@@ -340,6 +340,24 @@ def test_incomplete_data_refused():
         fit_models(ds, STUDY, settings=replace(STUDY.metamodel, generations=1, population=10))
 
 
+def test_the_failed_paths_of_an_incomplete_doe_are_left_out_and_recorded():
+    from magtact.metamodel import MAX_OMITTED
+
+    ds = synthetic_doe(STUDY, n_t=4)
+    n = ds.sizes["t"] * ds.sizes["theta"] * ds.sizes["H"]
+    ds["F_z"][:, 1, 1, :] = np.nan  # one whole (θ, H) path
+    ds.attrs.update(complete=0, failed_jobs="path θ=x, H=y: structural path failed")
+    cfg = replace(STUDY.metamodel, generations=1, population=10, holdout_paths=0)
+    res = fit_models(ds, STUDY, settings=cfg, names=("f_z",))
+    info = res.models["f_z"].info
+    assert info["omitted_points"] == ds.sizes["t"] and "path failed" in info["failed_jobs"]
+    assert info["accuracy"]["train"]["n_points"] == n - ds.sizes["t"]
+    ds["F_z"][:, :, :, :] = np.nan
+    with pytest.raises(ValueError, match=rf"the DOE is incomplete: {n} of {n} points \(1 "
+                                         rf"failed job\(s\)\), more than {MAX_OMITTED:.0%}"):
+        fit_models(ds, STUDY, settings=cfg, names=("f_z",))
+
+
 def test_exact_field_matches_hall_field_and_its_derivatives():
     from magtact.magnetics import hall_field
 

@@ -38,6 +38,7 @@ def doe_command(
     """Run STUDY's full-factorial DOE; write OUT/doe.nc (netCDF) and OUT/doe.csv (user units)."""
     from .._files import write_text
     from ..doe import DOEFailed, run_doe, save_dataset, write_csv
+    from ..metamodel import MAX_OMITTED
 
     s = get_study(study)
     start = time.perf_counter()
@@ -51,12 +52,19 @@ def doe_command(
             report = o.final(write_text(o.folder / "doe_failures.json", json.dumps(
                 [{"job": f.label, "error": f.error, "traceback": f.detail} for f in failed],
                 indent=1)))
+            # the finished jobs as a data set of its own name (NaN on the failed paths,
+            # complete = 0): magtact fit leaves a few failed paths out and records them
+            if exc.dataset is not None:
+                o.final(save_dataset(exc.dataset, o.folder / "doe_partial.nc"))
         else:
             nc = o.final(save_dataset(ds, o.folder / "doe.nc"))
             csv = o.final(write_csv(ds, o.folder / "doe.csv"))
     if failed is not None:
         console.print(f"[bold red]{len(failed)} job(s) failed[/] (tracebacks in {report}); "
-                      "the other jobs are cached: re-run to retry only the failed ones.")
+                      "the other jobs are cached: re-run to retry only the failed ones. "
+                      "The data set of the finished jobs (NaN on the failed paths) is in "
+                      f"{out / 'doe_partial.nc'}: magtact fit leaves out up to "
+                      f"{MAX_OMITTED:.0%} of its points and records them.")
         for f in failed:
             console.print(f"  [red]{f.label}[/]: {f.error}", highlight=False)
         sys.exit(1)

@@ -171,6 +171,10 @@ def hall_features(study: Study) -> tuple[sp.Expr, sp.Expr]:
     return sp.expand(X), sp.expand(Z)
 
 
+#: The largest share of a DOE's points a fit may leave out (the paths of failed jobs).
+MAX_OMITTED = 0.1
+
+
 def _table(ds):
     """Flattened training table: t, θ, H, the geometric design variables besides H (if the
     data set has them), and the four responses."""
@@ -187,12 +191,26 @@ def _table(ds):
         F = np.asarray(ds[f"F_{k}"].transpose(*dims, "G").values, dtype=float)
         f = F / G
         mean = f.mean(axis=-1)
-        spread[f"f_{k}"] = float(np.max(np.abs(f - mean[..., None])) / max(np.ptp(mean), 1e-300))
+        span = max(float(np.nanmax(mean) - np.nanmin(mean)), 1e-300)  # NaN on failed paths
+        spread[f"f_{k}"] = float(np.nanmax(np.abs(f - mean[..., None])) / span)
         out[f"f_{k}"] = mean.ravel()
-    for k in RESPONSES:
-        if not np.all(np.isfinite(out[k])):
-            raise MagtactError(f"data set has non-finite values of {k}: an incomplete DOE?")
-    return out, spread, (t_, th_, H_)
+    finite = np.logical_and.reduce([np.isfinite(out[k]) for k in RESPONSES])
+    omitted = int(finite.size - finite.sum())
+    if omitted:
+        bad = next(k for k in RESPONSES if not np.all(np.isfinite(out[k])))
+        failed = [s for s in str(ds.attrs.get("failed_jobs", "")).splitlines() if s.strip()]
+        if int(ds.attrs.get("complete", 1)) or not failed:
+            raise MagtactError(f"data set has non-finite values of {bad} and records no failed "
+                               "DOE job: a damaged or hand-edited data set")
+        if omitted > MAX_OMITTED * finite.size:
+            raise MagtactError(
+                f"the DOE is incomplete: {omitted} of {finite.size} points ({len(failed)} failed "
+                f"job(s)), more than {MAX_OMITTED:.0%}; re-run it to retry the failed jobs "
+                f"(the others are cached). First failure: {failed[0]}")
+        # a path the solver could not complete is left out of the fit, whole (its levels
+        # before the failure are not in the data set either); the fit records it
+        out = {k: v[finite] for k, v in out.items()}
+    return out, spread, (t_, th_, H_), omitted
 
 
 def holdout_paths(theta_levels, H_levels, n: int, seed: int = 0) -> list[tuple[float, float]]:
@@ -454,7 +472,7 @@ def fit_models(ds, study: Study, *, settings=None, names=None, log=None,
     if names is None:
         names = (("f_r", "f_z") if cfg.b_model == "exact" or field_models is not None
                  else tuple(RESPONSES))
-    table, spread, (t_, th_, H_) = _table(ds)
+    table, spread, (t_, th_, H_), omitted = _table(ds)
     hold = holdout_paths(th_, H_, cfg.holdout_paths)
     test = holdout_mask(table, hold)
     digest = data_hash(ds)
@@ -476,6 +494,9 @@ def fit_models(ds, study: Study, *, settings=None, names=None, log=None,
             "rejected": list(rep.rejected), "fit_time_s": rep.fit_time_s,
             "data_hash": digest, "G_spread": spread.get(name, 0.0),
         }
+        if omitted:
+            info["omitted_points"] = omitted
+            info["failed_jobs"] = str(ds.attrs.get("failed_jobs", ""))
         if name in ("f_r", "f_z"):
             info["definition"] = definition
         if isinstance(m, FieldForceModel):
