@@ -215,3 +215,27 @@ def read_json_capped(path: str | os.PathLike, max_bytes: int):
     except (ValueError, RecursionError) as exc:
         what = "nests too deeply" if isinstance(exc, RecursionError) else str(exc)
         raise UnreadableFile(f"is not JSON: {what}") from None
+
+
+# ---- a result file read back: each value of the type its writer gives it, else nothing ----
+def json_number(value) -> float | None:
+    """``value`` as a float if it is a JSON number (not a boolean), else None."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    return None
+
+
+def json_text(value, default: str = "") -> str:
+    """``value`` as text: a JSON string as is, None as ``default``, anything else as
+    ``str(value)`` (a forged file's number where words belong is shown, not refused)."""
+    return default if value is None else value if isinstance(value, str) else str(value)
+
+
+def json_dict(value) -> dict:
+    """``value`` if it is a JSON object, else an empty one."""
+    return value if isinstance(value, dict) else {}
+
+
+def json_list(value) -> list:
+    """``value`` if it is a JSON array, else an empty one."""
+    return value if isinstance(value, list) else []

@@ -39,11 +39,12 @@ import signal
 import time
 import uuid
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
 from ._errors import MagtactError
-from ._files import write_json, write_text
+from ._files import json_dict, json_list, json_number, json_text, write_json, write_text
 
 #: The lock file of a results folder.
 LOCK = ".magtact-lock"
@@ -464,6 +465,109 @@ def remove_dead(folder: Path, keep: Path | None = None) -> None:
             _remove(p)
 
 
+@dataclass
+class StageRecord:
+    """What happened to one stage of a run (an entry of ``run.json``'s ``stages``).
+
+    Attributes
+    ----------
+    key, title : str
+        Folder name and human title.
+    status : str
+        ``"ok"``, ``"warning"``, ``"failed"`` or ``"skipped"``.
+    wall_time_s : float or None
+        Wall time [s] (None where a file read back does not give it as a number).
+    message : str
+        One line: what was produced, or why it failed / was skipped.
+    notes : list of str
+        Further remarks (shown in the report).
+    """
+
+    key: str
+    title: str
+    status: str = "pending"
+    wall_time_s: float | None = 0.0
+    message: str = ""
+    notes: list[str] = field(default_factory=list)
+
+    def to_json(self) -> dict:
+        return {"key": self.key, "title": self.title, "status": self.status,
+                "wall_time_s": self.wall_time_s, "message": self.message,
+                "notes": list(self.notes)}
+
+    @classmethod
+    def from_json(cls, data) -> StageRecord | None:
+        """The record :meth:`to_json` wrote, every field of its type (None for anything but a
+        JSON object; the key is kept as the file gives it, None where missing)."""
+        if not isinstance(data, dict):
+            return None
+        key = data.get("key")
+        return cls(None if key is None else json_text(key), json_text(data.get("title")),
+                   json_text(data.get("status"), "unknown"), json_number(data.get("wall_time_s")),
+                   json_text(data.get("message")), [json_text(n) for n in
+                                                     json_list(data.get("notes"))])
+
+
+@dataclass
+class RunManifest:
+    """``run.json``: what a run is (its id, study, command, start) and, as it goes, each
+    stage's record, the data set's source, and at its end its finish or interruption and
+    total wall time [s]. A field the run has not reached yet is None and not written."""
+
+    run_id: str | None
+    study: str
+    command: str
+    started: str | None
+    recompute: bool = False
+    refit: bool = False
+    versions: dict[str, str] = field(default_factory=dict)
+    stages: list[StageRecord] = field(default_factory=list)
+    doe_source: str | None = None
+    wall_time_s: float | None = None
+    interrupted: str | None = None
+    finished: str | None = None
+
+    def to_json(self) -> dict:
+        doc = {"run_id": self.run_id, "study": self.study, "command": self.command,
+               "started": self.started, "recompute": self.recompute, "refit": self.refit,
+               "versions": self.versions, "stages": [s.to_json() for s in self.stages]}
+        for key, value in (("doe_source", self.doe_source), ("wall_time_s", self.wall_time_s),
+                           ("interrupted", self.interrupted), ("finished", self.finished)):
+            if value is not None:
+                doc[key] = value
+        return doc
+
+    @classmethod
+    def from_json(cls, data) -> RunManifest | None:
+        """The manifest :meth:`to_json` wrote, every field of its type; None for anything but
+        a JSON object (a forged file's value of the wrong type reads as none, or as text)."""
+        if not isinstance(data, dict) or not data:
+            return None
+        run_id = data.get("run_id")
+
+        def text(key: str) -> str | None:
+            return None if data.get(key) is None else json_text(data.get(key))
+
+        return cls(run_id=None if run_id is None else json_text(run_id),
+                   study=json_text(data.get("study"), "unknown study"),
+                   command=json_text(data.get("command")), started=text("started"),
+                   recompute=data.get("recompute") is True, refit=data.get("refit") is True,
+                   versions=json_dict(data.get("versions")),
+                   stages=[r for r in map(StageRecord.from_json, json_list(data.get("stages")))
+                           if r is not None],
+                   doe_source=text("doe_source"),
+                   wall_time_s=json_number(data.get("wall_time_s")),
+                   interrupted=text("interrupted"), finished=text("finished"))
+
+    def write(self, folder: str | os.PathLike) -> Path:
+        """Write ``folder/run.json``."""
+        return write_json(Path(folder) / MANIFEST, self.to_json(), indent=1, ensure_ascii=False)
+
+
+#: The manifest of a run, in its results folder.
+MANIFEST = "run.json"
+
+
 def interrupted_runs(folder: str | os.PathLike, held: bool = False) -> list[dict]:
     """The runs that stopped before their results were put in place.
 
@@ -471,8 +575,9 @@ def interrupted_runs(folder: str | os.PathLike, held: bool = False) -> list[dict
     -------
     list of dict
         Per staging folder left by a run no longer running: ``staging`` (its name) and the
-        ``run.json`` it holds (``manifest``, empty if none). Empty while another process holds
-        the lock (its staging folder is in use); ``held``: this process holds it.
+        ``run.json`` it holds (``manifest``, a :class:`RunManifest`, None if none). Empty
+        while another process holds the lock (its staging folder is in use); ``held``: this
+        process holds it.
     """
     folder = Path(folder)
     if not folder.is_dir() or (not held and in_use(folder)):
@@ -480,11 +585,10 @@ def interrupted_runs(folder: str | os.PathLike, held: bool = False) -> list[dict
     out = []
     for p in sorted(folder.glob(f"{STAGING}*")):
         try:
-            manifest = json.loads((p / "run.json").read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            manifest = {}
-        out.append({"staging": p.name, "manifest": manifest if isinstance(manifest, dict)
-                    else {}})
+            manifest = json.loads((p / MANIFEST).read_text(encoding="utf-8"))
+        except (OSError, ValueError, RecursionError):
+            manifest = None
+        out.append({"staging": p.name, "manifest": RunManifest.from_json(manifest)})
     return out
 
 

@@ -22,15 +22,17 @@ import traceback
 import uuid
 import warnings
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
 from ._errors import MagtactError, MissingFileError
-from ._files import write_json, write_text
+from ._files import write_text
 from ._front import solve
 from ._runfolder import (
     RunLock,
+    RunManifest,
+    StageRecord,
     check_replaceable,
     recover,
     remove_dead,
@@ -47,32 +49,6 @@ RUN_STAMP = ".magtact-run"
 
 class StageSkipped(Exception):
     """A stage could not run because an input it needs is missing (not an error of its own)."""
-
-
-@dataclass
-class StageRecord:
-    """What happened to one stage.
-
-    Attributes
-    ----------
-    key, title : str
-        Folder name and human title.
-    status : str
-        ``"ok"``, ``"failed"`` or ``"skipped"``.
-    wall_time_s : float
-        Wall time [s].
-    message : str
-        One line: what was produced, or why it failed / was skipped.
-    notes : list of str
-        Further remarks (shown in the report).
-    """
-
-    key: str
-    title: str
-    status: str = "pending"
-    wall_time_s: float = 0.0
-    message: str = ""
-    notes: list[str] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -175,22 +151,20 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
                        data=[Path(p) for p in data] if data else None,
                        cache=Path(cache) if cache is not None else None, workers=workers,
                        log=log)
-        manifest = {
-            "run_id": run_id, "study": study.name, "command": command,
-            "started": datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
-            "recompute": recompute, "refit": refit, "versions": versions(), "stages": [],
-        }
+        manifest = RunManifest(run_id, study.name, command,
+                               datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
+                               recompute=recompute, refit=refit, versions=versions())
         try:
             records = _run_stages(ctx, run_id, manifest, start)
         except BaseException as exc:  # stopped: the staging folder says how and where
-            manifest["interrupted"] = f"{type(exc).__name__} {exc}".strip()
-            _write_json(stage / "run.json", manifest)
+            manifest.interrupted = f"{type(exc).__name__} {exc}".strip()
+            manifest.write(stage)
             raise
         if evidence is not None:
             _copy_evidence(Path(evidence), stage)
-        manifest["finished"] = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
-        manifest["wall_time_s"] = time.perf_counter() - start
-        _write_json(stage / "run.json", manifest)
+        manifest.finished = datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+        manifest.wall_time_s = time.perf_counter() - start
+        manifest.write(stage)
         from .report import report_document
 
         write_text(stage / "report.html", report_document(stage, shown=folder))
@@ -201,11 +175,12 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
                      wall_time_s=time.perf_counter() - start)
 
 
-def _run_stages(ctx: _Context, run_id: str, manifest: dict, start: float) -> list[StageRecord]:
+def _run_stages(ctx: _Context, run_id: str, manifest: RunManifest, start: float
+                ) -> list[StageRecord]:
     """Run the stages into ``ctx.folder``, recording each in its ``run.json`` as it ends."""
     folder, log = ctx.folder, ctx.log
     (folder / "study.toml").write_text(ctx.study.to_toml(), encoding="utf-8")
-    _write_json(folder / "run.json", manifest)
+    manifest.write(folder)
     records = []
     for n, (key, title, fn) in enumerate(STAGES, start=1):
         rec = StageRecord(key=key, title=title)
@@ -227,10 +202,10 @@ def _run_stages(ctx: _Context, run_id: str, manifest: dict, start: float) -> lis
             (folder / key / RUN_STAMP).write_text(run_id, encoding="utf-8")
         log(f"      {rec.status} ({rec.wall_time_s:.1f} s) {rec.message}")
         records.append(rec)
-        manifest["stages"] = [asdict(r) for r in records]
-        manifest["doe_source"] = ctx.doe_source
-        manifest["wall_time_s"] = time.perf_counter() - start
-        _write_json(folder / "run.json", manifest)
+        manifest.stages = list(records)
+        manifest.doe_source = ctx.doe_source
+        manifest.wall_time_s = time.perf_counter() - start
+        manifest.write(folder)
     return records
 
 
@@ -459,6 +434,3 @@ def _copy_evidence(source: Path, folder: Path) -> None:
     for path in sorted(source.glob("*.json")):
         shutil.copy2(path, target / path.name)
 
-
-def _write_json(path: Path, data: dict) -> None:
-    write_json(path, data, indent=1, ensure_ascii=False)

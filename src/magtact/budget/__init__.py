@@ -11,6 +11,7 @@ from ._array import (
 )
 from ._budget import (
     Budget,
+    BudgetFile,
     BudgetRow,
     budget_card_rows,
     budget_json,
@@ -21,8 +22,8 @@ from ._budget import (
 from ._fabrication import linearised, monte_carlo, percentiles, responses, unit_context
 
 __all__ = [
-    "Budget", "BudgetRow", "budget_card_rows", "budget_json", "crosstalk", "error_budget",
-    "linearised", "magnets_field", "monte_carlo", "neighbour_changes", "neighbour_offsets",
-    "percentiles", "responses", "smallest_pitch", "unit_context", "worst_false_force",
-    "write_budget_outputs", "write_budgets",
+    "Budget", "BudgetFile", "BudgetRow", "budget_card_rows", "budget_json", "crosstalk",
+    "error_budget", "linearised", "magnets_field", "monte_carlo", "neighbour_changes",
+    "neighbour_offsets", "percentiles", "responses", "smallest_pitch", "unit_context",
+    "worst_false_force", "write_budget_outputs", "write_budgets",
 ]

@@ -15,13 +15,14 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
+from .._files import json_dict, json_list, json_number, json_text
 from ..designer import HallChip, hall_chip, resolution
 from ..doe import check_design
 from ..magnetics import hall_field
 from ..metamodel import ModelSet
 from ..optimise import DesignResult, per_design
 from ..sensitivity import dF_dB, gamma
-from ..study import Study, from_si, kpa, mm
+from ..study import Study, from_si, kpa, mm, to_si
 from ..viscoelastic import (
     MEASURED_HYSTERESIS,
     MEASURED_SOURCE,
@@ -38,6 +39,8 @@ from . import _array, _fabrication
 N_BOX = 41
 #: Components of every row.
 COMPONENTS = ("F_r", "F_z")
+#: Keys of the resolution in ``budget.json`` (the order of :attr:`Budget.resolution`).
+RESOLUTION_KEYS = tuple(f"{c}_{where}" for where in ("at_rest", "worst") for c in COMPONENTS)
 #: Sources of the cited defaults (docs/method.md §12).
 SOURCES = {
     "remanence_tc": "Advanced Magnetic Materials, 'What are temperature coefficients α and β "
@@ -63,6 +66,33 @@ class BudgetRow:
     at_rest: float
     worst: float
     assumptions: str
+
+    def to_json(self) -> dict:
+        """The row in ``budget.json``: forces in mN, a value that is not finite as null."""
+        return {"name": self.name, "group": self.group, "component": self.component,
+                "at_rest_mN": _mN(self.at_rest), "worst_mN": _mN(self.worst),
+                "assumptions": self.assumptions}
+
+    @classmethod
+    def from_json(cls, data) -> BudgetRow | None:
+        """The row :meth:`to_json` wrote (None for anything but a JSON object; a value of the
+        wrong type reads as NaN or as text)."""
+        if not isinstance(data, dict):
+            return None
+        return cls(json_text(data.get("name")), json_text(data.get("group")),
+                   json_text(data.get("component")), _from_mN(data.get("at_rest_mN")),
+                   _from_mN(data.get("worst_mN")), json_text(data.get("assumptions")))
+
+
+def _mN(v) -> float | None:
+    """A force [N] in mN for a file; None where it is not finite."""
+    return None if v is None or not math.isfinite(v) else from_si(v, "mN")
+
+
+def _from_mN(v) -> float:
+    """A force of a file in mN back in N; NaN where there is none."""
+    v = json_number(v)
+    return math.nan if v is None else to_si(v, "mN")
 
 
 @dataclass(frozen=True)
@@ -116,6 +146,91 @@ class Budget:
         from .._display import budget_rows, html_block
 
         return html_block(*budget_rows(self))
+
+    def to_json(self) -> dict:
+        """Every number in user units, the unit in each key (mN, mm, kPa, µT): the budget as
+        ``budget.json`` holds it."""
+        return budget_json(self)
+
+    @classmethod
+    def from_json(cls, data) -> Budget | None:
+        """The budget :meth:`to_json` wrote, back in SI: the design, the noise, the rows, the
+        resolution, the array and the time rows (``time`` as the file holds it, in mN and s);
+        the Monte Carlo's and the environment's details stay in the file. None for anything
+        but a JSON object with a list of rows (a value of the wrong type reads as NaN, None or
+        text)."""
+        if not isinstance(data, dict) or not isinstance(data.get("rows"), list):
+            return None
+
+        def num(key: str, unit: str | None = None) -> float:
+            v = json_number(data.get(key))
+            return math.nan if v is None else v if unit is None else to_si(v, unit)
+
+        noise = [json_number(data.get(k)) for k in ("noise_x_uT", "noise_z_uT")]
+        res = json_dict(data.get("resolution_mN"))
+        arr = json_dict(data.get("array"))
+        pitch = json_number(arr.get("smallest_pitch_mm"))
+        M_z = json_number(data.get("M_z_A_per_m"))
+        return cls(
+            label=json_text(data.get("label"), "design"), H=num("H_mm", "mm"),
+            G=num("G_kPa", "kPa"), M_z=M_z, t_m=num("t_m"), theta_m=num("theta_m_rad"),
+            chip=json_text(data.get("chip")),
+            noise=None if None in noise else (to_si(noise[0], "uT"), to_si(noise[1], "uT")),
+            noise_source=json_text(data.get("noise_source")),
+            rows=tuple(r for r in map(BudgetRow.from_json, data["rows"]) if r is not None),
+            resolution=None if not res else tuple(_from_mN(res.get(k))
+                                                  for k in RESOLUTION_KEYS),
+            array={} if not arr else {
+                "layout": json_text(arr.get("layout")), "rings": arr.get("rings"),
+                "pitch": _from_mm(arr.get("pitch_mm")), "pitch_given": arr.get("pitch_given"),
+                "smallest_pitch": None if pitch is None else to_si(pitch, "mm"),
+                "criterion": json_text(arr.get("criterion")),
+                "one_neighbour_worst": [_from_mN(v) for v in
+                                        json_list(arr.get("one_neighbour_worst_mN"))],
+                "all_neighbours_worst": [_from_mN(v) for v in
+                                         json_list(arr.get("all_neighbours_worst_mN"))]},
+            not_modelled=tuple(json_text(n) for n in json_list(data.get("not_modelled"))),
+            time=json_dict(data.get("time")))
+
+
+def _from_mm(v) -> float:
+    v = json_number(v)
+    return math.nan if v is None else to_si(v, "mm")
+
+
+@dataclass(frozen=True)
+class BudgetFile:
+    """``budget.json``: the error budgets of a folder (e.g. the chosen and the original design
+    of a run), the study's name and the run that wrote it."""
+
+    study: str
+    budgets: tuple[Budget, ...]
+    run_id: str | None = None
+
+    def to_json(self) -> dict:
+        return {"title": "Error budget", "study": self.study, "run_id": self.run_id,
+                "budgets": [b.to_json() for b in self.budgets]}
+
+    @classmethod
+    def from_json(cls, data) -> BudgetFile | None:
+        """The file :meth:`to_json` wrote; None for anything but a JSON object with a list of
+        budgets (an entry that is not a budget is left out). ``run_id`` is kept as the file
+        gives it when it is not text (so that it never names a run by accident)."""
+        if not isinstance(data, dict) or not isinstance(data.get("budgets"), list):
+            return None
+        return cls(json_text(data.get("study")),
+                   tuple(b for b in map(Budget.from_json, data["budgets"]) if b is not None),
+                   data.get("run_id"))
+
+    @classmethod
+    def read(cls, path: str | Path) -> BudgetFile | None:
+        """:meth:`from_json` of the file ``path``; None where it is missing or not JSON."""
+        import json
+
+        try:
+            return cls.from_json(json.loads(Path(path).read_text(encoding="utf-8")))
+        except (OSError, ValueError, RecursionError):
+            return None
 
 
 #: A false force below this fraction of the largest of its row is round-off of a zero (e.g. a
@@ -446,33 +561,37 @@ def _model_rows(models, study, design, dataset, seeds) -> list[BudgetRow]:
 
 def budget_json(b: Budget) -> dict:
     """Every number of a budget in user units, the unit in each key (mN, mm, kPa, µT)."""
-    def mN(v):
-        return None if v is None or not math.isfinite(v) else from_si(v, "mN")
-
     out = {
         "label": b.label, "H_mm": mm(b.H), "G_kPa": kpa(b.G),
         "M_z_A_per_m": b.M_z, "t_m": b.t_m, "theta_m_rad": b.theta_m, "chip": b.chip,
         "noise_x_uT": None if b.noise is None else from_si(b.noise[0], "uT"),
         "noise_z_uT": None if b.noise is None else from_si(b.noise[1], "uT"),
         "noise_source": b.noise_source,
-        "rows": [{"name": r.name, "group": r.group, "component": r.component,
-                  "at_rest_mN": mN(r.at_rest), "worst_mN": mN(r.worst),
-                  "assumptions": r.assumptions} for r in b.rows],
+        "rows": [r.to_json() for r in b.rows],
         "not_modelled": list(b.not_modelled),
     }
     if b.resolution is not None:
-        out["resolution_mN"] = {"F_r_at_rest": mN(b.resolution[0]),
-                                "F_z_at_rest": mN(b.resolution[1]),
-                                "F_r_worst": mN(b.resolution[2]),
-                                "F_z_worst": mN(b.resolution[3])}
+        out["resolution_mN"] = dict(zip(RESOLUTION_KEYS, map(_mN, b.resolution), strict=True))
     a = b.array
-    out["array"] = {"layout": a["layout"], "rings": a["rings"], "pitch_mm": mm(a["pitch"]),
-                    "pitch_given": a["pitch_given"],
-                    "smallest_pitch_mm": None if a["smallest_pitch"] is None
-                    else mm(a["smallest_pitch"]), "criterion": a["criterion"],
-                    "one_neighbour_worst_mN": [mN(v) for v in a["one_neighbour_worst"]],
-                    "all_neighbours_worst_mN": [mN(v) for v in a["all_neighbours_worst"]]}
+    out["array"] = {} if not a else {
+        "layout": a["layout"], "rings": a["rings"], "pitch_mm": mm(a["pitch"]),
+        "pitch_given": a["pitch_given"],
+        "smallest_pitch_mm": None if a["smallest_pitch"] is None else mm(a["smallest_pitch"]),
+        "criterion": a["criterion"],
+        "one_neighbour_worst_mN": [_mN(v) for v in a["one_neighbour_worst"]],
+        "all_neighbours_worst_mN": [_mN(v) for v in a["all_neighbours_worst"]]}
     f = b.fabrication
+    if f:
+        out["fabrication"] = _fabrication_json(f)
+    e = b.environment
+    if e:
+        out["environment"] = _environment_json(e)
+    if b.time:
+        out["time"] = b.time
+    return out
+
+
+def _fabrication_json(f: dict) -> dict:
     units = {"Gamma_r_0": ("Gamma_r_0_N_per_T", 1.0), "Gamma_z_0": ("Gamma_z_0_N_per_T", 1.0),
              "F_r_min": ("F_r_min_N", 1.0), "F_z_max": ("F_z_max_N", 1.0)}
     pct = {}
@@ -484,21 +603,18 @@ def budget_json(b: Budget) -> dict:
         key, _ = units.get(k, (f"{k}_mN", None))
         lin[key] = dict(zip(f["inputs"], v if k in units else [from_si(x, "mN") for x in v],
                             strict=True))
-    out["fabrication"] = {"percentiles_5_50_95": pct, "samples": f["samples"],
-                          "seed": f["seed"], "sigma_per_input_linear": lin,
-                          "inputs_1_sigma": dict(zip(f["inputs"], f["sigmas"], strict=True))}
-    e = b.environment
-    out["environment"] = {"delta_T_K": e["delta_T"], "remanence_tc_pct_per_K":
-                          100 * e["remanence_tc"], "remanence_tc_tolerance_pct_per_K":
-                          100 * e["remanence_tc_tolerance"], "chip_drift_pct_per_K":
-                          100 * e["chip_drift"], "earth_field_uT": from_si(e["earth_field"],
-                                                                           "uT"),
-                          "stray_field_uT": from_si(e["stray_field"], "uT"),
-                          "B_rest_mT": [from_si(v, "mT") for v in e["B_rest"]],
-                          "sources": e["sources"]}
-    if b.time:
-        out["time"] = b.time
-    return out
+    return {"percentiles_5_50_95": pct, "samples": f["samples"], "seed": f["seed"],
+            "sigma_per_input_linear": lin,
+            "inputs_1_sigma": dict(zip(f["inputs"], f["sigmas"], strict=True))}
+
+
+def _environment_json(e: dict) -> dict:
+    return {"delta_T_K": e["delta_T"], "remanence_tc_pct_per_K": 100 * e["remanence_tc"],
+            "remanence_tc_tolerance_pct_per_K": 100 * e["remanence_tc_tolerance"],
+            "chip_drift_pct_per_K": 100 * e["chip_drift"],
+            "earth_field_uT": from_si(e["earth_field"], "uT"),
+            "stray_field_uT": from_si(e["stray_field"], "uT"),
+            "B_rest_mT": [from_si(v, "mT") for v in e["B_rest"]], "sources": e["sources"]}
 
 
 def budget_card_rows(budgets, n: int = 3) -> list[list[str]]:
@@ -587,8 +703,7 @@ def write_budgets(budgets, study: Study, folder, figures=None, *, run_id: str | 
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    doc = {"title": "Error budget", "study": study.name, "run_id": run_id,
-           "budgets": [budget_json(b) for b in budgets]}
+    doc = BudgetFile(study.name, tuple(budgets), run_id).to_json()
     path = write_json(folder / "budget.json", doc, indent=1, ensure_ascii=False)
     if figures is not None:
         figures(doc, folder)

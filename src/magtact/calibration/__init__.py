@@ -25,7 +25,10 @@ from ._map import (
     sensor_map,
 )
 from ._outputs import (
+    SUMMARY_FORMAT,
     Calibration,
+    CalibrationSummary,
+    ForceError,
     calibrate,
     error_grid,
     force_model_error,
@@ -50,7 +53,8 @@ __all__ = [
     "DEFAULT_FIT", "FLAG_NAMES", "FORCE_SOURCES", "FEForces", "PathHoldout", "fe_forces",
     "force_model_error", "force_source_for", "has_height", "path_holdout", "NOT_UNIQUE",
     "NO_INVERSE", "OK", "OUTSIDE", "PARAMETERS",
-    "PRESS_COLUMNS", "TOLERANCE", "Approximation", "Calibration", "FirmwareChoice", "Presses",
+    "PRESS_COLUMNS", "SUMMARY_FORMAT", "TOLERANCE", "Approximation", "Calibration",
+    "CalibrationSummary", "FirmwareChoice", "ForceError", "Presses",
     "Reading", "SensorMap", "UnitCalibration", "UnitParameters", "approximation_json",
     "c_header", "calibrate", "calibrate_unit", "error_grid", "fe_readings",
     "firmware_approximation", "load_approximation", "read_presses", "region_polygon",

@@ -9,9 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
+from .._files import json_dict, json_list, json_number, json_text
 from ..doe import check_design
 from ..metamodel import ModelSet
-from ..study import HallChip, Study, from_si, hall_chip
+from ..study import HallChip, Study, from_si, hall_chip, to_si
 from ._fe import fe_forces, has_height, path_holdout
 from ._firmware import (
     DEGREES,
@@ -79,10 +80,17 @@ class Calibration:
 
         return html_block(*calibration_rows(self))
 
+    @property
+    def force_limit(self) -> ForceError | None:
+        """What limits the map's forces (:attr:`force_error`) as a record, in N."""
+        return ForceError.from_json(self.force_error)
+
     def to_json(self) -> dict:
+        """The summary in user units (``calibration.json``; read back by
+        :meth:`CalibrationSummary.from_json`)."""
         fw = approximation_json(self.firmware, self.map)
         return {
-            "format": "magtact-calibration-summary/1",
+            "format": SUMMARY_FORMAT,
             "design": self.map.describe(),
             "noise_B_uT": [from_si(v, "uT") for v in self.noise],
             "noise_source": self.noise_source,
@@ -107,6 +115,118 @@ class Calibration:
                       "region, 2 no field); bx, by, bz in T, F in N. Python: "
                       "magtact.calibration.load_approximation(json.load(open('force_map.json'))['approximation']).evaluate(B)"),
         }
+
+
+#: ``format`` of the calibration summary (``calibration.json``).
+SUMMARY_FORMAT = "magtact-calibration-summary/1"
+
+
+@dataclass(frozen=True)
+class ForceError:
+    """What limits the forces of a map (:func:`force_model_error`): in words, and the
+    largest error of F_r and F_z [N] (None where not measured)."""
+
+    kind: str
+    F_r: float | None
+    F_z: float | None
+
+    @classmethod
+    def from_json(cls, data) -> ForceError | None:
+        """The record of :func:`force_model_error`'s document; None for anything but a JSON
+        object."""
+        if not isinstance(data, dict):
+            return None
+        r, z = (json_number(data.get(k)) for k in ("F_r_mN", "F_z_mN"))
+        return cls(json_text(data.get("kind")), None if r is None else to_si(r, "mN"),
+                   None if z is None else to_si(z, "mN"))
+
+
+@dataclass(frozen=True)
+class CalibrationSummary:
+    """``calibration.json`` (:meth:`Calibration.to_json`) read back, in SI; a value the file
+    does not give (or gives with the wrong type) is None.
+
+    Attributes
+    ----------
+    H, G, t_m, theta_m : float or None
+        The design [m, Pa] and its stable region [1, rad].
+    round_trip : float or None
+        Largest round-trip error F → B → F, relative to the force range.
+    noise : tuple of float
+        σ_B [T] the resolution is computed with; ``noise_source`` where it comes from.
+    sigma_F : (float or None, float or None)
+        σ_F,r, σ_F,z [N], the firmware's target.
+    firmware_kind, firmware_rule : str or None
+    firmware_bytes, firmware_multiplies : int or None
+    firmware_error : (float or None, float or None)
+        The chosen approximation's largest error of F_r, F_z over the region [N].
+    reached : bool
+        Whether the firmware map reaches σ_F.
+    frontier : list of dict
+        Every firmware candidate as the file gives it (user units in its keys).
+    force_source : str or None
+    force_error : ForceError or None
+    unit : dict or None
+        A built unit's parameters as the file gives them.
+    usage : str or None
+    """
+
+    H: float | None
+    G: float | None
+    t_m: float | None
+    theta_m: float | None
+    round_trip: float | None
+    noise: tuple[float, ...]
+    noise_source: str | None
+    sigma_F: tuple[float | None, float | None]
+    firmware_kind: str | None
+    firmware_rule: str | None
+    firmware_bytes: int | None
+    firmware_multiplies: int | None
+    firmware_error: tuple[float | None, float | None]
+    reached: bool
+    frontier: list[dict]
+    force_source: str | None
+    force_error: ForceError | None
+    unit: dict | None
+    usage: str | None
+
+    @classmethod
+    def from_json(cls, data) -> CalibrationSummary | None:
+        """The summary of ``calibration.json``'s document; None for a document of another
+        format."""
+        if not (isinstance(data, dict) and data.get("format") == SUMMARY_FORMAT):
+            return None
+        design, fw = json_dict(data.get("design")), json_dict(data.get("firmware"))
+
+        def num(d: dict, key: str, unit: str | None = None) -> float | None:
+            v = json_number(d.get(key))
+            return v if v is None or unit is None else to_si(v, unit)
+
+        def text(d: dict, key: str) -> str | None:
+            return None if d.get(key) is None else json_text(d.get(key))
+
+        def count(d: dict, key: str) -> int | None:
+            v = d.get(key)
+            return v if isinstance(v, int) and not isinstance(v, bool) else None
+
+        return cls(
+            H=num(design, "H_mm", "mm"), G=num(design, "G_kPa", "kPa"), t_m=num(design, "t_m"),
+            theta_m=num(design, "theta_m_rad"), round_trip=num(data, "round_trip_rel"),
+            noise=tuple(to_si(v, "uT") for v in map(json_number, json_list(
+                data.get("noise_B_uT"))) if v is not None),
+            noise_source=text(data, "noise_source"),
+            sigma_F=(num(data, "sigma_F_r_mN", "mN"), num(data, "sigma_F_z_mN", "mN")),
+            firmware_kind=text(fw, "kind"), firmware_rule=text(fw, "rule"),
+            firmware_bytes=count(fw, "bytes"), firmware_multiplies=count(fw, "multiplies"),
+            firmware_error=(num(fw, "max_error_F_r_mN", "mN"),
+                            num(fw, "max_error_F_z_mN", "mN")),
+            reached=bool(fw.get("reached")),
+            frontier=[r for r in json_list(fw.get("frontier")) if isinstance(r, dict)],
+            force_source=text(data, "force_source"),
+            force_error=ForceError.from_json(data.get("force_model_error")),
+            unit=data.get("unit") if isinstance(data.get("unit"), dict) else None,
+            usage=text(data, "usage"))
 
 
 def round_trip_error(smap: SensorMap, n: int = N_ROUND_TRIP, seed: int = 0) -> float:
@@ -166,8 +286,8 @@ def force_model_error(smap: SensorMap, dataset) -> dict:
         return {"force_source": "fe",
                 "kind": "FE interpolant, leave-one-theta-path-out at H (the interior paths: "
                         "between paths, at twice the paths' spacing)",
-                "F_r_mN": 1e3 * max(p.err_r for p in inner),
-                "F_z_mN": 1e3 * max(p.err_z for p in inner),
+                "F_r_mN": from_si(max(p.err_r for p in inner), "mN"),
+                "F_z_mN": from_si(max(p.err_z for p in inner), "mN"),
                 "paths": [p.to_json() for p in paths]}
     if not has_height(dataset, smap.H):
         return {"force_source": "models", "kind": "not measured: no FE paths at this H",
@@ -180,8 +300,8 @@ def force_model_error(smap: SensorMap, dataset) -> dict:
     F = smap.F_of(w)
     return {"force_source": "models",
             "kind": "metamodels against the DOE's FE forces at H, over the region's FE points",
-            "F_r_mN": 1e3 * float(np.abs(F[..., 0] - fr)[inside].max()),
-            "F_z_mN": 1e3 * float(np.abs(F[..., 2] - fz)[inside].max()),
+            "F_r_mN": from_si(float(np.abs(F[..., 0] - fr)[inside].max()), "mN"),
+            "F_z_mN": from_si(float(np.abs(F[..., 2] - fz)[inside].max()), "mN"),
             "points": int(inside.sum())}
 
 

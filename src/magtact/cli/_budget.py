@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import contextlib
+import math
 from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
@@ -13,9 +14,12 @@ from rich.markup import escape
 from rich.table import Table
 
 from .._errors import MagtactError
-from ..study import checked_si
+from ..study import checked_si, from_si, kpa, mm
 from ._app import StudyArg, app, console, get_study, outputs
 from ._optimise import ModelsOpt, study_models
+
+if TYPE_CHECKING:
+    from ..budget import Budget
 
 #: Range of a Hall chip's RMS field noise that ``--noise-uT`` accepts [T]: 1 nT to 10 mT.
 NOISE_BOUNDS = (1e-9, 1e-2)
@@ -103,7 +107,7 @@ def budget_command(
         "--out", "-o", help="Also write OUT/budget.json and the figure.")] = None,
 ) -> None:
     """The error budget of design (H, G): every false force besides the load, in mN."""
-    from ..budget import budget_card_rows, budget_json, error_budget, write_budgets
+    from ..budget import budget_card_rows, error_budget, write_budgets
     from ..designer import answer
     from ..report import budget_figures
 
@@ -124,7 +128,7 @@ def budget_command(
             b = replace(b, noise_source=said)
         if o is not None:
             write_budgets([b], s, o.folder, figures=budget_figures)
-    print_budget(budget_json(b))
+    print_budget(b)
     for name, text in budget_card_rows([b]):
         console.print(f"{escape(name)}: {escape(text)}", highlight=False)
     if o is not None:
@@ -136,10 +140,10 @@ def noise_override(chip, sigma):
     sentence that says so (None, and the chip unchanged, without ``--noise-uT``)."""
     if sigma is None:
         return chip, None
-    given = ", ".join(f"{v * 1e6:.3g}" for v in sigma)
+    given = ", ".join(f"{from_si(v, 'uT'):.3g}" for v in sigma)
     own = (("that of the setting magtact picks per design" if chip.picked else "none")
            if chip.noise is None
-           else ", ".join(f"{v * 1e6:.3g}" for v in chip.noise) + f" µT at {chip.setting}")
+           else ", ".join(f"{from_si(v, 'uT'):.3g}" for v in chip.noise) + f" µT at {chip.setting}")
     said = (f"given as --noise-uT {given} µT (x, z), in place of the chip's own figure "
             f"({chip.name}: {own})")
     console.print(f"noise: {escape(said)}", highlight=False)
@@ -156,24 +160,24 @@ def _dataset(study):
         return None
 
 
-def print_budget(doc: dict, stdout: Console | None = None) -> None:
-    """Print one budget (a :func:`magtact.budget.budget_json` entry) as a rich table."""
-    table = Table(title=f"Error budget, H = {doc['H_mm']:.4g} mm, G = {doc['G_kPa']:.4g} kPa "
-                        f"({doc['chip']}; noise: {doc['noise_source']})")
+def print_budget(b: Budget, stdout: Console | None = None) -> None:
+    """Print one budget as a rich table (forces in mN, lengths in mm, G in kPa)."""
+    table = Table(title=f"Error budget, H = {mm(b.H):.4g} mm, G = {kpa(b.G):.4g} kPa "
+                        f"({b.chip}; noise: {b.noise_source})")
     for h, j in (("row", "left"), ("force", "left"), ("at rest [mN]", "right"),
                  ("worst [mN]", "right")):
         table.add_column(escape(h), justify=j)
-    for r in doc["rows"]:
-        table.add_row(escape(r["name"]), r["component"], _fmt(r["at_rest_mN"]),
-                      _fmt(r["worst_mN"]))
+    for r in b.rows:
+        table.add_row(escape(r.name), r.component, _fmt(r.at_rest), _fmt(r.worst))
     (stdout or Console()).print(table)
-    sp = doc["array"]["smallest_pitch_mm"]
+    sp = b.array.get("smallest_pitch")
     (stdout or Console()).print(
-        f"smallest {doc['array']['layout']} pitch for crosstalk below the resolution: "
-        + ("unknown (no noise figure)" if sp is None else f"{sp:.3g} mm"), highlight=False)
-    for n in doc["not_modelled"]:
+        f"smallest {b.array.get('layout')} pitch for crosstalk below the resolution: "
+        + ("unknown (no noise figure)" if sp is None else f"{mm(sp):.3g} mm"), highlight=False)
+    for n in b.not_modelled:
         (stdout or Console()).print(f"not modelled: {escape(n)}", highlight=False)
 
 
-def _fmt(v) -> str:
-    return "–" if v is None else f"{v:.3g}"
+def _fmt(force: float) -> str:
+    """A force [N] in mN to 3 significant figures; a dash where there is none."""
+    return "–" if not math.isfinite(force) else f"{from_si(force, 'mN'):.3g}"

@@ -135,11 +135,11 @@ def calibrate_command(
         f"{from_si(cal.sigma_F[1], 'mN'):.3g} mN "
         f"({'reached' if cal.firmware.reached else 'NOT reached: see the frontier'})",
         highlight=False)
-    e = cal.force_error
+    e = cal.force_limit
     what = ("the FE paths at H, interpolated; between paths" if cal.map.force_source == "fe"
             else "the metamodels; against the FE paths at H")
-    limit = ("not measured (no FE paths at this H)" if e["F_r_mN"] is None else
-             f"F_r {e['F_r_mN']:.3g} mN, F_z {e['F_z_mN']:.3g} mN")
+    limit = ("not measured (no FE paths at this H)" if e is None or e.F_r is None else
+             f"F_r {from_si(e.F_r, 'mN'):.3g} mN, F_z {from_si(e.F_z, 'mN'):.3g} mN")
     console.print(f"forces from {what}: largest error {limit}", highlight=False)
     if cal.unit is not None:
         u = cal.unit.unit

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from .._errors import MagtactError
 from .._floor import RELATIVE_FLOOR
-from ..study import MESH_DENSITIES, PRESETS, Study, checked_si, to_si
+from ..study import MESH_DENSITIES, PRESETS, Study, checked_si, mm, to_si
 from ..validation import MAX_GRID, N_GRID
 from ._app import app, check_out, console, get_study, outputs, tables
 
@@ -53,10 +53,9 @@ def print_table(validation) -> None:
     table = Table(title=validation.title, caption=f"model: {validation.model_label}")
     for col in ("response", "c_v (%)", "at u_z (mm)", "ε (%)", "at u_z (mm)", "excluded from ε"):
         table.add_column(col, justify="left" if col.startswith(("resp", "excl")) else "right")
-    for row in validation.rows():
-        table.add_row(row["response"], f"{row['c_v_percent']:.3g}", f"{row['c_v_at_u_z_mm']:.3g}",
-                      f"{row['eps_percent']:.3g}", f"{row['eps_at_u_z_mm']:.3g}",
-                      row["eps_excluded"])
+    for response, s in validation.stats.items():
+        table.add_row(response, f"{s.c_v:.3g}", f"{mm(s.c_v_at):.3g}", f"{s.eps:.3g}",
+                      f"{mm(s.eps_at):.3g}", validation.excluded(response))
     tables().print(table)
     for note in validation.notes:
         console.print(f"note: {note}", highlight=False)

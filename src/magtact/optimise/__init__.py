@@ -25,6 +25,7 @@ from ._geometry import (
     GeometricChoice,
     GeometryOptimisation,
     describe,
+    geometry_choice_json,
     geometry_json,
     optimise_geometry,
     write_geometry_outputs,
@@ -51,9 +52,11 @@ from ._pareto import (
 )
 from ._run import (
     CAPTIONS,
+    ChosenFile,
     FrontGapWarning,
     Optimisation,
     Timings,
+    design_file_definition,
     optimise,
     write_optimise_outputs,
 )
@@ -79,7 +82,7 @@ __all__ = [
     "exact_sensor_reduction", "optimise_sensor", "sensor_nsga2", "sensor_space",
     "SettingChoice", "best_setting", "setting_for", "sigma_objective", "with_setting",
     "DesignSet", "FrontGapWarning", "GeometricChoice", "GeometryOptimisation", "describe",
-    "geometry_json",
+    "geometry_choice_json", "geometry_json",
     "optimise_geometry", "write_geometry_outputs",
     "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignProblem",
     "DesignResult",
@@ -87,7 +90,8 @@ __all__ = [
     "ParetoSet", "Reduction", "ShearBoundConditioning", "Timings", "as_responses",
     "batch_optimum", "best_magnetisation", "box_optimum", "chip_margin", "choose", "compare",
     "decision_index", "design_maps", "exact_reduction", "feasible_G", "force_constraints",
-    "front_gap", "heights_batch", "CAPTIONS", "nondominated",
+    "front_gap", "heights_batch", "CAPTIONS", "ChosenFile", "design_file_definition",
+    "nondominated",
     "optimise", "pareto_nsga2", "per_design",
     "per_height", "shear_bound_conditioning", "sweep", "write_optimise_outputs",
 ]

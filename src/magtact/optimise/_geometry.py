@@ -308,6 +308,14 @@ def geometry_json(r: GeometryOptimisation) -> dict:
             "pareto": _set_json(r.pareto), "exact_front": _set_json(r.exact)}
 
 
+def geometry_choice_json(data) -> dict | None:
+    """The chosen design of ``geometry.json``'s document (:func:`geometry_json`) as the flat
+    values of ``chosen.json``, with the constraints; None where it has none."""
+    if not isinstance(data, dict) or not isinstance(data.get("choice"), dict):
+        return None
+    return data["choice"] | {"constraints": data.get("constraints")}
+
+
 def write_geometry_outputs(result: GeometryOptimisation, folder, figures=None) -> list[Path]:
     """Write ``folder/geometry.json`` (and, with ``figures``, its figure: a callable
     ``figures(result, folder)`` returning its files); return the files written."""

@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
-from .._files import significant, write_csv
+from .._files import json_dict, json_number, json_text, significant, write_csv
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
-from ..study import Study, from_si
+from ..study import Study, from_si, to_si
 from ._conditioning import shear_bound_conditioning
 from ._design import DesignMaps, DesignResult, as_responses, design_maps
 from ._pareto import (
@@ -186,6 +186,93 @@ def _design_json(d: DesignResult) -> dict:
 def _choice_json(c: Choice) -> dict:
     return {**_design_json(c.design), "g_r_N": c.g_r, "g_z_N": c.g_z,
             "active_constraints": list(c.active)}
+
+
+@dataclass(frozen=True)
+class ChosenFile:
+    """``chosen.json`` read back, in SI: the chosen design as :func:`write_optimise_outputs`,
+    :meth:`magtact.optimise.SensorOptimisation.write` and (its ``choice``) ``geometry.json``
+    write it. A field the file does not give (or gives with the wrong type) is None.
+
+    Attributes
+    ----------
+    design : str or None
+        The design in words (over geometric design variables).
+    H, G, M_z : float or None
+        Base height [m], shear modulus [Pa], magnetisation [A/m].
+    Gamma_r_max, Gamma_z_max : float or None
+        The objectives: worst Γ [N/T], or worst σ_F [N] where ``objective`` is ``"sigma_F"``.
+    F_r_min, F_z_max : float or None
+        Force extrema [N].
+    t_m, theta_m : float or None
+        The stable region's bounds [1, rad].
+    g_r, g_z : float or None
+        Margins to the force constraints [N] (≤ 0: met).
+    F_r_c, F_z_c : float or None
+        The force constraints [N]; ``constraints_source`` where they come from; all None where
+        the file has no constraints.
+    active_constraints, degenerate, sensitivity_definition, objective : str or None
+    """
+
+    design: str | None = None
+    H: float | None = None
+    G: float | None = None
+    M_z: float | None = None
+    Gamma_r_max: float | None = None
+    Gamma_z_max: float | None = None
+    F_r_min: float | None = None
+    F_z_max: float | None = None
+    t_m: float | None = None
+    theta_m: float | None = None
+    g_r: float | None = None
+    g_z: float | None = None
+    F_r_c: float | None = None
+    F_z_c: float | None = None
+    constraints_source: str | None = None
+    has_constraints: bool = False
+    active_constraints: str | None = None
+    degenerate: str | None = None
+    sensitivity_definition: str | None = None
+    objective: str | None = None
+
+    @classmethod
+    def from_json(cls, data) -> ChosenFile | None:
+        """The chosen design of ``chosen.json``'s document; None for anything but a non-empty
+        JSON object."""
+        if not isinstance(data, dict) or not data:
+            return None
+
+        def num(key: str, unit: str | None = None) -> float | None:
+            v = json_number(data.get(key))
+            return v if v is None or unit is None else to_si(v, unit)
+
+        def text(key: str) -> str | None:
+            v = data.get(key)
+            return None if v is None else json_text(v)
+
+        c = data.get("constraints")
+        given = isinstance(c, dict)
+        c = json_dict(c)
+        active = data.get("active_constraints")
+        return cls(design=text("design"), H=num("H_mm", "mm"), G=num("G_kPa", "kPa"),
+                   M_z=num("M_z_A_per_m", "A_per_m"), Gamma_r_max=num("Gamma_r_max_N_per_T"),
+                   Gamma_z_max=num("Gamma_z_max_N_per_T"), F_r_min=num("F_r_min_N"),
+                   F_z_max=num("F_z_max_N"), t_m=num("t_m"), theta_m=num("theta_m_rad"),
+                   g_r=num("g_r_N"), g_z=num("g_z_N"), F_r_c=json_number(c.get("F_r_c_N")),
+                   F_z_c=json_number(c.get("F_z_c_N")),
+                   constraints_source=None if c.get("source") is None
+                   else json_text(c.get("source")), has_constraints=given,
+                   active_constraints=None if active is None else json_text(
+                       ", ".join(map(str, active)) if isinstance(active, list) else active),
+                   degenerate=text("degenerate"),
+                   sensitivity_definition=text("sensitivity_definition"),
+                   objective=text("objective"))
+
+
+def design_file_definition(data) -> str | None:
+    """The sensitivity definition recorded in ``design.json``'s document (None if none)."""
+    v = data.get("sensitivity_definition") if isinstance(data, dict) else None
+    return None if v is None else json_text(v)
 
 
 def optimise(models: Responses | ModelSet, study: Study,

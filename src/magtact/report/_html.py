@@ -16,11 +16,14 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import re
 from datetime import UTC, datetime
 from pathlib import Path
 
 from .._errors import MissingFileError
+from .._runfolder import MANIFEST, RunManifest, StageRecord
+from ..study import from_si
 from ._card import read_card
 from ._explorer import explorer_section
 from ._fragments import escape as _e
@@ -148,13 +151,10 @@ def report_document(folder: Path, *, shown: Path | None = None,
     runs of :func:`magtact._runfolder.interrupted_runs`.
     """
     shown = folder if shown is None else Path(shown)
-    manifest = _load_json(folder / "run.json")
-    manifest = manifest if isinstance(manifest, dict) else {}  # a forged run.json: none
-    listed = manifest.get("stages")
-    stages = {s.get("key"): _stage_record(s) for s in (listed if isinstance(listed, list) else [])
-              if isinstance(s, dict)}
-    study_name = manifest.get("study", "unknown study")
-    run_id = manifest.get("run_id")
+    manifest = RunManifest.from_json(_load_json(folder / MANIFEST))  # a forged one: none
+    stages = {} if manifest is None else {s.key: s for s in manifest.stages}
+    study_name = "unknown study" if manifest is None else manifest.study
+    run_id = None if manifest is None else manifest.run_id
     optimise = folder / "optimise" if _of_run(folder / "optimise", run_id) else None
     card = read_card(optimise, shown / "publication") if optimise is not None else None
     parts = [f"<h1>magtact report — {_e(study_name)}</h1>",
@@ -163,7 +163,7 @@ def report_document(folder: Path, *, shown: Path | None = None,
              "parts, the figures a designer looks at, the explorer, the tables, then the "
              'evidence and <a href="#method">the method</a> (collapsed at the end).</p>']
     parts.extend(_interrupted(r, manifest) for r in interrupted or [])
-    if not manifest:
+    if manifest is None:
         parts.append('<div class="missing">No <code>run.json</code> in this folder: the stages '
                      "below are reported from the files present only; statuses and timings are "
                      "unknown.</div>")
@@ -209,32 +209,32 @@ def report_document(folder: Path, *, shown: Path | None = None,
 # ---- sections ------------------------------------------------------------------------------
 
 
-def _interrupted(run: dict, manifest: dict) -> str:
+def _interrupted(run: dict, manifest: RunManifest | None) -> str:
     """The banner of a run that stopped before its results were put in place."""
-    m = run.get("manifest") or {}
-    listed = m.get("stages") if isinstance(m.get("stages"), list) else []
-    done = [s for s in listed if isinstance(s, dict)]
+    m = run.get("manifest")
+    done = [] if m is None else m.stages
     titles = {k: t for k, t, _ in STAGES}
-    keys = [s.get("key") for s in done]
+    keys = [s.key for s in done]
     at = next((t for k, t in titles.items() if k not in keys), None)
-    if m.get("finished"):
+    if m is not None and m.finished:
         where = "after its last stage, before its results were put in place"
     elif at is not None:
         where = f"during the stage <i>{_e(at)}</i>"
     else:
         where = "before it completed"
     finished = ("; finished stages: " + ", ".join(
-        f"{_e(titles.get(s.get('key'), s.get('key')))} ({_e(s.get('status'))})" for s in done)
-        if done else "")
-    why = f" ({_e(m['interrupted'])})" if isinstance(m.get("interrupted"), str) else ""
-    command = _e(m.get("command", "an unknown command"))
+        f"{_e(titles.get(s.key, s.key))} ({_e(s.status)})" for s in done) if done else "")
+    why = f" ({_e(m.interrupted)})" if m is not None and m.interrupted is not None else ""
+    command = _e(m.command if m is not None and m.command else "an unknown command")
     last = (f"The results shown are those of the last complete run (run "
-            f"{_e(str(manifest.get('run_id', '?'))[:12])}, started "
-            f"{_e(manifest.get('started', '?'))})." if manifest.get("finished")
+            f"{_e(str(manifest.run_id or '?')[:12])}, started "
+            f"{_e(manifest.started or '?')})." if manifest is not None and manifest.finished
             else "This folder holds no complete run.")
+    started = m.started if m is not None and m.started is not None else "at an unknown time"
+    run_id = m.run_id if m is not None and m.run_id is not None else "?"
     return ('<div class="missing"><b>Interrupted run.</b> The run <code>'
-            f"{command}</code> started {_e(m.get('started', 'at an unknown time'))} (run "
-            f"{_e(str(m.get('run_id', '?'))[:12])}) was interrupted {where}{why}{finished}. "
+            f"{command}</code> started {_e(started)} (run "
+            f"{_e(str(run_id)[:12])}) was interrupted {where}{why}{finished}. "
             f"Its partial results, in <code>{_e(run.get('staging'))}/</code>, are not shown; "
             f"the next run into this folder removes them. {last}</div>")
 
@@ -320,50 +320,47 @@ def _card(card: dict | None) -> str:
 
 def _budget_section(folder: Path, run_id: str | None) -> str:
     """The error budget (``budget/budget.json`` and its figures), or nothing without one."""
-    data = _load_json(folder / "budget.json")
-    if not isinstance(data, dict) or not isinstance(data.get("budgets"), list):
+    from ..budget import BudgetFile
+
+    doc = BudgetFile.from_json(_load_json(folder / "budget.json"))
+    if doc is None:
         return ('<h2 id="budget">Error budget</h2><div class="missing">No error budget in this '
                 "folder (<code>budget/budget.json</code>: the stage did not run, or failed; "
                 "see the run summary).</div>")
-    if run_id is not None and data.get("run_id") != run_id and not (
+    if run_id is not None and doc.run_id != run_id and not (
             (folder / RUN_STAMP).is_file() and _of_run(folder, run_id)):
         return ('<h2 id="budget">Error budget</h2><div class="missing">The error budget in '
                 "<code>budget/</code> is not of this run (its <code>budget.json</code> names "
-                f"run {_e(str(data.get('run_id'))[:32])}); nothing of it is shown.</div>")
+                f"run {_e(str(doc.run_id)[:32])}); nothing of it is shown.</div>")
     out = ['<h2 id="budget">Error budget</h2><p>Everything besides the force that moves the '
            "field the chip reads, as a false force ΔF = J ΔB in mN (J = ∂F/∂B of the "
            "metamodels): at rest (t = 0) and worst over the stable region. Rows far above the "
            "resolution are what limits the sensor, not the noise (method, §12). Every number "
            "in <code>budget/budget.json</code>.</p>"]
-    for b in data["budgets"]:
-        if not isinstance(b, dict) or not isinstance(b.get("rows"), list):
-            continue
-        label = str(b.get("label", "design"))
-        out.append(f"<h3>{_e(label)}: H = {_fmt(b.get('H_mm'))} mm, G = "
-                   f"{_fmt(b.get('G_kPa'))} kPa</h3><p>Noise: {_e(b.get('noise_source', ''))}."
-                   "</p>")
+    for b in doc.budgets:
+        label = b.label
+        out.append(f"<h3>{_e(label)}: H = {_fmt(_in(b.H, 'mm'))} mm, G = "
+                   f"{_fmt(_in(b.G, 'kPa'))} kPa</h3><p>Noise: {_e(b.noise_source)}.</p>")
         rows = "".join(
-            f'<tr><td class="l">{_e(r.get("name"))}</td><td class="l">'
-            f'{_e(r.get("component"))}</td><td>{_fmt(r.get("at_rest_mN"))}</td>'
-            f'<td>{_fmt(r.get("worst_mN"))}</td></tr>'
-            for r in b["rows"] if isinstance(r, dict))
+            f'<tr><td class="l">{_e(r.name)}</td><td class="l">'
+            f'{_e(r.component)}</td><td>{_fmt(_in(r.at_rest, "mN"))}</td>'
+            f'<td>{_fmt(_in(r.worst, "mN"))}</td></tr>' for r in b.rows)
         out.append('<table><tr><th class="l">row</th><th class="l">force</th><th>at rest '
                    f"[mN]</th><th>worst [mN]</th></tr>{rows}</table>")
-        arr = b.get("array") if isinstance(b.get("array"), dict) else {}
-        if arr.get("smallest_pitch_mm") is not None:
-            out.append(f"<p>Smallest {_e(arr.get('layout'))} array pitch at which the "
+        pitch = b.array.get("smallest_pitch")
+        if pitch is not None:
+            out.append(f"<p>Smallest {_e(b.array.get('layout'))} array pitch at which the "
                        f"neighbours' crosstalk stays below the resolution: "
-                       f"<b>{_fmt(arr.get('smallest_pitch_mm'))} mm</b> "
-                       f"({_e(arr.get('criterion', ''))}).</p>")
+                       f"<b>{_fmt(_in(pitch, 'mm'))} mm</b> "
+                       f"({_e(b.array.get('criterion', ''))}).</p>")
         slug = re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "design"
         png = folder / f"budget_{slug}.png"
         if png.is_file():
             out.append(_figure(png, f"Error budget of the {label} design: false force per row "
                                     "[mN], log scale; dashed: the resolution (1 σ, worst)"))
-        notes = "".join(f"<li>{_e(r.get('name'))} ({_e(r.get('component'))}): "
-                        f"{_e(r.get('assumptions'))}</li>" for r in b["rows"]
-                        if isinstance(r, dict) and r.get("component") == "F_r")
-        missing = "".join(f"<li>{_e(n)}</li>" for n in b.get("not_modelled", []))
+        notes = "".join(f"<li>{_e(r.name)} ({_e(r.component)}): {_e(r.assumptions)}</li>"
+                        for r in b.rows if r.component == "F_r")
+        missing = "".join(f"<li>{_e(n)}</li>" for n in b.not_modelled)
         out.append(f"<details><summary>assumptions of each row</summary><ul>{notes}</ul>"
                    f"</details><p>Not modelled:</p><ul>{missing}</ul>")
     for png in sorted(folder.glob("time_*.png")):  # the time rows' figure (method.md §15)
@@ -400,12 +397,14 @@ def _method() -> str:
 
 def _definition(folder: Path) -> str | None:
     """The sensitivity definition of the run (from its design.json), if recorded."""
-    data = _load_json(folder / "optimise" / "design.json") or {}
-    return data.get("sensitivity_definition")
+    from ..optimise import design_file_definition
+
+    return design_file_definition(_load_json(folder / "optimise" / "design.json"))
 
 
 
-def _summary(manifest: dict, stages: dict, folder: Path) -> str:
+def _summary(manifest: RunManifest | None, stages: dict[str, StageRecord], folder: Path
+             ) -> str:
     rows = []
     for key, title, _ in STAGES:
         s = stages.get(key)
@@ -414,17 +413,15 @@ def _summary(manifest: dict, stages: dict, folder: Path) -> str:
             status, wall = ("files present", "?") if present else ("absent", "")
             msg = "no record of this stage in run.json" if present else "not run"
         else:
-            status = s.get("status", "unknown")
-            wall = _fmt_time(s.get("wall_time_s"))
-            msg = s.get("message", "")
+            status, wall, msg = s.status, _fmt_time(s.wall_time_s), s.message
         rows.append(f'<tr><td class="l">{_e(title)}</td><td class="l {_e(status)}">'
                     f'{_e(status)}</td><td>{wall}</td><td class="l">{_e(msg)}</td></tr>')
-    total = manifest.get("wall_time_s")
     head = '<h2 id="summary">Run summary</h2>'
-    if manifest:
-        head += (f"<p>Command <code>{_e(manifest.get('command', ''))}</code>; started "
-                 f"{_e(manifest.get('started', '?'))}, total wall time {_fmt_time(total)}; "
-                 f"data set: {_e(manifest.get('doe_source', 'unknown'))}.</p>")
+    if manifest is not None:
+        head += (f"<p>Command <code>{_e(manifest.command)}</code>; started "
+                 f"{_e(manifest.started or '?')}, total wall time "
+                 f"{_fmt_time(manifest.wall_time_s)}; "
+                 f"data set: {_e(manifest.doe_source or 'unknown')}.</p>")
     return (head + '<table><tr><th class="l">stage</th><th class="l">status</th><th>wall time'
             '</th><th class="l">message</th></tr>' + "".join(rows) + "</table>")
 
@@ -432,59 +429,56 @@ def _summary(manifest: dict, stages: dict, folder: Path) -> str:
 def _chosen(folder: Path | None) -> str:
     """The chosen design in words and units (every number in ``optimise/chosen.json``, or
     ``geometry.json`` over geometric design variables)."""
-    data = _load_json(folder / "chosen.json") if folder is not None else None
-    geo = _load_json(folder / "geometry.json") if folder is not None else None
-    if isinstance(geo, dict) and isinstance(geo.get("choice"), dict) and not data:
-        data, source = geo["choice"] | {"constraints": geo.get("constraints")}, "geometry.json"
+    from ..optimise import ChosenFile, geometry_choice_json
+
+    data = ChosenFile.from_json(_load_json(folder / "chosen.json")) if folder else None
+    geo = geometry_choice_json(_load_json(folder / "geometry.json")) if folder else None
+    if geo is not None and data is None:
+        data, source = ChosenFile.from_json(geo), "geometry.json"
     else:
         source = "chosen.json"
-    if not isinstance(data, dict) or not data:
+    if data is None:
         return ('<h2 id="chosen">Chosen design</h2><div class="missing">No chosen design in '
                 "this folder (the optimisation stage did not produce "
                 "<code>optimise/chosen.json</code>).</div>")
 
-    def num(key, fmt=None):
-        v = data.get(key)
-        return sig(float(v)) if isinstance(v, (int, float)) and not isinstance(v, bool) else "?"
+    def num(v: float | None, unit: str | None = None) -> str:
+        return "?" if v is None else sig(v if unit is None else from_si(v, unit))
 
     rows = []
-    if "design" in data:
-        rows.append(("design", str(data["design"])))
-    if "H_mm" in data:
-        rows += [("base height H", f"{num('H_mm')} mm"),
-                 ("shear modulus G of the elastomer", f"{num('G_kPa')} kPa")]
-    if "M_z_A_per_m" in data:
-        rows.append(("magnetisation M_z", f"{num('M_z_A_per_m', '.4g')} A/m"))
-    if data.get("objective") == "sigma_F":  # the objective columns hold σ_F [N]
-        g_r, g_z = (data.get(k) for k in ("Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T"))
+    if data.design is not None:
+        rows.append(("design", data.design))
+    if data.H is not None:
+        rows += [("base height H", f"{num(data.H, 'mm')} mm"),
+                 ("shear modulus G of the elastomer", f"{num(data.G, 'kPa')} kPa")]
+    if data.M_z is not None:
+        rows.append(("magnetisation M_z", f"{num(data.M_z, 'A_per_m')} A/m"))
+    if data.objective == "sigma_F":  # the objective columns hold σ_F [N]
         rows += [("worst shear force noise σ_Fr over the stable region (the objective)",
-                  f"{sig(1e3 * g_r)} mN" if isinstance(g_r, (int, float)) else "?"),
+                  f"{num(data.Gamma_r_max, 'mN')} mN"),
                  ("worst normal force noise σ_Fz over the stable region (the objective)",
-                  f"{sig(1e3 * g_z)} mN" if isinstance(g_z, (int, float)) else "?")]
+                  f"{num(data.Gamma_z_max, 'mN')} mN")]
     else:
         rows += [("worst shear sensitivity Γ_r,max over the stable region",
-                  f"{num('Gamma_r_max_N_per_T')} N/T"),
+                  f"{num(data.Gamma_r_max)} N/T"),
                  ("worst normal sensitivity Γ_z,max over the stable region",
-                  f"{num('Gamma_z_max_N_per_T')} N/T")]
-    rows += [
-             ("largest stable shear force F_r,min", f"{num('F_r_min_N')} N"),
-             ("largest normal force in the stable region F_z,max", f"{num('F_z_max_N')} N")]
-    if "t_m" in data:
-        rows.append(("stable region", f"t ≤ {num('t_m', '.3g')}, θ ≤ "
-                                      f"{num('theta_m_rad', '.3g')} rad"))
-    c = data.get("constraints")
-    if isinstance(c, dict):
-        rows.append(("force constraints", f"F_r,min ≤ {_plain(c.get('F_r_c_N'))} N, F_z,max ≥ "
-                                          f"{_plain(c.get('F_z_c_N'))} N "
-                                          f"({_plain(c.get('source', '?'))})"))
-    rows.append(("margins to the constraints", f"{num('g_r_N', '.3g')} N shear, "
-                                               f"{num('g_z_N', '.3g')} N normal (≤ 0: met)"))
-    if "active_constraints" in data:
-        rows.append(("active constraints", _plain(data["active_constraints"])))
-    if data.get("degenerate"):
-        rows.append(("note", round_text(_plain(data["degenerate"]))))
-    if "sensitivity_definition" in data:
-        rows.append(("sensitivity Γ", f"{_plain(data['sensitivity_definition'])} definition"))
+                  f"{num(data.Gamma_z_max)} N/T")]
+    rows += [("largest stable shear force F_r,min", f"{num(data.F_r_min)} N"),
+             ("largest normal force in the stable region F_z,max", f"{num(data.F_z_max)} N")]
+    if data.t_m is not None:
+        rows.append(("stable region", f"t ≤ {num(data.t_m)}, θ ≤ {num(data.theta_m)} rad"))
+    if data.has_constraints:
+        rows.append(("force constraints", f"F_r,min ≤ {_plain(data.F_r_c)} N, F_z,max ≥ "
+                                          f"{_plain(data.F_z_c)} N "
+                                          f"({_plain(data.constraints_source or '?')})"))
+    rows.append(("margins to the constraints", f"{num(data.g_r)} N shear, "
+                                               f"{num(data.g_z)} N normal (≤ 0: met)"))
+    if data.active_constraints is not None:
+        rows.append(("active constraints", data.active_constraints))
+    if data.degenerate:
+        rows.append(("note", round_text(data.degenerate)))
+    if data.sensitivity_definition is not None:
+        rows.append(("sensitivity Γ", f"{data.sensitivity_definition} definition"))
     body = "".join(f'<tr><td class="l">{_e(k)}</td><td class="l">{_e(v)}</td></tr>'
                    for k, v in rows)
     return (f'<h2 id="chosen">Chosen design</h2><div class="design"><table>{body}</table>'
@@ -492,13 +486,14 @@ def _chosen(folder: Path | None) -> str:
             f"{_design_rule(data)}</div>")
 
 
-def _design_rule(chosen: dict) -> str:
-    """The resolution–range trade-off of the chosen height, in words."""
+def _design_rule(chosen) -> str:
+    """The resolution–range trade-off of the chosen height, in words (a
+    :class:`magtact.optimise.ChosenFile`)."""
     try:
-        H, G = chosen["H_mm"], chosen["G_kPa"]
-        kz = chosen["Gamma_z_max_N_per_T"] / chosen["F_z_max_N"]
-        kr = chosen["Gamma_r_max_N_per_T"] / abs(chosen["F_r_min_N"])
-    except (KeyError, TypeError, ZeroDivisionError):
+        H, G = from_si(chosen.H, "mm"), from_si(chosen.G, "kPa")
+        kz = chosen.Gamma_z_max / chosen.F_z_max
+        kr = chosen.Gamma_r_max / abs(chosen.F_r_min)
+    except (TypeError, ZeroDivisionError):
         return ""
     return (f"<p><b>Design rule.</b> Forces and sensitivities are both G times a function of "
             f"H, so at H = {H:.3g} mm every newton of normal range costs {kz:.3g} N/T of "
@@ -508,16 +503,16 @@ def _design_rule(chosen: dict) -> str:
             "<i>resolution–range</i> in the section on the publication).</p>")
 
 
-def _stage(folder: Path, key: str, title: str, what: str, info: dict | None) -> str:
+def _stage(folder: Path, key: str, title: str, what: str, info: StageRecord | None) -> str:
     out = [f'<h2 id="{key}">{_e(title)}</h2><p>{_e(what)}</p>']
     if info is not None:
-        status = info.get("status", "unknown")
+        status = info.status
         out.append(f'<p>Status: <span class="{_e(status)}">{_e(status)}</span>, wall time '
-                   f"{_fmt_time(info.get('wall_time_s'))}. {_e(info.get('message', ''))}</p>")
-        for note in info.get("notes", []):
+                   f"{_fmt_time(info.wall_time_s)}. {_e(info.message)}</p>")
+        for note in info.notes:
             out.append(f"<p>Note: {_e(note)}</p>")
     if not folder.is_dir() or not any(folder.iterdir()):
-        reason = info.get("message", "") if info else "this stage was not run"
+        reason = info.message if info else "this stage was not run"
         out.append(f'<div class="missing">No results for this stage in the folder ({_e(reason)}).'
                    " Nothing is shown in its place.</div>")
         return "\n".join(out)
@@ -559,56 +554,49 @@ def _calibration(folder: Path) -> str:
     round trip, the firmware export's size and error against σ_F, a built unit's parameters,
     the error figure and how to use the files."""
     out = ['<h2 id="calibration">Calibration: the field-to-force map</h2>']
+    from ..calibration import CalibrationSummary
+
     for p in sorted(folder.glob("*.json")):
-        d = _load_json(p)
-        if not (isinstance(d, dict) and d.get("format") == "magtact-calibration-summary/1"):
+        d = CalibrationSummary.from_json(_load_json(p))
+        if d is None:
             continue
-        design, fw = d.get("design") or {}, d.get("firmware") or {}
         out.append(
-            f"<p>Design H = {_sig(design.get('H_mm'))} mm, "
-            f"G = {_sig(design.get('G_kPa'))} kPa; "
-            f"stable region t ≤ {_sig(design.get('t_m'))}, θ ≤ "
-            f"{_sig(design.get('theta_m_rad'))} rad. Round trip F → B → F: largest error "
-            f"{_sig(d.get('round_trip_rel'))} of the force range. Firmware map: "
-            f"{_e(fw.get('kind'))} ({_fmt(fw.get('bytes'))} bytes, "
-            f"{_fmt(fw.get('multiplies'))} multiplications), largest error over the region "
-            f"F_r {_sig(fw.get('max_error_F_r_mN'))} mN, F_z {_sig(fw.get('max_error_F_z_mN'))}"
-            f" mN against σ_F {_sig(d.get('sigma_F_r_mN'))} / {_sig(d.get('sigma_F_z_mN'))} mN "
-            f"(field noise {_e(', '.join(_sig(v) for v in d.get('noise_B_uT') or []))} µT from "
-            f"{_e(d.get('noise_source'))}): "
-            f"{'reached' if fw.get('reached') else 'not reached'}, {_e(fw.get('rule'))}.</p>")
-        err = d.get("force_model_error")
-        if isinstance(err, dict):
-            limit = ("not measured" if err.get("F_r_mN") is None else
-                     f"F_r {_sig(err.get('F_r_mN'))} mN, "
-                     f"F_z {_sig(err.get('F_z_mN'))} mN")
+            f"<p>Design H = {_sig(_in(d.H, 'mm'))} mm, "
+            f"G = {_sig(_in(d.G, 'kPa'))} kPa; "
+            f"stable region t ≤ {_sig(d.t_m)}, θ ≤ "
+            f"{_sig(d.theta_m)} rad. Round trip F → B → F: largest error "
+            f"{_sig(d.round_trip)} of the force range. Firmware map: "
+            f"{_e(d.firmware_kind)} ({_fmt(d.firmware_bytes)} bytes, "
+            f"{_fmt(d.firmware_multiplies)} multiplications), largest error over the region "
+            f"F_r {_sig(_in(d.firmware_error[0], 'mN'))} mN, "
+            f"F_z {_sig(_in(d.firmware_error[1], 'mN'))}"
+            f" mN against σ_F {_sig(_in(d.sigma_F[0], 'mN'))} / "
+            f"{_sig(_in(d.sigma_F[1], 'mN'))} mN "
+            f"(field noise {_e(', '.join(_sig(_in(v, 'uT')) for v in d.noise))} µT from "
+            f"{_e(d.noise_source)}): "
+            f"{'reached' if d.reached else 'not reached'}, {_e(d.firmware_rule)}.</p>")
+        err = d.force_error
+        if err is not None:
+            limit = ("not measured" if err.F_r is None else
+                     f"F_r {_sig(_in(err.F_r, 'mN'))} mN, "
+                     f"F_z {_sig(_in(err.F_z, 'mN'))} mN")
             source = {"models": "the metamodels",
-                      "fe": "the DOE's FE paths at H, interpolated"}.get(d.get("force_source"),
-                                                                         d.get("force_source"))
+                      "fe": "the DOE's FE paths at H, interpolated"}.get(d.force_source,
+                                                                         d.force_source)
             out.append(f"<p>Forces from {_e(source)}; what limits them: "
-                       f"{_e(err.get('kind'))}: {limit} (docs/method.md §13.4).</p>")
-        if isinstance(d.get("unit"), dict):
-            out.append("<h3>Built unit</h3>" + _dict_table(d["unit"]))
-        out.append(f"<p>Use: {_e(d.get('usage'))}. Files in <code>{_e(folder.name)}/</code>: "
+                       f"{_e(err.kind)}: {limit} (docs/method.md §13.4).</p>")
+        if d.unit is not None:
+            out.append("<h3>Built unit</h3>" + _dict_table(d.unit))
+        out.append(f"<p>Use: {_e(d.usage)}. Files in <code>{_e(folder.name)}/</code>: "
                    "<code>force.h</code> (C99), <code>force_map.json</code>, "
                    "<code>force_table.csv</code>.</p>")
-        rows = fw.get("frontier")
-        if isinstance(rows, list) and rows:
+        if d.frontier:
             out.append("<details><summary>every firmware candidate (size and error)</summary>"
-                       + _records_table("frontier", [r for r in rows if isinstance(r, dict)])
-                       + "</details>")
+                       + _records_table("frontier", d.frontier) + "</details>")
     for p in sorted(folder.glob("*.png")):
         out.append(_figure(p, "error of the firmware map over the stable region, and the "
                               "candidates' size against their error"))
     return "\n".join(out)
-
-
-def _stage_record(s: dict) -> dict:
-    """A stage's record of run.json with every field of the type the report expects."""
-    notes = s.get("notes")
-    return {"key": s.get("key"), "status": str(s.get("status", "unknown")),
-            "wall_time_s": s.get("wall_time_s"), "message": str(s.get("message", "")),
-            "notes": [str(n) for n in notes] if isinstance(notes, list) else []}
 
 
 def _of_run(folder: Path, run_id: str | None) -> bool:
@@ -738,9 +726,9 @@ def _same(value, unset) -> bool:
             and isinstance(unset, (int, float)) and float(value) == float(unset))
 
 
-def _versions(manifest: dict) -> str:
-    versions = manifest.get("versions")
-    if not versions or not isinstance(versions, dict):
+def _versions(manifest: RunManifest | None) -> str:
+    versions = None if manifest is None else manifest.versions
+    if not versions:
         return ""
     rows = "".join(f'<tr><td class="l">{_e(k)}</td><td class="l">{_e(v)}</td></tr>'
                    for k, v in versions.items())
@@ -870,6 +858,14 @@ def _sig(v, digits: int = 3) -> str:
     """A measured number to ``digits`` significant figures, escaped (text stays text)."""
     return _e(sig(v, digits)) if isinstance(v, (int, float)) and not isinstance(v, bool) \
         else _e(_plain(v))
+
+
+def _in(value: float | None, unit: str) -> float | None:
+    """An SI value of a file read back, in ``unit`` for the page; None where there is none
+    (missing, or not finite), which the page shows as a dash."""
+    if value is None or not math.isfinite(value):
+        return None
+    return from_si(value, unit)
 
 
 def _fmt_time(seconds) -> str:

@@ -111,6 +111,12 @@ class Validation:
         return (f"Validation ({kind}): {len(self.sensors)} sensors, {self.n_tests} tests, "
                 f"θ = {self.theta:.3f} rad")
 
+    def excluded(self, response: str, measure: str = "eps") -> str:
+        """The u_z ranges [mm] of ``response`` left out of ``measure`` (``"eps"`` or
+        ``"c_v"``), in words."""
+        s = self.stats[response]
+        return _ranges_text(self.u_z, s.eps_excluded if measure == "eps" else s.cv_excluded)
+
     def rows(self) -> list[dict[str, object]]:
         """The table of c_v and ε: one dict per response, user units (mm, %)."""
         out = []
@@ -121,8 +127,8 @@ class Validation:
                 "response": r, "unit": s.unit, "n_tests": self.n_tests,
                 "c_v_percent": s.c_v, "c_v_at_u_z_mm": mm(s.c_v_at),
                 "eps_percent": s.eps, "eps_at_u_z_mm": mm(s.eps_at),
-                "c_v_excluded": _ranges_text(self.u_z, s.cv_excluded),
-                "eps_excluded": _ranges_text(self.u_z, s.eps_excluded),
+                "c_v_excluded": self.excluded(r, "c_v"),
+                "eps_excluded": self.excluded(r, "eps"),
                 "model": self.model_label,
             })
         return out
