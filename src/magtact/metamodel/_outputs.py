@@ -60,6 +60,6 @@ def write_fit_outputs(study: Study, ds, folder: str | Path, *, H: float | None =
                                 title=f"Metamodels: {study.name}", gamma_check=check,
                                 exact_B=study.metamodel.b_model == "exact"))
     if figures is not None:
-        table, _, _ = _table(ds)
+        table = _table(ds)[0]
         files += figures(study, models, table, holdout_mask(table, result.holdout), folder, H, G)
     return result, files
