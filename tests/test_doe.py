@@ -5,6 +5,7 @@ against its formula; the real solvers are exercised in ``test_doe_acceptance.py`
 """
 
 import csv
+import json
 import os
 from dataclasses import replace
 
@@ -156,6 +157,33 @@ def test_failed_jobs_are_reported_and_others_finish(tmp_path, monkeypatch):
     monkeypatch.delenv("MAGTACT_TEST_FAIL")
     retry = run(s, tmp_path)  # only the failed path is computed again
     assert retry.attrs["run_paths_computed"] == 1
+
+
+def stalling_path(study, H, theta, *, G=None, mesh=None, t=None, vtu=None):
+    """The fake path, failing after its first two levels at the sheared, tallest path."""
+    from magtact.mechanics import PathFailed
+
+    res = fake_path(study, H, theta, G=G, t=t)
+    if theta > 0 and H == study.H_levels[-1]:
+        part = replace(res, **{k: getattr(res, k)[:2] for k in ("t", "u_r", "u_z", "F_r", "F_z")})
+        raise PathFailed(0.5, theta, H, float(res.t[1]), "no progress", part)
+    return res
+
+
+def test_a_failed_path_keeps_its_levels_before_the_failure(tmp_path):
+    s = tiny()
+    with pytest.raises(DOEFailed, match="levels up to t = 0.3333 kept") as info:
+        run(s, tmp_path, path_solver=stalling_path)
+    ds = info.value.dataset
+    whole = run(s)
+    assert ds.attrs["complete"] == 0 and "kept" in ds.attrs["failed_jobs"]
+    kept = ds.F_z.isel(theta=1, H=1)
+    xr.testing.assert_equal(kept.isel(t=slice(0, 2)), whole.F_z.isel(theta=1, H=1, t=slice(0, 2)))
+    assert np.isnan(kept.isel(t=slice(2, None))).all()
+    job = next(j for j in json.loads(ds.attrs["jobs"]) if "t_reached" in j)
+    assert job["t_reached"] == pytest.approx(1 / 3)
+    with pytest.raises(DOEFailed):  # a partial path is not cached: the next run tries again
+        run(s, tmp_path, path_solver=stalling_path)
 
 
 def test_a_non_finite_result_is_a_failure_not_data():

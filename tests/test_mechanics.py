@@ -301,6 +301,30 @@ def test_path_failed_names_t_theta_H(study):
     assert info.value.t_converged == 0.0 and info.value.H == 3e-3
 
 
+def test_a_failed_path_keeps_the_levels_it_reached(study, monkeypatch):
+    """The partial path of a failure is the complete path's first levels, exactly."""
+    from magtact.mechanics import _model
+
+    t = [0.0, 0.1, 0.2, 0.3]
+    full = simulate_path(study, 4e-3, 0.2, mesh="coarse", t=t)
+    wall = loading_path(study, 0.25, 0.2, 4e-3)[1]  # u_z at t = 0.25: no step beyond it
+    real = _model.HalfBodyModel._newton
+
+    def newton(self, u_r, u_z, st):
+        if u_z < wall:
+            raise _model.NewtonFailed("stand-in for a stall")
+        return real(self, u_r, u_z, st)
+
+    monkeypatch.setattr(_model.HalfBodyModel, "_newton", newton)
+    with pytest.raises(PathFailed, match="last converged t = 0.2") as info:
+        simulate_path(study, 4e-3, 0.2, mesh="coarse", t=t)
+    part = info.value.partial
+    np.testing.assert_array_equal(part.t, [0.0, 0.1, 0.2])
+    np.testing.assert_allclose(part.F_z, full.F_z[:3], rtol=1e-12)
+    np.testing.assert_allclose(part.F_r, full.F_r[:3], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(part.u_z, full.u_z[:3])
+
+
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"H": -1e-3}, "H must be positive"),
     ({"theta": -0.1}, "theta must be in"),

@@ -103,6 +103,8 @@ def provenance(study: Study, field_job: FieldJob, field: Entry | None, path_jobs
                                                    "n_cells", "mesh", "wall_time")})
             rec["G_solved"] = entry.meta["G"]
             rec["job_wall_time"] = entry.meta.get("job_wall_time")
+            if "t_reached" in entry.meta:  # a failed path's levels up to there
+                rec["t_reached"] = entry.meta["t_reached"]
         jobs.append(rec)
     meshes = sorted({r["mesh"] for r in jobs if r.get("mesh")})
     cells = [r["n_cells"] for r in jobs if "n_cells" in r]

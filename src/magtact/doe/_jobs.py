@@ -95,6 +95,8 @@ class Outcome:
     error: str | None = None
     detail: str = ""
     wall_time: float = 0.0
+    #: a failed path's levels before the failure (NaN beyond): data, never cached
+    partial: Entry | None = None
 
 
 # ---- keys ---------------------------------------------------------------------------------------
@@ -212,6 +214,20 @@ def path_entry(job: PathJob, result) -> Entry:
     return Entry(arrays=arrays, meta=meta)
 
 
+def partial_entry(job: PathJob, result) -> Entry:
+    """The entry of a path that failed after reaching the first levels of ``job.t``: those
+    levels' values, NaN beyond (checked as :func:`path_entry` checks a whole path)."""
+    k = len(result.t)
+    if not 0 < k < len(job.t):
+        raise ValueError(f"a partial path has {k} levels, expected 1 to {len(job.t) - 1}")
+    short = PathJob(job.study, job.theta, job.H, job.G, job.t[:k], job.key)
+    entry = path_entry(short, result)
+    pad = np.full(len(job.t) - k, np.nan)
+    arrays = {name: np.concatenate([a, pad]) for name, a in entry.arrays.items()}
+    arrays["t"] = np.asarray(job.t, dtype=float)
+    return Entry(arrays=arrays, meta={**entry.meta, "t_reached": float(job.t[k - 1])})
+
+
 def verify_entry(job: PathJob | FieldJob, entry: Entry) -> None:
     """Check that a cache entry holds what ``job`` produces: every array with the job's shape,
     finite, and (for a path) its scalars with a positive modulus.
@@ -256,8 +272,16 @@ def run_path(job: PathJob, path_solver) -> Outcome:
         result = path_solver(job.study, job.H, job.theta, G=job.G, t=np.asarray(job.t))
         entry = path_entry(job, result)
     except Exception as exc:
-        return Outcome(None, f"{type(exc).__name__}: {exc}", traceback.format_exc(),
-                       time.perf_counter() - start)
+        wall = time.perf_counter() - start
+        partial = None
+        if getattr(exc, "partial", None) is not None:  # a path that stopped part of the way
+            try:
+                partial = partial_entry(job, exc.partial)
+                partial.meta["job_wall_time"] = wall
+            except Exception:  # a malformed partial result: the failure alone is reported
+                partial = None
+        return Outcome(None, f"{type(exc).__name__}: {exc}", traceback.format_exc(), wall,
+                       partial)
     wall = time.perf_counter() - start
     entry.meta["job_wall_time"] = wall
     return Outcome(entry, wall_time=wall)

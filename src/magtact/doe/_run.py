@@ -203,7 +203,11 @@ def _run(study: Study, *, cache, workers, scheduler, console, path_solver, field
                                     on_start=display.start):
             display.finish(job, outcome)
             if outcome.entry is None:
-                stats.failures.append(JobFailure(job.label, outcome.error or "", outcome.detail))
+                error = outcome.error or ""
+                if outcome.partial is not None:  # its levels before the failure are data
+                    results[job.key] = outcome.partial
+                    error += f" (its levels up to t = {outcome.partial.meta['t_reached']:.4g} kept)"
+                stats.failures.append(JobFailure(job.label, error, outcome.detail))
                 continue
             if store is not None:
                 store.put(job.kind, job.key, outcome.entry)

@@ -157,11 +157,15 @@ _CELLS = {8: ("hexahedron", fem.RegionHexahedron),
 
 
 class StepFailure(Exception):
-    """A load step could not be converged with the smallest allowed step size."""
+    """A load step could not be converged with the smallest allowed step size.
 
-    def __init__(self, t: float, t_converged: float, reason: str):
+    ``reached``: what :meth:`HalfBodyModel.solve_path` recorded before the failure (its
+    outputs at the first ``len(reached["lower"])`` load levels), or None.
+    """
+
+    def __init__(self, t: float, t_converged: float, reason: str, reached: dict | None = None):
         super().__init__(reason)
-        self.t, self.t_converged, self.reason = t, t_converged, reason
+        self.t, self.t_converged, self.reason, self.reached = t, t_converged, reason, reached
 
 
 @dataclass(frozen=True)
@@ -527,7 +531,12 @@ class HalfBodyModel:
                     if dt < st.dt_min:
                         self._linear.free()
                         self._K10 = None
-                        raise StepFailure(t_try, t, str(exc).strip() or type(exc).__name__) from exc
+                        reached = {**{k: v[:i].copy() for k, v in out.items()},
+                                   "iterations": self.iterations,
+                                   "jacobians": self.jacobians, "cutbacks": cutbacks,
+                                   "steps": steps}
+                        raise StepFailure(t_try, t, str(exc).strip() or type(exc).__name__,
+                                          reached) from exc
                     continue
                 steps += 1
                 self.log.append((t, t_try, n_it))

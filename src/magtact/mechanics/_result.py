@@ -20,10 +20,14 @@ class PathFailed(RuntimeError):
         Shear angle [rad] and base height [m] of the path.
     t_converged : float
         Last converged load level.
+    partial : PathResult or None
+        The path over the load levels reached before the failure (at least two), or None.
     """
 
-    def __init__(self, t: float, theta: float, H: float, t_converged: float, reason: str = ""):
+    def __init__(self, t: float, theta: float, H: float, t_converged: float, reason: str = "",
+                 partial: PathResult | None = None):
         self.t, self.theta, self.H, self.t_converged = t, theta, H, t_converged
+        self.partial = partial
         msg = (f"structural path failed at t = {t:.5g} (theta = {theta:.4f} rad, "
                f"H = {mm(H):.4g} mm); last converged t = {t_converged:.5g}")
         super().__init__(msg + (f": {reason}" if reason else ""))

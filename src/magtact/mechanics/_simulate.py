@@ -81,7 +81,7 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
     ------
     PathFailed
         If a step cannot be converged even with the smallest step size; it names t, θ, H and
-        the last converged t. No partial result is returned.
+        the last converged t, and holds the path over the levels reached (``partial``).
 
     Notes
     -----
@@ -123,20 +123,25 @@ def simulate_path(study: Study, H: float, theta: float, *, G: float | None = Non
         u_r, u_z = loading_path(study, tt, theta, H)
         return float(u_r), float(u_z)
 
+    def result_of(out: dict, levels: np.ndarray) -> PathResult:
+        u_r, u_z = loading_path(study, levels, theta, H)
+        result = PathResult(
+            t=levels.copy(), u_r=np.broadcast_to(u_r, levels.shape).copy(),
+            u_z=np.broadcast_to(u_z, levels.shape).copy(),
+            F_r=2 * out["lower"][:, 0], F_z=2 * out["lower"][:, 2], G=G_solve, H=float(H),
+            theta=float(theta), newton_iterations=out["iterations"], cutbacks=out["cutbacks"],
+            steps=out["steps"], wall_time=time.perf_counter() - t0, n_dofs=model.n_dofs,
+            n_cells=model.bmesh.n_cells, mesh=model.bmesh.name, timings=dict(model.timings),
+            jacobians=out["jacobians"],
+        )
+        return result if G_solve == G_out else result.scaled(G_out)
+
     try:
         out = model.solve_path(path, t, stepping=stepping_of(study), on_level=progress)
     except StepFailure as exc:
-        raise PathFailed(exc.t, theta, H, exc.t_converged, exc.reason) from exc
-    u_r, u_z = loading_path(study, t, theta, H)
+        n = len(exc.reached["lower"]) if exc.reached is not None else 0
+        partial = result_of(exc.reached, t[:n]) if n >= 2 else None
+        raise PathFailed(exc.t, theta, H, exc.t_converged, exc.reason, partial) from exc
     if vtu is not None:
         write_vtu(vtu, model.bmesh, model.displacement)
-    result = PathResult(
-        t=t.copy(), u_r=np.broadcast_to(u_r, t.shape).copy(),
-        u_z=np.broadcast_to(u_z, t.shape).copy(),
-        F_r=2 * out["lower"][:, 0], F_z=2 * out["lower"][:, 2], G=G_solve, H=float(H),
-        theta=float(theta), newton_iterations=out["iterations"], cutbacks=out["cutbacks"],
-        steps=out["steps"], wall_time=time.perf_counter() - t0, n_dofs=model.n_dofs,
-        n_cells=model.bmesh.n_cells, mesh=model.bmesh.name, timings=dict(model.timings),
-        jacobians=out["jacobians"],
-    )
-    return result if G_solve == G_out else result.scaled(G_out)
+    return result_of(out, t)
