@@ -41,12 +41,6 @@ ALLOWED: dict[str, tuple[str, set[str]]] = {
                                "named as these", {"G_kPa", "wall_time_s"}),
     "report/_fig_publication.py": ("draws publication.json of magtact.publication",
                                    {"H_mm", "t_m"}),
-    "report/_fig_time.py": ("not yet read through a type: the time rows of budget.json "
-                            "(magtact.viscoelastic.time_json and the budget's time section)",
-                            {"press_time_s", "hysteresis_pct"}),
-    "report/_fig_calibration.py": ("not yet read through a type: the firmware frontier and "
-                                   "the design of calibration.json",
-                                   {"on_frontier", "error_over_sigma", "H_mm", "G_kPa"}),
 }
 
 

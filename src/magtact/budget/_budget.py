@@ -25,12 +25,13 @@ from ..sensitivity import dF_dB, gamma
 from ..study import Study, from_si, kpa, mm, to_si
 from ..viscoelastic import (
     MEASURED_HYSTERESIS,
-    MEASURED_SOURCE,
+    SiliconeSweep,
     design_forces,
     implied_ratio,
     relaxation_of,
     time_json,
     time_response,
+    unknown_time_json,
 )
 from . import _array, _fabrication
 
@@ -479,13 +480,9 @@ def _time_rows(models, study, design) -> tuple[list[BudgetRow], dict]:
     prony, source = relaxation_of(study, design.G)
     g_min, tau_at = implied_ratio(design_forces(models, design.H, 0.0), design.t_m,
                                   env.press_time, MEASURED_HYSTERESIS, env.calibrated_on)
-    implied = {"single_term_g_min": None if not math.isfinite(g_min) else g_min,
-               "single_term_tau_s": None if not math.isfinite(tau_at) else tau_at}
     if prony is None:
-        return [], {"source": source, "press_time_s": env.press_time, "hold_s": env.hold,
-                    "calibrated_on": env.calibrated_on,
-                    "measured": {"hysteresis_pct": 100 * MEASURED_HYSTERESIS,
-                                 "source": MEASURED_SOURCE, **implied}}
+        return [], unknown_time_json(source, env.press_time, env.hold, env.calibrated_on,
+                                     g_min, tau_at)
     r = time_response(models, study, design.H, design.G, design.t_m, design.theta_m, prony,
                       implied=(g_min, tau_at))
     modulus = "long-time G_∞" if env.calibrated_on == "long" else "instantaneous G(0)"
@@ -499,13 +496,14 @@ def _time_rows(models, study, design) -> tuple[list[BudgetRow], dict]:
     rows += _rows(f"time: creep over a {env.hold:g} s hold", "time", (0.0, 0.0), r.creep,
                   f"change of the reading while a full press is held at constant force for "
                   f"environment.hold_s after a press in environment.press_time_s; {history}")
-    return rows, {"source": prony.source, **time_json(r),
-                  "silicones": _silicone_sweeps(models, study, design)}
+    return rows, time_json(r, source=prony.source,
+                           silicones=_silicone_sweeps(models, study, design))
 
 
-def _silicone_sweeps(models, study, design) -> dict:
-    """Hysteresis [% of the peak F_z] against the press time of the design's normal press for
-    every catalogue silicone with a cited relaxation (its ratios and times at the design's G)."""
+def _silicone_sweeps(models, study, design) -> dict[str, SiliconeSweep]:
+    """The hysteresis of F_z against the press time of the design's normal press for every
+    catalogue silicone with a cited relaxation (its ratios and times at the design's G), by
+    name."""
     from ..parts import SILICONES
     from ..viscoelastic import Prony, rate_sweep
 
@@ -517,8 +515,7 @@ def _silicone_sweeps(models, study, design) -> dict:
         r = sil.relaxation
         sw = rate_sweep(Prony.from_ratios(design.G, r.g, r.tau, r.source), f, design.t_m,
                         calibrated_on=study.environment.calibrated_on, n=200)
-        out[name] = {"source": r.source, "press_time_s": sw.press_times.tolist(),
-                     "hysteresis_pct": (100 * sw.gap[:, 1] / sw.peak[:, 1]).tolist()}
+        out[name] = SiliconeSweep.of(sw, r.source)
     return out
 
 

@@ -5,6 +5,7 @@ from ._fe import FEForces, PathHoldout, fe_forces, has_height, path_holdout
 from ._firmware import (
     Approximation,
     FirmwareChoice,
+    FrontierPoint,
     approximation_json,
     c_header,
     firmware_approximation,
@@ -54,7 +55,7 @@ __all__ = [
     "force_model_error", "force_source_for", "has_height", "path_holdout", "NOT_UNIQUE",
     "NO_INVERSE", "OK", "OUTSIDE", "PARAMETERS",
     "PRESS_COLUMNS", "SUMMARY_FORMAT", "TOLERANCE", "Approximation", "Calibration",
-    "CalibrationSummary", "FirmwareChoice", "ForceError", "Presses",
+    "CalibrationSummary", "FirmwareChoice", "ForceError", "FrontierPoint", "Presses",
     "Reading", "SensorMap", "UnitCalibration", "UnitParameters", "approximation_json",
     "c_header", "calibrate", "calibrate_unit", "error_grid", "fe_readings",
     "firmware_approximation", "load_approximation", "read_presses", "region_polygon",

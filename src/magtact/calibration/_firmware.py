@@ -27,7 +27,8 @@ import numpy as np
 from numpy.polynomial import chebyshev as cheb
 
 from .._errors import MagtactError
-from ..study import from_si, mm
+from .._files import json_number, json_text
+from ..study import from_si, mm, to_si
 from ._map import OK, SensorMap
 
 #: Transforms of b_z for the polynomial candidates: name → (NumPy function, C expression).
@@ -333,6 +334,68 @@ def _evaluate_features(ap: Approximation, B) -> tuple[np.ndarray, np.ndarray]:
 
 
 @dataclass(frozen=True)
+class FrontierPoint:
+    """One firmware candidate on the size–error plane (:meth:`FirmwareChoice.frontier`).
+
+    Attributes
+    ----------
+    kind, transform : str
+        The approximation's kind (``poly``, ``table``, ``features``) and the transform of B_z.
+    degree : int
+        Its degree (a table: points per side).
+    bytes, multiplies : int
+        Its size and its multiplies per evaluation.
+    err_r, err_z : float
+        Its largest held-out error of F_r and F_z [N].
+    error_over_sigma : float
+        The larger of the two errors over the target σ_F,r, σ_F,z [1].
+    on_frontier : bool
+        Whether no candidate of at most its size has a smaller ``error_over_sigma``.
+    """
+
+    kind: str
+    degree: int
+    transform: str
+    bytes: int
+    multiplies: int
+    err_r: float
+    err_z: float
+    error_over_sigma: float
+    on_frontier: bool
+
+    def to_json(self) -> dict:
+        """The candidate in user units (mN), as ``calibration.json``'s frontier holds it."""
+        return {"kind": self.kind, "degree_or_n": self.degree, "transform": self.transform,
+                "bytes": self.bytes, "multiplies": self.multiplies,
+                "max_error_F_r_mN": from_si(self.err_r, "mN"),
+                "max_error_F_z_mN": from_si(self.err_z, "mN"),
+                "error_over_sigma": self.error_over_sigma, "on_frontier": self.on_frontier}
+
+    @classmethod
+    def from_json(cls, data) -> FrontierPoint | None:
+        """The candidate :meth:`to_json` wrote, in SI; None for anything but a JSON object
+        with a size and a score (another missing number reads as NaN or 0, text as text)."""
+        if not isinstance(data, dict):
+            return None
+        size, score = data.get("bytes"), json_number(data.get("error_over_sigma"))
+        if not isinstance(size, int) or isinstance(size, bool) or score is None:
+            return None
+
+        def num(key: str) -> float:
+            v = json_number(data.get(key))
+            return np.nan if v is None else to_si(v, "mN")
+
+        def count(key: str) -> int:
+            v = data.get(key)
+            return v if isinstance(v, int) and not isinstance(v, bool) else 0
+
+        return cls(json_text(data.get("kind")), count("degree_or_n"),
+                   json_text(data.get("transform")), size, count("multiplies"),
+                   num("max_error_F_r_mN"), num("max_error_F_z_mN"), score,
+                   data.get("on_frontier") is True)
+
+
+@dataclass(frozen=True)
 class FirmwareChoice:
     """The chosen approximation, every candidate measured, and the target it was held to.
 
@@ -347,22 +410,23 @@ class FirmwareChoice:
     reached: bool
     rule: str
 
+    def frontier_points(self) -> list[FrontierPoint]:
+        """Every candidate on the size–error plane, with whether it is on the frontier (no
+        candidate of at most its size has a smaller error)."""
+        scores = [max(a.err_r / self.target_r, a.err_z / self.target_z)
+                  for a in self.candidates]
+        return [FrontierPoint(a.kind, a.degree, a.transform, a.bytes, a.multiplies, a.err_r,
+                              a.err_z, score,
+                              not any(o.bytes <= a.bytes and s < score
+                                      for j, (o, s) in enumerate(zip(self.candidates, scores,
+                                                                     strict=True))
+                                      if j != i))
+                for i, (a, score) in enumerate(zip(self.candidates, scores, strict=True))]
+
     def frontier(self) -> list[dict]:
         """Every candidate: kind, degree, transform, bytes, multiplies, errors [mN], whether it
-        is on the size–error frontier (no smaller candidate has a smaller error)."""
-        rows = []
-        for a in self.candidates:
-            score = max(a.err_r / self.target_r, a.err_z / self.target_z)
-            rows.append({"kind": a.kind, "degree_or_n": a.degree, "transform": a.transform,
-                         "bytes": a.bytes, "multiplies": a.multiplies,
-                         "max_error_F_r_mN": from_si(a.err_r, "mN"),
-                         "max_error_F_z_mN": from_si(a.err_z, "mN"),
-                         "error_over_sigma": score})
-        for r in rows:
-            r["on_frontier"] = not any(o["bytes"] <= r["bytes"]
-                                       and o["error_over_sigma"] < r["error_over_sigma"]
-                                       and o is not r for o in rows)
-        return rows
+        is on the size–error frontier (:meth:`frontier_points` in user units)."""
+        return [p.to_json() for p in self.frontier_points()]
 
 
 def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],

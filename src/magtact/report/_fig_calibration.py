@@ -30,14 +30,14 @@ def draw_calibration(fig, cal) -> list:
         ax.set_title(f"${name[0]}_{name[2]}$: max {from_si(g[key].max(), 'mN'):.3g} mN, "
                      f"σ_F {from_si(sigma, 'mN'):.3g} mN", fontsize=8)
     ax = axes[2]
-    rows = cal.firmware.frontier()
+    points = cal.firmware.frontier_points()
     colours = {"features": "C2", "poly": "C0", "table": "C1"}
     for kind, marker in (("features", "^"), ("poly", "o"), ("table", "s")):
-        sel = [r for r in rows if r["kind"] == kind]
+        sel = [p for p in points if p.kind == kind]
         for filled in (True, False):
-            pts = [r for r in sel if r["on_frontier"] == filled]
+            pts = [p for p in sel if p.on_frontier == filled]
             if pts:
-                ax.plot([r["bytes"] for r in pts], [r["error_over_sigma"] for r in pts],
+                ax.plot([p.bytes for p in pts], [p.error_over_sigma for p in pts],
                         marker, color=colours[kind],
                         mfc=None if filled else "none", ls="none",
                         label=f"{kind}{' (frontier)' if filled else ''}")
@@ -51,9 +51,9 @@ def draw_calibration(fig, cal) -> list:
     reached = "target reached" if cal.firmware.reached else "target NOT reached"
     ax.set_title(f"firmware candidates ({reached})", fontsize=8)
     ax.legend(frameon=False, fontsize=6)
-    d = cal.map.describe()
     noise = ", ".join(f"{from_si(v, 'uT'):.3g}" for v in cal.noise)
-    fig.suptitle(f"calibration of H = {d['H_mm']:.3g} mm, G = {d['G_kPa']:.3g} kPa: "
+    fig.suptitle(f"calibration of H = {from_si(cal.map.H, 'mm'):.3g} mm, "
+                 f"G = {from_si(cal.map.G, 'kPa'):.3g} kPa: "
                  f"{a.kind} ({a.bytes} bytes); σ_F for σ_B = ({noise}) µT", fontsize=8)
     return list(axes)
 

@@ -6,16 +6,22 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import numpy as np
-
+from ..study import from_si
 from ._style import save, style, subplots
 
 
-def _normal_press(entry: dict) -> dict | None:
-    for press in (entry.get("time") or {}).get("presses", []):
-        if press["theta_rad"] == 0.0:
-            return press
-    return None
+def _timed(doc: dict) -> list:
+    """(label, time record) of every budget of ``doc`` with a normal press in its time rows."""
+    from ..budget import BudgetFile
+    from ..viscoelastic import TimeRecord
+
+    read = BudgetFile.from_json(doc)
+    out = []
+    for b in () if read is None else read.budgets:
+        t = TimeRecord.from_json(b.time)
+        if t is not None and t.normal_press is not None:
+            out.append((b.label, t))
+    return out
 
 
 def draw_time(doc: dict):
@@ -27,39 +33,38 @@ def draw_time(doc: dict):
     time for every budget with time rows and every catalogue silicone with a cited
     relaxation (``time.silicones``).
     """
-    entries = [e for e in doc.get("budgets", []) if _normal_press(e) is not None]
+    entries = _timed(doc)
     if not entries:
         return None
-    first = entries[0]
-    loop = _normal_press(first)["loop"]
+    label, first = entries[0]
+    press = first.normal_press
     with style():
         fig, (ax_l, ax_h) = subplots(1, 2, figsize=(8.0, 3.4))
-        true = np.asarray(loop["F_true_mN"])[:, 1]
-        read = np.asarray(loop["F_read_mN"])[:, 1]
-        ax_l.plot(true, read, color="C3", gid="loop",
-                  label=f"press and release in {first['time']['press_time_s']:.3g} s")
+        true = from_si(press.F_true[:, 1], "mN")
+        read = from_si(press.F_read[:, 1], "mN")
+        ax_l.plot(true, read, color="C3", gid="loop", label="press and release" + (
+            "" if first.press_time is None else f" in {first.press_time:.3g} s"))
         lim = [min(true.min(), read.min(), 0.0), max(true.max(), read.max())]
         ax_l.plot(lim, lim, "k--", lw=0.8, label="read = true")
         ax_l.set_xlabel("true $F_z$ [mN]")
         ax_l.set_ylabel("read $F_z$ [mN]")
-        gap = first["time"]["hysteresis_mN"][1]
-        ax_l.set_title(f"{first.get('label', '')}: hysteresis "
-                       + (f"{gap / 1e3:.3g} N" if gap >= 1e3 else f"{gap:.3g} mN"))
+        if first.hysteresis is not None:
+            gap = from_si(first.hysteresis[1], "mN")
+            ax_l.set_title(f"{label}: hysteresis "
+                           + (f"{gap / 1e3:.3g} N" if gap >= 1e3 else f"{gap:.3g} mN"))
         ax_l.legend(frameon=False)
-        for k, e in enumerate(entries):
-            sw = _normal_press(e)["rate_sweep"]
-            gap = np.asarray(sw["hysteresis_mN"])[:, 1]
-            peak = np.asarray(sw["peak_mN"])[:, 1]
-            ax_h.plot(sw["press_time_s"], 100 * gap / peak, color=f"C{k}", gid=f"sweep:{k}",
-                      label=f"{e.get('label', 'design')} (relaxation of the study)")
-        for j, (name, s) in enumerate(sorted((first["time"].get("silicones") or {}).items())):
-            ax_h.plot(s["press_time_s"], s["hysteresis_pct"], ls=":", color=f"C{j + 3}",
+        for k, (name, t) in enumerate(entries):
+            p = t.normal_press
+            ax_h.plot(p.press_times, 100 * p.gap[:, 1] / p.peak[:, 1], color=f"C{k}",
+                      gid=f"sweep:{k}", label=f"{name} (relaxation of the study)")
+        for j, (name, s) in enumerate(sorted(first.silicones.items())):
+            ax_h.plot(s.press_times, 100 * s.hysteresis, ls=":", color=f"C{j + 3}",
                       gid=f"silicone:{name}", label=name)
-        m = first["time"].get("measured") or {}
-        if m.get("hysteresis_pct"):
-            ax_h.axhline(m["hysteresis_pct"], color="k", lw=0.8, ls="--",
+        if first.measured_hysteresis:
+            ax_h.axhline(100 * first.measured_hysteresis, color="k", lw=0.8, ls="--",
                          label="MagOne measured (Wang et al. 2016)")
-        ax_h.axvline(first["time"]["press_time_s"], color="0.6", lw=0.8)
+        if first.press_time is not None:
+            ax_h.axvline(first.press_time, color="0.6", lw=0.8)
         ax_h.set_xscale("log")
         ax_h.set_xlabel("press time, rest to full load [s]")
         ax_h.set_ylabel("hysteresis [% of peak $F_z$]")
@@ -73,6 +78,6 @@ def time_figures(doc: dict, folder: str | Path, formats: tuple[str, ...] = ("png
     fig = draw_time(doc)
     if fig is None:
         return []
-    label = next(e.get("label", "design") for e in doc["budgets"] if _normal_press(e))
+    label = _timed(doc)[0][0]
     slug = re.sub(r"[^A-Za-z0-9]+", "_", str(label)).strip("_") or "design"
     return save(fig, Path(folder) / f"time_{slug}", formats)

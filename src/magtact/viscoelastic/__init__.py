@@ -2,12 +2,16 @@
 a design, from a Prony series and the metamodels' elastic forces (docs/method.md §15)."""
 
 from ._design import (
+    SiliconeSweep,
+    TimePress,
+    TimeRecord,
     TimeResponse,
     design_forces,
     implied_ratio,
     relaxation_of,
     time_json,
     time_response,
+    unknown_time_json,
 )
 from ._prony import Prony, held_force, hereditary_force
 from ._sensor import (
@@ -26,7 +30,8 @@ from ._sensor import (
 
 __all__ = [
     "CALIBRATIONS", "MEASURED_HYSTERESIS", "MEASURED_SOURCE", "Creep", "Loop", "Prony",
-    "RateSweep", "TimeResponse", "calibration_modulus", "design_forces", "held_force",
-    "hereditary_force", "implied_ratio", "press_and_hold", "press_cycle",
-    "press_times_around", "rate_sweep", "relaxation_of", "time_json", "time_response",
+    "RateSweep", "SiliconeSweep", "TimePress", "TimeRecord", "TimeResponse",
+    "calibration_modulus", "design_forces", "held_force", "hereditary_force", "implied_ratio",
+    "press_and_hold", "press_cycle", "press_times_around", "rate_sweep", "relaxation_of",
+    "time_json", "time_response", "unknown_time_json",
 ]

@@ -9,8 +9,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from .._files import json_dict, json_list, json_number, json_text
 from ..parts import SILICONES
-from ..study import Study, from_si
+from ..study import Study, from_si, to_si
 from ._prony import Prony
 from ._sensor import (
     MEASURED_HYSTERESIS,
@@ -159,9 +160,12 @@ def _every(n: int, most: int = 201) -> slice:
     return slice(None, None, max(1, -(-n // most)))
 
 
-def time_json(r: TimeResponse) -> dict:
+def time_json(r: TimeResponse, *, source: str | None = None,
+              silicones: dict[str, SiliconeSweep] | None = None) -> dict:
     """Every number of a :class:`TimeResponse` in user units (mN, s), the unit in each key;
-    the loops and creeps thinned to about 200 samples."""
+    the loops and creeps thinned to about 200 samples. With ``source`` (where the relaxation
+    comes from, first) and ``silicones`` (the catalogue silicones' sweeps, last): the ``time``
+    entry of a budget (read back by :meth:`TimeRecord.from_json`)."""
     def mN(a):
         return from_si(np.asarray(a, dtype=float), "mN").tolist()
 
@@ -185,7 +189,10 @@ def time_json(r: TimeResponse) -> dict:
 
     p = r.prony
     m = r.measured
-    return {
+    head = {} if source is None else {"source": source}
+    tail = {} if silicones is None else {
+        "silicones": {name: sw.to_json() for name, sw in silicones.items()}}
+    return head | {
         "relaxation": {"G_inf_kPa": from_si(p.G_inf, "kPa"), "g": list(p.ratios),
                        "tau_s": list(p.tau), "source": p.source},
         "press_time_s": r.press_time, "hold_s": r.hold, "calibrated_on": r.calibrated_on,
@@ -200,4 +207,167 @@ def time_json(r: TimeResponse) -> dict:
                      else m["single_term_g_min"],
                      "single_term_tau_s": None if not np.isfinite(m["single_term_tau"])
                      else m["single_term_tau"]},
-    }
+    } | tail
+
+
+def unknown_time_json(source: str, press_time: float, hold: float, calibrated_on: str,
+                      g_min: float, tau: float) -> dict:
+    """The ``time`` entry of a budget whose silicone's relaxation is not known: why
+    (``source``), the study's load history [s] and the MagOne's measured hysteresis with the
+    smallest single-term ratio ``g_min`` (at ``tau`` [s]) that reaches it (None where none
+    does)."""
+    return {"source": source, "press_time_s": press_time, "hold_s": hold,
+            "calibrated_on": calibrated_on,
+            "measured": {"hysteresis_pct": 100 * MEASURED_HYSTERESIS, "source": MEASURED_SOURCE,
+                         "single_term_g_min": None if not np.isfinite(g_min) else g_min,
+                         "single_term_tau_s": None if not np.isfinite(tau) else tau}}
+
+
+@dataclass(frozen=True)
+class SiliconeSweep:
+    """A silicone's hysteresis of the normal press against the press time.
+
+    Attributes
+    ----------
+    source : str
+        Where its relaxation comes from.
+    press_times : ndarray
+        Press times, rest to full load [s].
+    hysteresis : ndarray
+        The hysteresis of F_z at each press time, as a fraction of the peak F_z [1].
+    """
+
+    source: str
+    press_times: np.ndarray
+    hysteresis: np.ndarray
+
+    @classmethod
+    def of(cls, sweep: RateSweep, source: str) -> SiliconeSweep:
+        """The F_z hysteresis of a :class:`RateSweep`."""
+        return cls(source, np.asarray(sweep.press_times, dtype=float),
+                   sweep.gap[:, 1] / sweep.peak[:, 1])
+
+    def to_json(self) -> dict:
+        """In user units (s, % of the peak F_z)."""
+        return {"source": self.source, "press_time_s": self.press_times.tolist(),
+                "hysteresis_pct": (100 * self.hysteresis).tolist()}
+
+    @classmethod
+    def from_json(cls, data) -> SiliconeSweep | None:
+        """The sweep :meth:`to_json` wrote; None for anything but a JSON object with press
+        times and hysteresis of equal length."""
+        if not isinstance(data, dict):
+            return None
+        T, pct = _numbers(data.get("press_time_s")), _numbers(data.get("hysteresis_pct"))
+        if T is None or pct is None or T.shape != pct.shape:
+            return None
+        return cls(json_text(data.get("source")), T, pct / 100)
+
+
+@dataclass(frozen=True)
+class TimePress:
+    """One press of a time entry read back (:func:`time_json`), in SI.
+
+    Attributes
+    ----------
+    theta : float
+        The press's shear angle [rad] (0: the normal press).
+    F_true, F_read : ndarray (n, 2)
+        The true and the read force (F_r, F_z) [N] over the press and release.
+    press_times : ndarray (m,)
+        The rate sweep's press times [s].
+    gap, peak : ndarray (m, 2)
+        The sweep's hysteresis and peak force (F_r, F_z) [N] at each press time.
+    """
+
+    theta: float
+    F_true: np.ndarray
+    F_read: np.ndarray
+    press_times: np.ndarray
+    gap: np.ndarray
+    peak: np.ndarray
+
+    @classmethod
+    def from_json(cls, data) -> TimePress | None:
+        """The press :func:`time_json` wrote; None where it lacks the angle, the loop or the
+        sweep (or gives arrays of the wrong shape)."""
+        if not isinstance(data, dict):
+            return None
+        theta = json_number(data.get("theta_rad"))
+        loop, sweep = json_dict(data.get("loop")), json_dict(data.get("rate_sweep"))
+        true, read = (_numbers(loop.get(k), 2) for k in ("F_true_mN", "F_read_mN"))
+        T = _numbers(sweep.get("press_time_s"))
+        gap, peak = (_numbers(sweep.get(k), 2) for k in ("hysteresis_mN", "peak_mN"))
+        if theta is None or any(a is None for a in (true, read, T, gap, peak)) or \
+                true.shape != read.shape or not (len(T) == len(gap) == len(peak)):
+            return None
+        return cls(theta, to_si(true, "mN"), to_si(read, "mN"), T, to_si(gap, "mN"),
+                   to_si(peak, "mN"))
+
+
+@dataclass(frozen=True)
+class TimeRecord:
+    """The ``time`` entry of a budget (:func:`time_json` with its source and silicones, or
+    :func:`unknown_time_json`) read back, in SI; a value the entry does not give is None.
+
+    Attributes
+    ----------
+    source : str
+        Where the relaxation comes from (or why it is not known).
+    press_time : float or None
+        The study's press time, rest to full load [s].
+    hysteresis : ndarray (2,) or None
+        The largest hysteresis of (F_r, F_z) over the presses [N].
+    measured_hysteresis : float or None
+        The MagOne's measured hysteresis, a fraction of the peak F_z [1].
+    presses : tuple of TimePress
+        Empty where the relaxation is not known.
+    silicones : dict of str to SiliconeSweep
+        The catalogue silicones with a cited relaxation, by name.
+    """
+
+    source: str
+    press_time: float | None
+    hysteresis: np.ndarray | None
+    measured_hysteresis: float | None
+    presses: tuple[TimePress, ...]
+    silicones: dict[str, SiliconeSweep]
+
+    @property
+    def normal_press(self) -> TimePress | None:
+        """The press at θ = 0, if there is one."""
+        return next((p for p in self.presses if p.theta == 0.0), None)
+
+    @classmethod
+    def from_json(cls, data) -> TimeRecord | None:
+        """The entry :func:`time_json` or :func:`unknown_time_json` wrote; None for anything
+        but a non-empty JSON object (a press or silicone that does not read is left out)."""
+        if not isinstance(data, dict) or not data:
+            return None
+        gap = _numbers(data.get("hysteresis_mN"))
+        pct = json_number(json_dict(data.get("measured")).get("hysteresis_pct"))
+        silicones = {name: sw for name, sw in ((n, SiliconeSweep.from_json(v)) for n, v in
+                                              json_dict(data.get("silicones")).items())
+                     if sw is not None}
+        return cls(json_text(data.get("source")), json_number(data.get("press_time_s")),
+                   None if gap is None or gap.shape != (2,) else to_si(gap, "mN"),
+                   None if pct is None else pct / 100,
+                   tuple(p for p in map(TimePress.from_json, json_list(data.get("presses")))
+                         if p is not None), silicones)
+
+
+def _numbers(value, columns: int | None = None) -> np.ndarray | None:
+    """A JSON array of numbers (with ``columns``: of rows of that many numbers) as floats;
+    None for anything else (a null reads as NaN)."""
+    if not isinstance(value, list):
+        return None
+    try:
+        a = np.asarray([np.nan if v is None else v for v in value] if columns is None
+                       else [[np.nan if v is None else v for v in row] for row in value],
+                       dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if a.ndim != (1 if columns is None else 2) or (columns is not None
+                                                   and a.shape[1] != columns):
+        return None
+    return a

@@ -1,0 +1,84 @@
+"""The records that read the time entry of ``budget.json`` (``magtact.viscoelastic.TimeRecord``)
+and the firmware frontier of ``calibration.json`` (``magtact.calibration.FrontierPoint``) back:
+what the writer wrote, in SI, and nothing from a document of another shape."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from magtact.calibration import FrontierPoint
+from magtact.viscoelastic import SiliconeSweep, TimePress, TimeRecord, unknown_time_json
+
+
+def _press(theta=0.0):
+    return {"theta_rad": theta,
+            "loop": {"F_true_mN": [[0.0, 0.0], [-1.0, 20.0], [0.0, 0.0]],
+                     "F_read_mN": [[0.0, 0.0], [-0.9, 19.0], [0.1, 1.0]]},
+            "creep": {},
+            "rate_sweep": {"press_time_s": [0.1, 1.0], "hysteresis_mN": [[0.1, 2.0], [0.2, 3.0]],
+                           "peak_mN": [[1.0, 20.0], [1.0, 20.0]]}}
+
+
+def _entry():
+    sweep = SiliconeSweep("cited", np.array([0.1, 1.0, 10.0]), np.array([0.01, 0.05, 0.02]))
+    return {"source": "given", "press_time_s": 0.5, "hysteresis_mN": [0.2, 3.0],
+            "presses": [_press(0.3), _press(0.0), {"theta_rad": 0.1}],
+            "measured": {"hysteresis_pct": 12.0},
+            "silicones": {"Ecoflex 00-30": sweep.to_json(), "broken": {"press_time_s": [1.0]}}}
+
+
+def test_the_time_record_reads_the_entry_in_si():
+    t = TimeRecord.from_json(_entry())
+    assert t.source == "given" and t.press_time == 0.5
+    np.testing.assert_allclose(t.hysteresis, [0.2e-3, 3e-3])
+    assert t.measured_hysteresis == pytest.approx(0.12)
+    assert [p.theta for p in t.presses] == [0.3, 0.0]  # the press without a loop is left out
+    n = t.normal_press
+    assert isinstance(n, TimePress) and n.theta == 0.0
+    np.testing.assert_allclose(n.F_read[:, 1], [0.0, 19e-3, 1e-3])
+    np.testing.assert_allclose(100 * n.gap[:, 1] / n.peak[:, 1], [10.0, 15.0])
+    assert list(t.silicones) == ["Ecoflex 00-30"]
+    s = t.silicones["Ecoflex 00-30"]
+    assert s.source == "cited"
+    np.testing.assert_allclose(s.hysteresis, [0.01, 0.05, 0.02])
+    np.testing.assert_allclose(s.press_times, [0.1, 1.0, 10.0])
+
+
+def test_an_unknown_relaxation_reads_without_presses():
+    t = TimeRecord.from_json(unknown_time_json("no data", 0.5, 10.0, "long", np.inf, np.nan))
+    assert t.presses == () and t.normal_press is None and t.hysteresis is None
+    assert t.press_time == 0.5 and t.measured_hysteresis > 0
+
+
+@pytest.mark.parametrize("doc", [None, {}, [], "time", 3.0])
+def test_no_time_record_from_a_document_of_another_shape(doc):
+    assert TimeRecord.from_json(doc) is None
+
+
+@pytest.mark.parametrize("bad", [
+    {"loop": {"F_true_mN": [[0.0, 1.0]], "F_read_mN": [[0.0]]}},
+    {"loop": {"F_true_mN": "x", "F_read_mN": [[0.0, 1.0]]}},
+    {"rate_sweep": {"press_time_s": [1.0, 2.0], "hysteresis_mN": [[0.1, 2.0]],
+                    "peak_mN": [[1.0, 20.0]]}},
+    {"theta_rad": "0"},
+])
+def test_a_press_of_another_shape_reads_as_none(bad):
+    assert TimePress.from_json(_press() | bad) is None
+
+
+def test_a_frontier_point_round_trips():
+    p = FrontierPoint("poly", 6, "log", 224, 40, 1.5e-3, 2.5e-3, 0.8, True)
+    q = FrontierPoint.from_json(p.to_json())
+    assert (q.kind, q.degree, q.transform, q.bytes, q.multiplies, q.on_frontier) == \
+        ("poly", 6, "log", 224, 40, True)
+    assert (q.err_r, q.err_z, q.error_over_sigma) == pytest.approx((1.5e-3, 2.5e-3, 0.8),
+                                                                   rel=1e-12)
+    doc = p.to_json()
+    assert list(doc) == ["kind", "degree_or_n", "transform", "bytes", "multiplies",
+                         "max_error_F_r_mN", "max_error_F_z_mN", "error_over_sigma",
+                         "on_frontier"]
+    for bad in (None, [], doc | {"bytes": "224"}, doc | {"bytes": True},
+                doc | {"error_over_sigma": None}):
+        assert FrontierPoint.from_json(bad) is None
+    assert FrontierPoint.from_json(doc | {"on_frontier": 1}).on_frontier is False
