@@ -9,6 +9,13 @@ The front door::
     result.evaluate(H_mm=4.0, G_kPa=30.0)   # any other design, same models
 
 ``magtact.solve(models, study)`` is the chain behind it, from models to the :class:`Result`.
+A :class:`Result` is a record; the work over it is done by functions that take it first::
+
+    magtact.error_budget(result)            # the chosen design's error budget (mN)
+    magtact.calibrate(result)               # its field-to-force map and firmware
+    magtact.write_results(result, "design") # tables, card.json, budget.json, figures
+
+(``error_budget``, not ``budget``: ``magtact.budget`` is the error budget's sub-package.)
 
 ``magtact.run`` runs every stage into a results folder with an HTML report; the stages are
 sub-packages (``magtact.study``, ``magnetics``, ``mechanics``, ``doe``, ``metamodel``,
@@ -19,7 +26,17 @@ docs/method.md.
 from importlib.metadata import PackageNotFoundError, version
 
 from ._errors import MagtactError
-from ._front import Result, design, load, models_for, solve
+from ._front import (
+    Result,
+    calibrate,
+    design,
+    error_budget,
+    load,
+    models_for,
+    solve,
+    write_results,
+    write_results_into,
+)
 from .study import Study
 
 try:
@@ -38,5 +55,6 @@ def run(study: Study | str | None = None, out: str = "results", **options):
     return run_study(study, out, **options)
 
 
-__all__ = ["MagtactError", "Result", "Study", "__version__", "design", "load", "models_for",
-           "run", "solve"]
+__all__ = ["MagtactError", "Result", "Study", "__version__", "calibrate", "design",
+           "error_budget", "load", "models_for", "run", "solve", "write_results",
+           "write_results_into"]

@@ -83,7 +83,10 @@ UNITS = {"H": "mm", "G": "kPa", "M_z": "A_per_m", "R_m": "mm", "H_m": "mm", "R":
 
 @dataclass(frozen=True)
 class Result:
-    """The answer for one study (:func:`design`, :func:`solve`).
+    """The answer for one study (:func:`design`, :func:`solve`): a record of what was
+    computed. The work over it is done by functions that take it first (:func:`error_budget`,
+    :func:`calibrate`, :func:`write_results`, :func:`write_results_into`); its methods
+    ``budget``, ``calibrate``, ``write`` and ``write_into`` are the same functions.
 
     Attributes
     ----------
@@ -113,6 +116,7 @@ class Result:
     >>> result.chosen_design                                        # doctest: +SKIP
     {'H_mm': 3.0, 'G_kPa': 22.57...}
     >>> result.evaluate(H_mm=4.0, G_kPa=30.0).design.Gamma_z_max   # doctest: +SKIP
+    >>> magtact.error_budget(result)                                # doctest: +SKIP
     """
 
     study: Study
@@ -168,12 +172,13 @@ class Result:
 
     @cached_property
     def budgets(self) -> tuple[Budget, Budget] | None:
-        """The error budgets of the chosen and the original design (:meth:`budget`, with the
-        data set's mesh error); None over geometric design variables (a budget belongs to one
+        """The error budgets of the chosen and the original design (:func:`error_budget`, with
+        the data set's mesh error); None over geometric design variables (a budget belongs to one
         geometry)."""
         if self.study.geometric_variables:
             return None
-        return tuple(self.budget(a, dataset=self.dataset) for a in (self.chosen, self.original))
+        return tuple(error_budget(self, a, dataset=self.dataset)
+                     for a in (self.chosen, self.original))
 
     def _budget_rows(self) -> list[list[str]]:
         from .budget import budget_card_rows
@@ -246,32 +251,8 @@ class Result:
 
     def budget(self, answer: DesignAnswer | None = None, *, dataset=None,
                seeds: dict | None = None, noise: tuple[float, float] | None = None) -> Budget:
-        """The error budget of a design (docs/method.md §12): every disturbance of the field
-        as a false force in mN beside the resolution.
-
-        Parameters
-        ----------
-        answer : DesignAnswer, optional
-            :attr:`chosen` (default), :attr:`original` or one of :meth:`evaluate`.
-        dataset : xarray.Dataset, optional
-            The models' DOE data set, for the mesh's error (its ``err_F_*``).
-        seeds : dict, optional
-            A seed study (``magtact reproduce``'s ``publication.json``) for the seed spread.
-        noise : (σ_x, σ_z) [T], optional
-            Field noise where the chip has none (the chip at the design's setting otherwise).
-
-        Raises
-        ------
-        MagtactError
-            For a study with geometric design variables (the budget is for one geometry).
-        """
-        from .budget import error_budget
-
-        a = self.chosen if answer is None else answer
-        models, study = self.of(a)
-        return error_budget(models, study, a.H, a.G, a.design.M_z, label=a.label,
-                            design=a.design, noise=noise, dataset=dataset, seeds=seeds,
-                            chip=a.chip)
+        """Same as ``magtact.error_budget(self, answer, ...)`` (:func:`error_budget`)."""
+        return error_budget(self, answer, dataset=dataset, seeds=seeds, noise=noise)
 
     @cached_property
     def sensor(self) -> SensorMap:
@@ -289,28 +270,8 @@ class Result:
 
     def calibrate(self, answer: DesignAnswer | None = None, *, presses=None,
                   noise: tuple[float, float] | None = None, **options) -> Calibration:
-        """The calibration of a design for firmware and, with ``presses`` (a built unit's
-        measured (B, F), :func:`magtact.calibration.read_presses`), of one unit
-        (docs/method.md §13), with the chip at the design's setting; ``options`` as
-        :func:`magtact.calibration.calibrate` (``fit``, ``degrees``, ``table_sizes``,
-        ``model_error``, ``force_source``: ``"auto"`` fits a unit to the FE forces of the
-        result's DOE data set when it holds the design's H, docs/method.md §13.4).
-
-        Raises
-        ------
-        MagtactError
-            For a study with geometric design variables, an unknown noise, presses that do not
-            identify the parameters.
-        """
-        from .calibration import calibrate
-
-        if self.study.geometric_variables:
-            raise MagtactError("a calibration belongs to one geometry: fix the geometric "
-                               "design variables (study.at(...)) with models fitted to it")
-        a = self.chosen if answer is None else answer
-        models, study = self.of(a)
-        return calibrate(models, study, a.H, a.G, a.design.M_z, noise=noise,
-                         presses=presses, chip=a.chip, dataset=self.dataset, **options)
+        """Same as ``magtact.calibrate(self, answer, ...)`` (:func:`calibrate`)."""
+        return calibrate(self, answer, presses=presses, noise=noise, **options)
 
     def figures(self) -> dict[str, Figure]:
         """The optimisation's figures, the error budget of the chosen design and its
@@ -323,68 +284,19 @@ class Result:
             from .budget import budget_json
 
             figs["budget_chosen"] = draw_budget(budget_json(self.budgets[0]))
-            figs["calibration"] = calibration_figure(self.calibrate())
+            figs["calibration"] = calibration_figure(calibrate(self))
         return figs
 
     def write(self, out: str | Path, figures: bool = True, budget: bool = True) -> list[Path]:
-        """Write the optimisation's tables, the design card (``card.json``), with ``budget``
-        the error budgets (``budget.json``) and, with ``figures``, the figures into ``out``;
-        return the files written.
-
-        ``out`` is a results folder with the rules of ``magtact`` commands (docs/method.md
-        §14): its lock is held while writing, the files appear only once all are complete,
-        and a file there that magtact did not write is never replaced.
-
-        Raises
-        ------
-        MagtactError
-            If another process is writing ``out``, or an output would replace a file that is
-            not magtact's (the message names the files).
-        """
-        from ._runfolder import command_outputs
-
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        with command_outputs(out, "magtact.Result.write") as o:
-            files = self.write_into(o.folder, figures=figures, budget=budget)
-        return [o.final(p) for p in files]
+        """Same as ``magtact.write_results(self, out, ...)`` (:func:`write_results`)."""
+        return write_results(self, out, figures=figures, budget=budget)
 
     def write_into(self, out: str | Path, figures: bool = True, budget: bool = True,
                    explorer: bool = False) -> list[Path]:
-        """:meth:`write` straight into ``out``, for a caller that already holds the folder
-        (a command's or a run's staging folder): no lock, no check of what is there. With
-        ``explorer`` also the report's design explorer (``explorer.json``, a grid of
-        :meth:`evaluate`)."""
-        from .budget import write_budgets
-        from .optimise import write_geometry_outputs, write_optimise_outputs
-        from .report import (
-            budget_figures,
-            fig_geometry_pareto,
-            optimise_figures,
-            write_card,
-            write_explorer,
-        )
-
-        out = Path(out)
-        if self.study.geometric_variables:
-            files = write_geometry_outputs(self.optimisation, out,
-                                           figures=fig_geometry_pareto if figures else None)
-        else:
-            files = write_optimise_outputs(self.optimisation, self.models, out,
-                                           figures=optimise_figures if figures else None)
-        if self.sensor_design is not None:  # the whole sensor is the chosen design
-            written = self.sensor_design.write(out, self.chosen.design)
-            files = [f for f in files if f.name != "chosen.json"] + written
-        files.append(write_card([self.chosen, self.original], out, self.constraints,
-                                rtol=self.study.optimise.active_rtol, study=self.study,
-                                extra_rows=self._budget_rows()))
-        grid = write_explorer(self, out) if explorer else None  # for the report's explorer
-        if grid is not None:
-            files.append(grid)
-        if budget and self.budgets is not None:
-            files.append(write_budgets(self.budgets, self.study, out,
-                                       figures=budget_figures if figures else None))
-        return files
+        """Same as ``magtact.write_results_into(self, out, ...)``
+        (:func:`write_results_into`)."""
+        return write_results_into(self, out, figures=figures, budget=budget,
+                                  explorer=explorer)
 
     def __str__(self) -> str:
         """A few lines in mN, N, mm and kPa (3 significant figures)."""
@@ -396,6 +308,214 @@ class Result:
         from ._display import html_block, result_rows
 
         return html_block(*result_rows(self))
+
+
+def error_budget(result: Result, answer: DesignAnswer | None = None, *, dataset=None,
+                 seeds: dict | None = None, noise: tuple[float, float] | None = None
+                 ) -> Budget:
+    """The error budget of a design of a result (docs/method.md §12): every disturbance of
+    the field as a false force in mN beside the resolution.
+
+    Parameters
+    ----------
+    result : Result
+        The answer of a study (:func:`design`, :func:`solve`).
+    answer : DesignAnswer, optional
+        ``result.chosen`` (default), ``result.original`` or one of ``result.evaluate``.
+    dataset : xarray.Dataset, optional
+        The models' DOE data set, for the mesh's error (its ``err_F_*``).
+    seeds : dict, optional
+        A seed study (``magtact reproduce``'s ``publication.json``) for the seed spread.
+    noise : (σ_x, σ_z) [T], optional
+        Field noise where the chip has none (the chip at the design's setting otherwise).
+
+    Returns
+    -------
+    Budget
+        Its rows in N, the resolution and the array's smallest pitch
+        (:class:`magtact.budget.Budget`).
+
+    Raises
+    ------
+    MagtactError
+        For a study with geometric design variables (the budget is for one geometry).
+
+    See Also
+    --------
+    Result.budget : the same, as a method.
+    Result.budgets : the budgets of the chosen and the original design, with the data set.
+
+    Examples
+    --------
+    >>> import magtact
+    >>> result = magtact.design()                                   # doctest: +SKIP
+    >>> print(magtact.error_budget(result, result.original))        # doctest: +SKIP
+    """
+    from .budget import error_budget as budget_of
+
+    a = result.chosen if answer is None else answer
+    models, study = result.of(a)
+    return budget_of(models, study, a.H, a.G, a.design.M_z, label=a.label, design=a.design,
+                     noise=noise, dataset=dataset, seeds=seeds, chip=a.chip)
+
+
+def calibrate(result: Result, answer: DesignAnswer | None = None, *, presses=None,
+              noise: tuple[float, float] | None = None, **options) -> Calibration:
+    """The calibration of a design of a result for firmware and, with ``presses``, of one
+    built unit (docs/method.md §13), with the chip at the design's setting.
+
+    Parameters
+    ----------
+    result : Result
+        The answer of a study with one geometry.
+    answer : DesignAnswer, optional
+        ``result.chosen`` (default), ``result.original`` or one of ``result.evaluate``.
+    presses : Presses, optional
+        A built unit's measured (B, F) (:func:`magtact.calibration.read_presses`).
+    noise : (σ_x, σ_z) [T], optional
+        Field noise where the chip has none.
+    **options
+        As :func:`magtact.calibration.calibrate`: ``fit``, ``degrees``, ``table_sizes``,
+        ``model_error``, ``force_source`` (``"auto"`` fits a unit to the FE forces of the
+        result's DOE data set when it holds the design's H, docs/method.md §13.4).
+
+    Returns
+    -------
+    Calibration
+        The field-to-force map, the firmware's approximation and, with ``presses``, the
+        unit's parameters (:class:`magtact.calibration.Calibration`).
+
+    Raises
+    ------
+    MagtactError
+        For a study with geometric design variables, an unknown noise, presses that do not
+        identify the parameters.
+
+    See Also
+    --------
+    Result.calibrate : the same, as a method.
+
+    Examples
+    --------
+    >>> import magtact
+    >>> result = magtact.design()                                   # doctest: +SKIP
+    >>> print(magtact.calibrate(result))                            # doctest: +SKIP
+    """
+    from .calibration import calibrate as calibration_of
+
+    if result.study.geometric_variables:
+        raise MagtactError("a calibration belongs to one geometry: fix the geometric "
+                           "design variables (study.at(...)) with models fitted to it")
+    a = result.chosen if answer is None else answer
+    models, study = result.of(a)
+    return calibration_of(models, study, a.H, a.G, a.design.M_z, noise=noise,
+                          presses=presses, chip=a.chip, dataset=result.dataset, **options)
+
+
+def write_results(result: Result, out: str | Path, *, figures: bool = True,
+                  budget: bool = True) -> list[Path]:
+    """Write a result into the results folder ``out``: the optimisation's tables, the design
+    card (``card.json``), the error budgets (``budget.json``) and the figures.
+
+    ``out`` has the rules of ``magtact`` commands (docs/method.md §14): its lock is held while
+    writing, the files appear only once all are complete, and a file there that magtact did
+    not write is never replaced.
+
+    Parameters
+    ----------
+    result : Result
+    out : path
+        The results folder (made if missing).
+    figures : bool
+        Draw the figures (PNG and SVG).
+    budget : bool
+        Write ``budget.json`` (where the study has one geometry).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+
+    Raises
+    ------
+    MagtactError
+        If another process is writing ``out``, or an output would replace a file that is
+        not magtact's (the message names the files).
+
+    See Also
+    --------
+    write_results_into : the same into a folder the caller already holds.
+    Result.write : the same, as a method.
+
+    Examples
+    --------
+    >>> import magtact
+    >>> magtact.write_results(magtact.design(), "design")         # doctest: +SKIP
+    """
+    from ._runfolder import command_outputs
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    with command_outputs(out, "magtact.Result.write") as o:
+        files = write_results_into(result, o.folder, figures=figures, budget=budget)
+    return [o.final(p) for p in files]
+
+
+def write_results_into(result: Result, out: str | Path, *, figures: bool = True,
+                       budget: bool = True, explorer: bool = False) -> list[Path]:
+    """:func:`write_results` straight into ``out``, for a caller that already holds the
+    folder (a command's or a run's staging folder): no lock, no check of what is there.
+
+    Parameters
+    ----------
+    result : Result
+    out : path
+        The folder (it must exist).
+    figures, budget : bool
+        As :func:`write_results`.
+    explorer : bool
+        Also the report's design explorer (``explorer.json``, a grid of
+        ``result.evaluate``).
+
+    Returns
+    -------
+    list of Path
+        The files written.
+
+    See Also
+    --------
+    Result.write_into : the same, as a method.
+    """
+    from .budget import write_budgets
+    from .optimise import write_geometry_outputs, write_optimise_outputs
+    from .report import (
+        budget_figures,
+        fig_geometry_pareto,
+        optimise_figures,
+        write_card,
+        write_explorer,
+    )
+
+    out = Path(out)
+    if result.study.geometric_variables:
+        files = write_geometry_outputs(result.optimisation, out,
+                                       figures=fig_geometry_pareto if figures else None)
+    else:
+        files = write_optimise_outputs(result.optimisation, result.models, out,
+                                       figures=optimise_figures if figures else None)
+    if result.sensor_design is not None:  # the whole sensor is the chosen design
+        written = result.sensor_design.write(out, result.chosen.design)
+        files = [f for f in files if f.name != "chosen.json"] + written
+    files.append(write_card([result.chosen, result.original], out, result.constraints,
+                            rtol=result.study.optimise.active_rtol, study=result.study,
+                            extra_rows=result._budget_rows()))
+    grid = write_explorer(result, out) if explorer else None  # for the report's explorer
+    if grid is not None:
+        files.append(grid)
+    if budget and result.budgets is not None:
+        files.append(write_budgets(result.budgets, result.study, out,
+                                   figures=budget_figures if figures else None))
+    return files
 
 
 def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str
