@@ -139,7 +139,10 @@ def test_a_short_fit_turns_the_metamodel_stage_to_a_warning(ds, short_fit, tmp_p
                             cache=None, workers=None, log=lambda m: None, dataset=ds)
     monkeypatch.setattr(pipeline, "STAGES", [("metamodel", "Metamodels",
                                               pipeline._stage_metamodel)])
-    (rec,) = pipeline._run_stages(ctx, "test", {}, 0.0)
+    from magtact._runfolder import RunManifest
+
+    manifest = RunManifest(run_id="test", study=s.name, command="test", started=None)
+    (rec,) = pipeline._run_stages(ctx, "test", manifest, 0.0)
     assert rec.status == "warning"
     assert any(n.startswith("WARNING: the answer rests on a poor fit") for n in rec.notes)
 
