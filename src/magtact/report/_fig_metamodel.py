@@ -84,7 +84,8 @@ def fig_parity(models, table: dict, test_mask: np.ndarray, path: str | Path) -> 
         fig, axes = subplots(1, 4, figsize=(7.2, 2.1))
         for ax, (k, unit) in zip(axes, names, strict=True):
             y = from_si(np.asarray(table[k]), unit)
-            y_hat = from_si(models[k].value(table["t"], table["theta"], table["H"]), unit)
+            geo = {g: table[g] for g in getattr(models[k], "geometry", ())}  # each row's
+            y_hat = from_si(models[k].value(table["t"], table["theta"], table["H"], **geo), unit)
             ax.plot(y[~test_mask], y_hat[~test_mask], ".", ms=2, color="C0", label="train")
             ax.plot(y[test_mask], y_hat[test_mask], ".", ms=2, color="C1", label="held out")
             lo, hi = y.min(), y.max()

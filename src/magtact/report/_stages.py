@@ -59,8 +59,10 @@ def fit_figures(study, models, table: dict, test_mask, folder: str | Path, H: fl
         Design [m], [Pa] of the force map and the sensitivity figure.
     """
     folder = Path(folder)
-    return (fig_force_map(models, study, H, G, folder / "force_map")
-            + fig_gamma(models, study, H, G, folder / "gamma")
+    # over geometric design variables the maps are drawn at the study's own magnet and body
+    at = models.at(**study.geometry()) if study.geometric_variables else models
+    return (fig_force_map(at, study, H, G, folder / "force_map")
+            + fig_gamma(at, study, H, G, folder / "gamma")
             + fig_parity(models, table, test_mask, folder / "parity"))
 
 
