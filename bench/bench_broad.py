@@ -1,28 +1,28 @@
 """The broad design space shipped with magtact.
 
-``bench/magtact_broad_full.toml`` is the space aimed at: H in [2, 10] mm at 4 levels, the
-magnet's radius R_m in [1.5, 3] mm and height H_m in [1, 3] mm at 2 levels each (diameters 3 and
-6 mm), 3 theta levels, default mesh, G by its exact scaling: 48 structural paths in 4 sub-DOEs.
-On the shared 2-core machine (load average 6-9 from other work) its paths took 3.3 min each,
-so only its first two sub-DOEs (the 3 mm magnet, heights 1 and 3 mm) completed in the time there
-was; they are ``bench/magtact_broad.toml``, the data set and fit shipped with magtact.
+``bench/magtact_broad_full.toml``: the MagOne body with H in [2, 10] mm at 4 levels and four
+magnets, diameter 3 or 6 mm (R_m 1.5, 3 mm) × height 1 or 3 mm, 3 theta levels, default mesh,
+G by its exact scaling: 48 structural paths in 4 sub-DOEs. Seven paths of the tall magnets stall
+before t = 1 and keep the levels they reached. magtact ships one (t, theta, H) data set and fit
+per magnet size (``src/magtact/doe/data/broad_<D>x<H>_doe.nc``, ``metamodel/data/broad_<D>x<H>``):
+a single fit over the four sizes (``fit --study full``) does not interpolate between them (the
+``magone`` step measures it against the MagOne data of a 5 x 2 mm magnet).
 
 Steps (each writes its part of ``bench/results/broad.json``)::
 
-    nohup nice -n 5 python bench/bench_broad.py doe --study full > broad_doe.log 2>&1 &
-    python bench/bench_broad.py assemble   # the shipped study's data set from the job cache
-    python bench/bench_broad.py fit        # magtact fit over it; held-out error
-    python bench/bench_broad.py ship       # copy data and fit into the package
-    python bench/bench_broad.py whatif     # what-ifs answered from the shipped data, timed
-    python bench/bench_broad.py mesh       # the mesh correction, measured (no FE solve)
-    python bench/bench_broad.py runs       # magtact run of the first what-ifs, timed
-    python bench/bench_broad.py quick      # one design's answer from the broad data, timed
+    nohup python bench/bench_broad.py doe --study full --workers 2 > broad_doe.log 2>&1 &
+    python bench/bench_broad.py split        # per size: its data set and magtact fit
+    python bench/bench_broad.py ship_sizes   # copy data sets and fits into the package
+    python bench/bench_broad.py fit --study full   # one fit over the four sizes, for the check
+    python bench/bench_broad.py magone       # that fit against the MagOne data
+    python bench/bench_broad.py whatif       # what-ifs answered from the shipped data, timed
+    python bench/bench_broad.py mesh         # the mesh correction, measured (no FE solve)
+    python bench/bench_broad.py runs         # magtact run of the first what-ifs, timed
+    python bench/bench_broad.py quick        # one design's answer from the broad data, timed
 
-``doe`` and ``assemble`` run ``magtact doe`` with one worker through the job cache
-``bench/results/broad_cache`` (a rerun reuses every finished path). The cache keys hash the
-study's sections as the code of the run reads them, so a resume needs the same code: the cached
-paths were computed by the source of commit d951cd0 (give its ``src`` folder in the environment
-variable ``MAGTACT_BROAD_SRC``, e.g. ``git archive d951cd0 src | tar -x -C /tmp/old``).
+``doe`` runs ``magtact doe`` through the job cache ``bench/results/broad_cache`` (committed: a
+rerun reuses every finished path and computes the stalled ones again). ``MAGTACT_BROAD_SRC``
+may name another ``src`` folder to run (the environment's ``PYTHONPATH``).
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
 STUDIES = {"3x1": HERE / "magtact_broad_3x1.toml", "H_m": HERE / "magtact_broad.toml",
+           "6mm": HERE / "magtact_broad_6mm.toml",
            "full": HERE / "magtact_broad_full.toml"}
 DOE_DIRS = {k: RESULTS / f"broad_{k}_doe" for k in STUDIES}
 FIT_DIRS = {k: RESULTS / f"broad_{k}_fit" for k in STUDIES}
@@ -93,22 +94,28 @@ def _cache_cost() -> dict:
             "first_to_last_completion_s": stamps[-1] - stamps[0] if stamps else None}
 
 
-def doe(which: str, workers: int, section: str = "doe") -> None:
+def doe(which: str, workers: int, section: str | None = None) -> None:
     import xarray as xr
 
+    section = section or f"doe_{which}"
     out = DOE_DIRS[which]
     cmd = _magtact("doe", str(STUDIES[which]), "--out", str(out), "--workers", str(workers),
                    "--cache", str(CACHE))
     load_start = os.getloadavg()
     start = time.perf_counter()
-    subprocess.run(cmd, check=True, cwd=ROOT, env=_env())
+    proc = subprocess.run(cmd, cwd=ROOT, env=_env())
     wall = time.perf_counter() - start
-    with xr.open_dataset(out / "doe.nc") as ds:
+    data = _doe_file(which)
+    if proc.returncode and data.name != "doe_partial.nc":
+        raise SystemExit(f"magtact doe failed (exit {proc.returncode}) and left no data set")
+    with xr.open_dataset(data) as ds:
         attrs = dict(ds.attrs)
         sizes = {k: int(v) for k, v in ds.sizes.items()}
     jobs = [j for j in json.loads(attrs["jobs"]) if "job_wall_time" in j]
     _update(section, {
-        "command": f"python bench/bench_broad.py {section} --study {which}",
+        "command": (f"python bench/bench_broad.py "
+                    f"{'assemble' if section == 'assemble' else 'doe'} --study {which} "
+                    f"--workers {workers}"),
         "magtact_command": _command(cmd),
         "study": str(STUDIES[which].relative_to(ROOT)),
         "workers": workers, "wall_time_s": wall, "load_average_at_start": load_start,
@@ -120,16 +127,38 @@ def doe(which: str, workers: int, section: str = "doe") -> None:
         "path_job_wall_time_s_sum": sum(j["job_wall_time"] for j in jobs),
         "complete": int(attrs.get("complete", 0)), "mesh": attrs.get("mesh"),
         "source_revision": attrs.get("source_revision"),
-        "dataset": str((out / "doe.nc").relative_to(ROOT)),
+        "failed_jobs": [j for j in attrs.get("failed_jobs", "").splitlines() if j],
+        "partial_paths": partial_paths(attrs),
+        "dataset": str(data.relative_to(ROOT)),
         "cache": _cache_cost(),
     })
-    print(f"DOE: {wall:.0f} s -> {out / 'doe.nc'}")
+    print(f"DOE: {wall:.0f} s -> {data}")
+
+
+def partial_paths(attrs: dict) -> list[dict]:
+    """The paths that stalled before t = 1, from a data set's job records: where (θ [rad],
+    H [mm] and the magnet's diameter and height [mm]) and the last load level kept."""
+    out = []
+    for j in json.loads(attrs.get("jobs", "[]")):
+        if "t_reached" in j:
+            out.append({"theta_rad": j["theta"], "H_mm": j["H"] * 1e3,
+                        "D_mm": 2e3 * j["R_m"] if "R_m" in j else None,
+                        "H_m_mm": j["H_m"] * 1e3 if "H_m" in j else None,
+                        "t_reached": j["t_reached"]})
+    return out
+
+
+def _doe_file(which: str) -> Path:
+    """The DOE's data set: doe.nc, or doe_partial.nc when some jobs failed (the fit leaves
+    their paths out)."""
+    full = DOE_DIRS[which] / "doe.nc"
+    return full if full.is_file() else DOE_DIRS[which] / "doe_partial.nc"
 
 
 def fit(which: str) -> None:
     FIT_DIR = FIT_DIRS[which]
-    cmd = _magtact("fit", str(STUDIES[which]), "--data",
-                   str(DOE_DIRS[which] / "doe.nc"), "--out", str(FIT_DIR))
+    cmd = _magtact("fit", str(STUDIES[which]), "--data", str(_doe_file(which)),
+                   "--out", str(FIT_DIR))
     load_start = os.getloadavg()
     start = time.perf_counter()
     subprocess.run(cmd, check=True, cwd=ROOT)
@@ -140,7 +169,8 @@ def fit(which: str) -> None:
         held[name] = info["accuracy"]
     from magtact.study import load_study
 
-    _update("fit", {"command": f"python bench/bench_broad.py fit --study {which}",
+    _update("fit" if which != "full" else "fit_full",
+            {"command": f"python bench/bench_broad.py fit --study {which}",
                     "study": str(STUDIES[which].relative_to(ROOT)),
                     "magtact_command": _command(cmd),
                     "settings": dict(vars(load_study(STUDIES[which]).metamodel)),
@@ -149,8 +179,94 @@ def fit(which: str) -> None:
     print(json.dumps(held, indent=1))
 
 
+#: The magnet sizes of the full DOE, each shipped as its own (t, θ, H) data set and fit.
+SIZE_DIR = RESULTS / "broad_sizes"
+
+
+def _size_name(R_m: float, H_m: float) -> str:
+    return f"{2e3 * R_m:.3g}x{1e3 * H_m:.3g}"
+
+
+def split() -> None:
+    """The full DOE's data set per magnet size: a (t, θ, H) data set each (the values as
+    computed, the study of that size, the jobs and stalls of that size), then ``magtact fit``
+    of each with a larger GP budget than the default (the field exact, 2 held-out paths)."""
+    from dataclasses import replace
+
+    from magtact.doe import load_dataset, save_dataset
+    from magtact.study import load_study, magone
+
+    full = load_dataset(_doe_file("full"))
+    study = load_study(STUDIES["full"])
+    # twice the default GP budget and up to five seeds: a (t, θ, H) fit per size as in the
+    # MagOne fit, where the sizes with a tall magnet need more search to reach its thresholds
+    fit_settings = replace(magone().metamodel, b_model="exact", holdout_paths=2,
+                           generations=200, population=1000, retries=4)
+    jobs = json.loads(full.attrs["jobs"])
+    record = {}
+    for R_m in full["R_m"].values:
+        for H_m in full["H_m"].values:
+            name = _size_name(R_m, H_m)
+            sub = replace(study.at(R_m=float(R_m), H_m=float(H_m)), metamodel=fit_settings,
+                          name=f"MagOne body, {name} mm magnet, H 2-10 mm")
+            ds = full.sel(R_m=R_m, H_m=H_m).drop_vars(["R_m", "H_m"])
+            mine = [j for j in jobs if j["R_m"] == R_m and j["H_m"] == H_m]
+            stalled = [j for j in mine if "t_reached" in j]
+            attrs = {k: v for k, v in full.attrs.items() if k != "geometric_variables"}
+            attrs.update({
+                "study_name": sub.name, "study_toml": sub.to_toml(),
+                "title": f"magtact design of experiments: {sub.name}",
+                "jobs": json.dumps(mine), "complete": int(not stalled),
+                "failed_jobs": "\n".join(
+                    f"path θ={j['theta']:.4f} rad, H={1e3 * j['H']:.4g} mm: stalled, its levels "
+                    f"up to t = {j['t_reached']:.4g} kept" for j in stalled),
+                "split_from": f"{full.attrs['study_name']} at R_m = {1e3 * R_m:.4g} mm, "
+                              f"H_m = {1e3 * H_m:.4g} mm (bench/bench_broad.py split)"})
+            ds.attrs = attrs
+            folder = SIZE_DIR / name
+            folder.mkdir(parents=True, exist_ok=True)
+            (folder / "study.toml").write_text(sub.to_toml(), encoding="utf-8")
+            save_dataset(ds, folder / "doe.nc")
+            cmd = _magtact("fit", str(folder / "study.toml"), "--data", str(folder / "doe.nc"),
+                           "--out", str(folder / "fit"))
+            start = time.perf_counter()
+            subprocess.run(cmd, check=True, cwd=ROOT)
+            wall = time.perf_counter() - start
+            record[name] = {
+                "magtact_command": _command(cmd), "wall_time_s": wall,
+                "paths_stalled": len(stalled), "points_missing": int(ds["F_z"].isel(G=0).isnull().sum()),
+                "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
+                             ["accuracy"] for k in ("f_r", "f_z")}}
+            print(name, f"{wall:.0f} s", {k: v["test"]["max_abs_err_over_range"]
+                                          for k, v in record[name]["accuracy"].items()})
+    _update("sizes", {"command": "python bench/bench_broad.py split",
+                      "settings": dict(vars(fit_settings)), "sizes": record})
+
+
+def ship_sizes() -> None:
+    """Copy each size's data set and fit (models, metamodels.md, PNG figures) into the package."""
+    data_dir, fit_root = SHIP_DATA.parent, SHIP_FIT.parent
+    sizes = {}
+    for folder in sorted(p for p in SIZE_DIR.iterdir() if (p / "doe.nc").is_file()):
+        data = data_dir / f"broad_{folder.name}_doe.nc"
+        shutil.copy2(folder / "doe.nc", data)
+        fit_dir = fit_root / f"broad_{folder.name}"
+        if fit_dir.exists():
+            shutil.rmtree(fit_dir)
+        fit_dir.mkdir(parents=True)
+        for src in sorted((folder / "fit").iterdir()):
+            if src.suffix in (".json", ".md", ".png") and not src.name.startswith("."):
+                shutil.copy2(src, fit_dir / src.name)
+        sizes[folder.name] = {"data": str(data.relative_to(ROOT)),
+                              "fit": str(fit_dir.relative_to(ROOT)),
+                              "data_bytes": data.stat().st_size,
+                              "fit_bytes": sum(p.stat().st_size for p in fit_dir.iterdir())}
+    _update("ship", {"command": "python bench/bench_broad.py ship_sizes", "sizes": sizes})
+    print(json.dumps(sizes, indent=1))
+
+
 def ship(which: str) -> None:
-    shutil.copy2(DOE_DIRS[which] / "doe.nc", SHIP_DATA)
+    shutil.copy2(_doe_file(which), SHIP_DATA)
     SHIP_FIT.mkdir(parents=True, exist_ok=True)
     for src in sorted(FIT_DIRS[which].iterdir()):
         if src.suffix in (".json", ".md", ".png", ".svg") and not src.name.startswith("."):
@@ -176,6 +292,10 @@ def whatif() -> None:
         "3 x 1 mm N52 magnet, H in [2, 10] mm": {"magnet": {"R_m_mm": 1.5, "H_m_mm": 1.0,
                                                             "grade": "N52"},
                                                  "design": {"H_mm": [2.0, 10.0]}},
+        "6 x 1 mm magnet, H in [2, 10] mm": {"magnet": {"R_m_mm": 3.0, "H_m_mm": 1.0},
+                                             "design": {"H_mm": [2.0, 10.0]}},
+        "3 x 3 mm magnet, H in [3, 9] mm": {"magnet": {"R_m_mm": 1.5, "H_m_mm": 3.0},
+                                            "design": {"H_mm": [3.0, 9.0]}},
     }
     out = {}
     for label, edit in cases.items():
@@ -188,7 +308,10 @@ def whatif() -> None:
                       "Gamma_r_max_N_per_T": r.chosen.design.Gamma_r_max,
                       "Gamma_z_max_N_per_T": r.chosen.design.Gamma_z_max,
                       "F_r_min_N": r.chosen.design.F_r_min,
-                      "F_z_max_N": r.chosen.design.F_z_max}
+                      "F_z_max_N": r.chosen.design.F_z_max,
+                      "sensor": (r.sensor_design.to_json() if r.sensor_design is not None
+                                 else None),
+                      "verdict_met": r.chosen.verdict.met if r.chosen.verdict else None}
         print(label, f"{wall:.1f} s", r.chosen_design)
     _update("whatif", {"command": "python bench/bench_broad.py whatif",
                        "load_average": os.getloadavg(), "cases": out})
@@ -292,6 +415,9 @@ RUNS = {
     "H range 3.5-6.5 mm": {"design": {"H_mm": [3.5, 6.5], "H_original_mm": 4.0}},
     "3 x 1 mm magnet, H range 3-9 mm": {"magnet": {"R_m_mm": 1.5, "H_m_mm": 1.0},
                                         "design": {"H_mm": [3.0, 9.0]}},
+    "6 x 3 mm N42 magnet, H range 4-10 mm": {"magnet": {"R_m_mm": 3.0, "H_m_mm": 3.0,
+                                                        "grade": "N42"},
+                                             "design": {"H_mm": [4.0, 10.0]}},
     "silicone, grade, G range, chip setting, constraints at once": {
         "material": {"silicone": "Dragon Skin 10"}, "magnet": {"grade": "N52"},
         "design": {"G_kPa": [10.0, 60.0]},
@@ -330,11 +456,70 @@ def runs() -> None:
     _update("runs", {"command": "python bench/bench_broad.py runs", "cases": out})
 
 
+def _magone_figure(own, models, G: float) -> None:
+    """F_z(t = 1) and min_t F_r over H: the MagOne data (points) and the broad fit (lines)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    H = np.linspace(float(own.H.min()), float(own.H.max()), 81)
+    t = np.asarray(own.t.values, dtype=float)
+    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.6), layout="constrained")
+    for i, th in enumerate(own.theta.values):
+        c = f"C{i}"
+        a.plot(own.H * 1e3, own.F_z.isel(G=0, t=-1, theta=i), "o", color=c)
+        a.plot(H * 1e3, G * models.f_z.value(1.0, th, H), "-", color=c,
+               label=f"θ = {np.degrees(th):.1f}°")
+        if th > 0:
+            b.plot(own.H * 1e3, own.F_r.isel(G=0, theta=i).min("t"), "o", color=c)
+            fr = G * models.f_r.value(t[:, None], th, H[None, :])
+            b.plot(H * 1e3, fr.min(axis=0), "-", color=c)
+    a.set(xlabel="H [mm]", ylabel="F_z(t = 1) [N]",
+          title="MagOne data (points), broad fit (lines)")
+    b.set(xlabel="H [mm]", ylabel="min over t of F_r [N]")
+    a.legend(fontsize=7)
+    fig.savefig(RESULTS / "broad_magone.png", dpi=110)
+    plt.close(fig)
+
+
+def magone() -> None:
+    """The single fit over the four magnet sizes (``fit --study full``) against the MagOne data
+    set it never saw: a 5 x 2 mm magnet, between its sizes, at H 3-7 mm, the same body, loading
+    and mesh. This is why magtact does not interpolate between the broad sizes."""
+    import numpy as np
+
+    from magtact.doe import load_bundled
+    from magtact.metamodel import load_models
+
+    models = load_models(FIT_DIRS["full"]).at(R_m=2.5e-3, H_m=2e-3)
+    own = load_bundled()
+    t, th, H = np.meshgrid(own.t.values, own.theta.values, own.H.values, indexing="ij")
+    G = float(own.G.values[0])
+    data = {}
+    for k in ("r", "z"):
+        measured = own[f"F_{k}"].isel(G=0).transpose("t", "theta", "H").values / G
+        model = np.asarray(getattr(models, f"f_{k}").value(t, th, H), dtype=float)
+        err = np.abs(model - measured)
+        data[f"f_{k}"] = {"max_abs_err_over_range": float(err.max() / np.ptp(measured)),
+                          "r2": float(1 - np.sum(err**2) / np.sum((measured - measured.mean())**2)),
+                          "n_points": int(err.size)}
+    fz1 = own.F_z.isel(G=0, t=-1).transpose("theta", "H").values / G
+    data["F_z_t1_max_rel_err"] = float(np.abs(models.f_z.value(1.0, th[-1], H[-1]) / fz1 - 1).max())
+    fr = own.F_r.isel(G=0).min("t").transpose("theta", "H").values[1:] / G
+    model_fr = np.asarray(models.f_r.value(t, th, H), dtype=float).min(axis=0)[1:]
+    data["F_r_min_max_rel_err"] = float(np.abs(model_fr / fr - 1).max())
+    _magone_figure(own, models, G)
+    _update("magone", {"command": "python bench/bench_broad.py magone", "data": data})
+    print(json.dumps(data, indent=1))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("step", choices=("doe", "assemble", "fit", "ship", "whatif", "mesh", "runs",
-                                    "quick"))
+                                    "quick", "magone", "split", "ship_sizes"))
     p.add_argument("--study", choices=tuple(STUDIES), default="full")
     p.add_argument("--workers", type=int, default=1)
     a = p.parse_args()
@@ -345,7 +530,8 @@ def main() -> None:
     elif a.step in ("fit", "ship"):
         {"fit": fit, "ship": ship}[a.step](a.study)
     else:
-        {"whatif": whatif, "mesh": mesh, "runs": runs, "quick": quick}[a.step]()
+        {"whatif": whatif, "mesh": mesh, "runs": runs, "quick": quick,
+         "magone": magone, "split": split, "ship_sizes": ship_sizes}[a.step]()
 
 
 if __name__ == "__main__":

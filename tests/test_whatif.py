@@ -163,11 +163,33 @@ def test_a_catalogue_magnet_and_a_tall_body_are_answered_from_the_broad_data():
     study = _study(magnet={"R_m_mm": 1.5, "H_m_mm": 1.0, "grade": "N45"},
                    design={"H_mm": [3.0, 9.0], "G_kPa": [15.0, 45.0]})
     ds = bundled_for(study)
-    assert ds.attrs["rescaled_from"] == "broad_doe.nc"
+    assert ds.attrs["rescaled_from"] == "broad_3x1_doe.nc"
     assert float(ds["H"].min()) <= 3e-3 and float(ds["H"].max()) >= 9e-3
     sel = select_metamodels(study, ds)
-    assert sel.shipped == prefitted_dir("broad") and sel.fit is None
+    assert sel.shipped == prefitted_dir("broad_3x1") and sel.fit is None
     assert not sel.poor_fit, sel.quality.message()
     with pytest.raises(MagtactError, match=r"needs new mechanics: \[design\] H_mm = \[3, 9\] "
                                            r"reaches outside the data's heights \[3, 7\] mm"):
         bundled_for(_study(design={"H_mm": [3.0, 9.0]}))
+
+
+@pytest.mark.parametrize("size", ["3x3", "6x1", "6x3"])
+def test_each_broad_magnet_size_is_answered_from_its_own_data(size):
+    D, H_m = (float(x) for x in size.split("x"))
+    study = _study(magnet={"R_m_mm": D / 2, "H_m_mm": H_m, "grade": "N42"},
+                   design={"H_mm": [2.5, 9.5]})
+    ds = bundled_for(study)
+    assert ds.attrs["rescaled_from"] == f"broad_{size}_doe.nc"
+    assert find_shipped(study, ds)[0] == prefitted_dir(f"broad_{size}")
+
+
+def test_a_magnet_between_the_broad_sizes_is_refused_naming_the_sizes_held():
+    """The broad DOE has two diameters and two heights: a size between them is not interpolated
+    (a fit over the sizes missed the 5 x 2 mm MagOne data by tens of per cent)."""
+    with pytest.raises(MagtactError) as info:
+        bundled_for(_study(magnet={"R_m_mm": 2.0, "H_m_mm": 2.0}))
+    msg = str(info.value)
+    assert "needs new mechanics: [magnet] R_m" in msg
+    for held in ("a 5 × 2 mm magnet over H [3, 7] mm", "a 3 × 1 mm magnet over H [2, 10] mm",
+                 "a 6 × 3 mm magnet over H [2, 10] mm"):
+        assert held in msg, msg

@@ -2,6 +2,7 @@
 
 from ._cache import CacheCorruptWarning, CacheError, JobCache
 from ._dataset import (
+    BROAD_SIZES,
     BUNDLED_NAMES,
     DOE_SECTIONS,
     FORCE_SETTINGS,
@@ -29,7 +30,7 @@ from ._executor import default_workers
 from ._run import DOEFailed, JobFailure, RunStats, run_doe
 
 __all__ = [
-    "Domain", "check_design", "domain_of", "BUNDLED_NAMES", "FORCE_SETTINGS", "data_study",
+    "Domain", "check_design", "domain_of", "BROAD_SIZES", "BUNDLED_NAMES", "FORCE_SETTINGS", "data_study",
     "rescaled_for",
     "DOE_SECTIONS", "ERROR_VARIABLES", "GEOMETRY_NAMES", "FINER_MESH", "CacheCorruptWarning",
     "CacheError", "DOEFailed", "JobCache", "JobFailure", "RunStats",

@@ -179,7 +179,8 @@ def bundled_path(name: str = BUNDLED_NAME) -> Path:
 
 def load_bundled(name: str = BUNDLED_NAME) -> xr.Dataset:
     """A DOE shipped with magtact (see ``magtact/doe/data/README.md``): by default the
-    built-in MagOne study's, ``"broad_doe.nc"`` the broad one over (H, R_m, H_m)."""
+    built-in MagOne study's, ``"broad_3x1_doe.nc"`` (and the other :data:`BROAD_SIZES`) the
+    MagOne body with that magnet over H 2-10 mm."""
     path = bundled_path(name)
     if not path.is_file():
         raise FileNotFoundError(f"the bundled DOE data set is missing ({path}); rebuild it with "
@@ -233,7 +234,10 @@ FORCE_SETTINGS = {
 #: Settings of those sections that do not change the forces beyond round-off.
 ROUND_OFF_SETTINGS = {"mechanics": ("threads", "solver")}
 #: Bundled data sets, in the order they are tried (the first that describes a study serves it).
-BUNDLED_NAMES = (BUNDLED_NAME, "broad_doe.nc")
+#: The broad data sets: the MagOne body over H 2-10 mm, one per magnet size (diameter x height
+#: in mm) of the broad DOE, each answering that size only (bench/bench_broad.py).
+BROAD_SIZES = ("3x1", "3x3", "6x1", "6x3")
+BUNDLED_NAMES = (BUNDLED_NAME, *(f"broad_{size}_doe.nc" for size in BROAD_SIZES))
 
 
 def matches_study(ds, study) -> bool:
@@ -375,6 +379,17 @@ def rescaled_for(ds, study) -> xr.Dataset:
     return out
 
 
+def _holds(ds) -> str:
+    """What a data set describes, in words: its magnet and heights ("" if its study does not
+    load)."""
+    other = data_study(ds)
+    if isinstance(other, str):
+        return ""
+    m, H = other.magnet, ds["H"].values
+    return (f"a {from_si(2 * m.R_m, 'mm'):.3g} × {from_si(m.H_m, 'mm'):.3g} mm magnet over H "
+            f"{_mm_range((float(H.min()), float(H.max())))} mm")
+
+
 def bundled_for(study, advice: str | None = None):
     """The bundled data set that describes ``study`` (:func:`differences`), rescaled exactly to
     its G levels and magnetisation (:func:`rescaled_for`): the MagOne data set, else the broad
@@ -388,7 +403,7 @@ def bundled_for(study, advice: str | None = None):
     MagtactError
         Naming the setting that needs new mechanics (and any others) and what to run instead.
     """
-    first = None
+    closest, held = None, []
     for name in BUNDLED_NAMES:
         path = bundled_path(name)
         if not path.is_file() and name != BUNDLED_NAME:
@@ -397,8 +412,11 @@ def bundled_for(study, advice: str | None = None):
         diff = differences(ds, study)
         if not diff:
             return rescaled_for(ds, study)
-        first = first or (name, diff)
-    name, diff = first
+        if closest is None or len(diff) < len(closest[1]):  # the data set nearest the study
+            closest = (name, diff)
+        held.append(_holds(ds))
+    name, diff = closest
+    diff = [*diff, f"the bundled data sets hold {'; '.join(h for h in held if h)}"]
     shown = "; ".join(diff[1:6]) + (f"; and {len(diff) - 6} more" if len(diff) > 6 else "")
     raise MagtactError(
         f"study {study.name!r} needs new mechanics: {diff[0]}"

@@ -18,6 +18,7 @@ from dataclasses import asdict
 from importlib import resources
 from pathlib import Path
 
+from ..doe import BROAD_SIZES
 from ..study import Study, magone
 from ._fit import data_hash
 from ._io import load_models, save_model
@@ -26,7 +27,8 @@ from ._model import RESPONSES, Metamodel, ModelSet
 #: Settings that do not change a fit's result (the GP is deterministic in its thread count).
 _NEUTRAL = {"threads"}
 #: Shipped fits: folder under ``data/`` -> the bundled data set (``magtact.doe``) they fit.
-SHIPPED = {"magone": "magone_doe.nc", "broad": "broad_doe.nc"}
+SHIPPED = {"magone": "magone_doe.nc",
+           **{f"broad_{size}": f"broad_{size}_doe.nc" for size in BROAD_SIZES}}
 
 
 def prefitted_dir(name: str = "magone") -> Path:
