@@ -41,3 +41,19 @@ def test_two_geometric_variables_give_one_dimension_each(tmp_path):
                                               sub[name].values)
     back = load_dataset(save_dataset(ds, tmp_path / "g.nc"))
     np.testing.assert_array_equal(back["F_r"].values, ds["F_r"].values)
+
+
+def test_a_failed_path_of_one_magnet_is_named_with_that_magnet(tmp_path, monkeypatch):
+    import pytest
+
+    from magtact.doe import DOEFailed
+
+    s = study_from_dict({"doe": {"n_t": 3, "n_theta": 2, "n_H": 2, "n_G": 2, "n_R_m": 2},
+                         "design": {"R_m_mm": [1.5, 3.0]}, "metamodel": {"b_model": "exact"}})
+    monkeypatch.setenv("MAGTACT_TEST_FAIL", "1")  # the sheared path at the tallest H fails
+    with pytest.raises(DOEFailed) as info:
+        run(s, tmp_path, path_solver=magnet_path, field_solver=magnet_field)
+    labels = [f.label for f in info.value.failures]
+    assert len(labels) == 2 and labels[0].endswith("R_m=1.5 mm") and labels[1].endswith(
+        "R_m=3 mm")
+    assert "R_m=3 mm: RuntimeError" in info.value.dataset.attrs["failed_jobs"]

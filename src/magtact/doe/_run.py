@@ -143,7 +143,8 @@ def _run_geometry(study: Study, **kw) -> xr.Dataset:
         try:
             part = run_doe(study.at(**geometry), **kw)
         except DOEFailed as exc:
-            failures += exc.failures
+            where = ", ".join(f"{k}={v * 1e3:.4g} mm" for k, v in geometry.items())
+            failures += [replace(f, label=f"{f.label}, {where}") for f in exc.failures]
             part = exc.dataset
         # one new dimension per geometric variable, after the DOE's own (any number of them)
         parts.append(part.expand_dims({k: [v] for k, v in geometry.items()})
