@@ -142,6 +142,30 @@ def test_evaluate_reports_each_requirement_with_its_margin(result):
         result.evaluate(H_mm=3.0, G_kPa=29.4, grade="N99")
 
 
+def test_a_design_on_the_constraint_boundary_meets_it(result):
+    """G chosen where F_z,max just reaches the required force: met to G's precision, not
+    below it by a round-off (which would print "no: the body carries 5 N stably")."""
+    from magtact.designer import verdict
+
+    a = result.chosen
+    study = result.sensor_design.choice.apply(result.study)
+    req = study.requirements
+    chip = a.chip
+    class At:  # the chosen design with one force replaced
+        def __init__(self, **forces):
+            self.forces = forces
+
+        def __getattr__(self, name):
+            return self.forces[name] if name in self.forces else getattr(a.design, name)
+
+    for F_z_max, met in ((req.F_z * (1 - 1e-8), True), (req.F_z * (1 - 1e-3), False)):
+        v = verdict(result.models, study, At(F_z_max=F_z_max), chip)
+        assert v["normal"].met is met, v["normal"].text
+    for F_r_min, met in ((-req.F_r * (1 - 1e-8), True), (-req.F_r * (1 - 1e-3), False)):
+        v = verdict(result.models, study, At(F_r_min=F_r_min), chip)
+        assert v["shear"].met is met, v["shear"].text
+
+
 def test_nsga2_meets_the_exact_reduction_and_is_seeded():
     from magtact.optimise import (
         WARN_GAP_SENSOR,

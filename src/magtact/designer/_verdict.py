@@ -92,6 +92,12 @@ def _n(x: float) -> str:
     return f"{x:.3g}"
 
 
+#: A design chosen on a force constraint's boundary (G where it is just met) meets it to the
+#: precision of G's computation (about 1e-8 relative): a force this close to the requirement
+#: meets it.
+BOUNDARY_RTOL = 1e-6
+
+
 def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip) -> Verdict:
     """The verdict on ``design`` with ``chip`` at its setting, against ``[requirements]``
     (``study`` holds the design's magnet and the chip's standoff)."""
@@ -103,7 +109,7 @@ def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
         s_r = s_z = math.nan
     else:
         s_r, s_z = (float(v[0]) for v in grid.sigma(design.G, M_z, *chip.noise, req.F_z))
-    carries = design.F_z_max >= req.F_z
+    carries = design.F_z_max >= req.F_z * (1.0 - BOUNDARY_RTOL)
     reads = F_sat > req.F_z
     items = []
     if not carries:
@@ -118,13 +124,14 @@ def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
                              f"reads 0–{_n(req.F_z)} N normal without saturating", text,
                              min(design.F_z_max, F_sat) - req.F_z, "N"))
     shear = -design.F_r_min
-    if shear < req.F_r:
+    stable = shear >= req.F_r * (1.0 - BOUNDARY_RTOL)
+    if not stable:
         text = f"no: shear turns unstable at {_n(shear)} N"
     elif not reads:
         text = "no: the chip saturates within the required loads"
     else:
         text = f"yes, stable up to {_n(shear)} N"
-    items.append(Requirement("shear", shear >= req.F_r and reads,
+    items.append(Requirement("shear", stable and reads,
                              f"carries and reads 0–{_n(req.F_r)} N shear", text,
                              shear - req.F_r, "N"))
     if req.rate > 0:
