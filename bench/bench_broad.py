@@ -417,7 +417,8 @@ RUNS = {
                                         "design": {"H_mm": [3.0, 9.0]}},
     "6 x 3 mm N42 magnet, H range 4-10 mm": {"magnet": {"R_m_mm": 3.0, "H_m_mm": 3.0,
                                                         "grade": "N42"},
-                                             "design": {"H_mm": [4.0, 10.0]}},
+                                             "design": {"H_mm": [4.0, 10.0],
+                                                        "H_original_mm": 5.0}},
     "silicone, grade, G range, chip setting, constraints at once": {
         "material": {"silicone": "Dragon Skin 10"}, "magnet": {"grade": "N52"},
         "design": {"G_kPa": [10.0, 60.0]},
@@ -451,7 +452,9 @@ def runs() -> None:
                 "stages": {s["key"]: {"status": s["status"], "wall_time_s": s["wall_time_s"],
                                       "message": s["message"][:300]}
                            for s in manifest.get("stages", [])},
-                "stderr_tail": proc.stderr[-600:]}
+                "stderr_tail": proc.stderr[-600:],
+                "chosen": (json.loads((folder / "optimise" / "chosen.json").read_text())
+                           if (folder / "optimise" / "chosen.json").is_file() else None)}
             print(label, f"{wall:.0f} s", proc.returncode, manifest.get("doe_source"))
     _update("runs", {"command": "python bench/bench_broad.py runs", "cases": out})
 
@@ -477,7 +480,7 @@ def _magone_figure(own, models, G: float) -> None:
             fr = G * models.f_r.value(t[:, None], th, H[None, :])
             b.plot(H * 1e3, fr.min(axis=0), "-", color=c)
     a.set(xlabel="H [mm]", ylabel="F_z(t = 1) [N]",
-          title="MagOne data (points), broad fit (lines)")
+          title="MagOne data (points), the fit over the four sizes (lines)")
     b.set(xlabel="H [mm]", ylabel="min over t of F_r [N]")
     a.legend(fontsize=7)
     fig.savefig(RESULTS / "broad_magone.png", dpi=110)

@@ -552,65 +552,109 @@ def broad_section(r: Results) -> list[str]:
     if "broad" not in r.files:
         return []
     b = r["broad"]
-    shipped = b.get("ship", {}).get("study", "none")
     out = ["## The broad design space", "",
-           f"Source: {r.source('broad')} (`bench/bench_broad.py`). The space aimed at, "
-           f"`{b['studies']['full']}`: H over 2–10 mm, magnet diameters 3 and 6 mm, heights 1 "
-           f"and 3 mm (48 structural paths). The space shipped, `{shipped}`: its first sub-DOE, "
-           "a 3 × 1 mm magnet over H 2–10 mm, the part that completed on the shared machine.",
-           ""]
-    fd = b.get("full_doe")
-    if fd:
-        out += [f"**The full DOE** ({fd['workers']} worker, nice {fd['nice']}): "
-                f"{fd['paths_cached']} of {fd['paths_total']} paths in the job cache, "
-                f"{fd['path_job_wall_time_s_sum'] / 60:.0f} min of solver time "
-                f"({fd['path_job_wall_time_s_min']:.0f}–{fd['path_job_wall_time_s_max']:.0f} s "
-                f"per path), {fd['first_to_last_completion_s'] / 60:.0f} min from the first to "
-                f"the last; stopped {fd['stopped']}. Per sub-DOE:", ""]
-        out += table(["magnet", "paths"], [[k, v] for k, v in fd["sub_does"].items()])
-        out += [f"Resume: {fd['resume']}.", ""]
-    a = b.get("assemble")
-    if a:
-        c = a["cache"]
-        out += [f"**Cost of the shipped space.** {a['paths_total']} structural paths (all from the "
-                f"job cache of the full DOE) and {a['fields_computed']} field solve; the paths "
-                f"took {c['path_job_wall_time_s_sum'] / 60:.0f} min of solver time "
-                f"({c['path_job_wall_time_s_min']:.0f}–{c['path_job_wall_time_s_max']:.0f} s "
-                "per path, one worker, 1-minute load average from other work "
-                f"{a['load_average_at_start'][0]:.0f}), {c['first_to_last_completion_s'] / 60:.0f}"
-                " min from the first to the last.", ""]
-    f = b.get("fit")
-    if f:
+           f"Source: {r.source('broad')} (`bench/bench_broad.py`). The space, "
+           f"`{b['studies']['full']}`: the MagOne body with H over 2–10 mm (4 levels), the "
+           "magnet's diameter 3 and 6 mm and its height 1 and 3 mm (the corners of the "
+           "catalogue's sizes), 3 θ levels: 48 structural paths and 4 field solves, default "
+           "mesh, G by its exact scaling. magtact ships it as one data set and one fit per "
+           "magnet size.", ""]
+    d = b.get("doe_full")
+    if d:
+        c = d["cache"]
+        failed = d.get("partial_paths", [])
+        out += [f"**Its DOE** (`{d['magtact_command']}`): {d['paths_total']} paths, "
+                f"{c['paths_cached']} finished in the job cache "
+                f"({c['path_job_wall_time_s_sum'] / 60:.0f} min of solver time, "
+                f"{c['path_job_wall_time_s_min']:.0f}–{c['path_job_wall_time_s_max']:.0f} s per "
+                "path, computed over two sessions with one and two workers beside other work: "
+                "a 1-minute load average of 2 to 9), and "
+                f"{len(failed)} that stall before t = 1 (no progress of the Newton iterations, "
+                "as in §3 of the method): each keeps the load levels it reached, NaN beyond, and "
+                "the fit leaves the missing levels out:", ""]
+        out += [f"Those {len(failed)} paths took {(d['path_job_wall_time_s_sum'] - c['path_job_wall_time_s_sum']) / 60:.0f} "
+                f"min more, and the whole run {d['wall_time_s'] / 60:.0f} min with "
+                f"{d['workers']} workers (every finished path from the cache).", ""]
+        out += table(["magnet [mm]", "θ [rad]", "H [mm]", "last level kept"],
+                     [[f"{f['D_mm']:.3g} × {f['H_m_mm']:.3g}", f"{f['theta_rad']:.3g}",
+                       f"{f['H_mm']:.3g}", f"t = {f['t_reached']:.3g}"] for f in failed])
+    sz = b.get("sizes")
+    if sz:
+        st = sz["settings"]
         rows = []
-        for name, acc in f["accuracy"].items():
-            for part in ("train", "test"):
-                x = acc.get(part)
-                if x:
-                    rows.append([name, "held out" if part == "test" else "training",
-                                 f"{x['r2']:.4f}", pct(x["max_abs_err_over_range"], 2),
-                                 pct(x["max_rel_err"], 1), str(x["n_points"])])
-        command = f["magtact_command"].replace(str(ROOT) + "/", "")
-        out += [f"**Metamodels over the broad space** (`{command}`, "
-                f"{f['settings']['generations']} GP generations × "
-                f"{f['settings']['population']}, {f['wall_time_s']:.0f} s; the field is the "
-                "exact one; held out: whole (θ, H) paths):", ""]
-        out += table(["model", "points", "R²", "largest error / range", "largest rel. error",
-                      "n"], rows)
-        out += ["![parity of the broad fit](../src/magtact/metamodel/data/broad/parity.png)", ""]
+        for name, v in sz["sizes"].items():
+            for k in ("f_r", "f_z"):
+                x = v["accuracy"][k]["test"]
+                rows.append([name.replace("x", " × "), k, f"{x['r2']:.4f}",
+                             pct(x["max_abs_err_over_range"], 2), str(x["n_points"]),
+                             str(v["points_missing"]), f"{v['wall_time_s']:.0f}"])
+        out += ["**Metamodels, one per magnet size** (`python bench/bench_broad.py split`: "
+                f"`magtact fit` of each size's data set, {st['generations']} GP generations × "
+                f"{st['population']}, up to {st['retries'] + 1} seeds; the field is the exact "
+                "one; held out: whole (θ, H) paths, the same two for every size):", ""]
+        out += table(["magnet [mm]", "model", "held-out R²", "held-out error / range",
+                      "held-out points", "points missing", "fit [s]"], rows)
+        from magtact.metamodel import POOR_OVER_RANGE, POOR_R2
+
+        poor = [f"{name.replace('x', ' × ')} mm {k} (R² {x['r2']:.4f})"
+                for name, v in sz["sizes"].items() for k in ("f_r", "f_z")
+                if (x := v["accuracy"][k]["test"])["r2"] < POOR_R2
+                or x["max_abs_err_over_range"] > POOR_OVER_RANGE]
+        if poor:
+            out += [f"Below the poor-fit thresholds (held-out R² ≥ {POOR_R2}, error ≤ "
+                    f"{pct(POOR_OVER_RANGE)} of the range): {', '.join(poor)}; every answer "
+                    "from that fit says it rests on a poor fit (card, stage, `magtact fit`).",
+                    ""]
     sh = b.get("ship")
-    if sh:
-        out += [f"Shipped: `{sh['data']}` ({sh['data_bytes'] / 1e3:.0f} kB) and `{sh['fit']}` "
-                f"({sh['fit_bytes'] / 1e3:.0f} kB).", ""]
+    if sh and "sizes" in sh:
+        total = sum(v["data_bytes"] + v["fit_bytes"] for v in sh["sizes"].values())
+        out += ["Shipped (`python bench/bench_broad.py ship_sizes`): "
+                + ", ".join(f"`{v['data']}` ({v['data_bytes'] / 1e3:.0f} kB) and `{v['fit']}` "
+                            f"({v['fit_bytes'] / 1e3:.0f} kB)" for v in sh["sizes"].values())
+                + f"; {total / 1e6:.1f} MB in all.", "",
+                "![parity of the 3 × 1 mm fit]"
+                "(../src/magtact/metamodel/data/broad_3x1/parity.png)", ""]
+    ff, mg = b.get("fit_full"), b.get("magone")
+    if ff and mg:
+        dd = mg["data"]
+        acc = ff["accuracy"]
+        out += ["**Why the sizes are not interpolated.** One fit over the four sizes "
+                f"(`{ff['magtact_command']}`, {ff['settings']['generations']} GP generations × "
+                f"{ff['settings']['population']}, {ff['wall_time_s'] / 60:.0f} min) reaches "
+                f"held-out f_z within {pct(acc['f_z']['test']['max_abs_err_over_range'], 2)} of "
+                f"the range and f_r within {pct(acc['f_r']['test']['max_abs_err_over_range'], 2)}"
+                f" (R² {acc['f_r']['test']['r2']:.3f}) on the four sizes; against the MagOne "
+                "data set, which it never saw (a 5 × 2 mm magnet, between those sizes, at "
+                "H 3–7 mm; the same body, loading and mesh: `python bench/bench_broad.py "
+                "magone`):", ""]
+        out += table(["force per unit G", "R²", "largest error / range", "points"],
+                     [[k, f"{v['r2']:.3f}", pct(v["max_abs_err_over_range"], 1),
+                       str(v["n_points"])] for k, v in dd.items() if isinstance(v, dict)])
+        out += [f"F_z(t = 1) of the MagOne paths is off by up to "
+                f"{pct(dd['F_z_t1_max_rel_err'], 0)} and min F_r by up to "
+                f"{pct(dd['F_r_min_max_rel_err'], 0)}: two levels per magnet dimension do not "
+                "resolve the forces between them, so magtact answers the four sizes of the "
+                "data only, each from its own fit, and refuses a size between them.", "",
+                "![MagOne data against the fit over the sizes]"
+                "(../bench/results/broad_magone.png)", ""]
     w = b.get("whatif")
     if w:
         out += ["**What-ifs answered from it** (`magtact.design`, no DOE; 1-minute load "
-                f"average {w['load_average'][0]:.1f}):", ""]
-        out += table(["study edit", "s", "H [mm]", "G [kPa]", "Γ_r,max [N/T]",
-                      "Γ_z,max [N/T]", "F_r,min [N]", "F_z,max [N]"],
+                f"average {w['load_average'][0]:.1f}; the chosen sensor of each):", ""]
+
+        def sensor_row(v):
+            d = (v.get("sensor") or {}).get("chosen")
+            if not d:
+                return ["—"] * 5
+            met = {True: "met", False: "not met", None: "—"}[v.get("verdict_met")]
+            return [d["magnet_grade"], f"{d['standoff_mm']:.2g}", f"{d['sigma_Fr_mN']:.3g}",
+                    f"{d['sigma_Fz_mN']:.3g}", met]
+
+        out += table(["study edit", "s", "H [mm]", "G [kPa]", "grade", "standoff [mm]",
+                      "σ_F,r [mN]", "σ_F,z [mN]", "requirements"],
                      [[k, f"{v['wall_time_s']:.1f}", f"{v['chosen']['H_mm']:.3g}",
-                       f"{v['chosen']['G_kPa']:.3g}", f"{v['Gamma_r_max_N_per_T']:.3g}",
-                       f"{v['Gamma_z_max_N_per_T']:.3g}", f"{v['F_r_min_N']:.3g}",
-                       f"{v['F_z_max_N']:.3g}"] for k, v in w["cases"].items()])
+                       f"{v['chosen']['G_kPa']:.3g}", *sensor_row(v)]
+                      for k, v in w["cases"].items()])
     q = b.get("quick")
     if q:
         out += [f"**One design's what-if** (`python bench/bench_broad.py quick`: a 3 × 1 mm N52 "
@@ -628,11 +672,13 @@ def broad_section(r: Results) -> list[str]:
                          *(f"{st[s]['wall_time_s']:.1f}" if s in st else "—"
                            for s in ("doe", "metamodel", "optimise")),
                          ", ".join(f"{s}: {x['status']}" for s, x in st.items()
-                                   if x["status"] != "ok") or "all ok"])
+                                   if x["status"] != "ok") or "all ok",
+                         *((f"{c['H_mm']:.3g}", f"{c['G_kPa']:.3g}")
+                           if (c := v.get("chosen")) else ("—", "—"))])
         out += ["**`magtact run` of the first what-ifs** (`python bench/bench_broad.py runs`; "
                 "no DOE computed in any of them):", ""]
         out += table(["study edit", "total [s]", "exit", "load", "DOE [s]", "metamodels [s]",
-                      "optimisation [s]", "stages not ok"], rows)
+                      "optimisation [s]", "stages not ok", "H [mm]", "G [kPa]"], rows)
     m = b.get("mesh_correction")
     if m:
         rows = []
