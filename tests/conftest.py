@@ -255,3 +255,11 @@ def deny_open(monkeypatch, locked) -> None:
         return real_open(path, *args, **kwargs)
 
     monkeypatch.setattr(os, "open", deny)
+
+
+@pytest.fixture(scope="session")
+def magone_design():
+    """``magtact.design()`` of the built-in study (one per test process; read, never changed)."""
+    import magtact
+
+    return magtact.design()

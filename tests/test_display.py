@@ -84,8 +84,8 @@ def test_round_text_shortens_long_numbers_only(v, major, minor):
 
 # ---- the displays -----------------------------------------------------------------------------
 @pytest.fixture(scope="module")
-def result():
-    return magtact.design("magone")
+def result(magone_design):
+    return magone_design
 
 
 def check_block(text: str, html: str, units: tuple[str, ...]):

@@ -16,8 +16,8 @@ SMALL_CALIBRATION = {"degrees": (4,), "table_sizes": (16,)}
 
 
 @pytest.fixture(scope="module")
-def result():
-    return magtact.design()
+def result(magone_design):
+    return magone_design
 
 
 def _doc(obj) -> str:
@@ -82,12 +82,12 @@ def test_write_function_and_method_write_the_same_files(result, tmp_path):
     assert by_function.keys() == by_method.keys()
     assert {"card.json", "budget.json", "design.json", "chosen.json"} <= by_function.keys()
     assert by_function == by_method
-    # into a folder already held: the same files, and the explorer when asked
+    # into a folder already held: the same files
     c, d = tmp_path / "into_function", tmp_path / "into_method"
     c.mkdir()
     d.mkdir()
     into_function = _files(magtact.write_results_into(result, c, figures=False,
-                                                      budget=False, explorer=True), c)
-    into_method = _files(result.write_into(d, figures=False, budget=False, explorer=True), d)
-    assert into_function == into_method and "explorer.json" in into_function
+                                                      budget=False), c)
+    into_method = _files(result.write_into(d, figures=False, budget=False), d)
+    assert into_function == into_method and "card.json" in into_function
     assert "budget.json" not in into_function

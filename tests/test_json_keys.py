@@ -62,12 +62,11 @@ def scanned(key: str) -> bool:
 
 
 @pytest.fixture(scope="module")
-def written_keys(tmp_path_factory) -> dict[str, set[str]]:
+def written_keys(tmp_path_factory, magone_design) -> dict[str, set[str]]:
     """key → the files of other modules that write it."""
-    import magtact
     from magtact._runfolder import RunManifest, StageRecord
 
-    result = magtact.design()
+    result = magone_design
     folder = tmp_path_factory.mktemp("written")
     docs = {p.name: json.loads(p.read_text(encoding="utf-8"))
             for p in result.write_into(folder, figures=False, budget=True)
