@@ -416,16 +416,15 @@ def bundled_for(study, advice: str | None = None):
             closest = (name, diff)
         held.append(_holds(ds))
     name, diff = closest
-    diff = [*diff, f"the bundled data sets hold {'; '.join(h for h in held if h)}"]
     shown = "; ".join(diff[1:6]) + (f"; and {len(diff) - 6} more" if len(diff) > 6 else "")
     raise MagtactError(
         f"study {study.name!r} needs new mechanics: {diff[0]}"
         + (f" (it also differs in {shown})" if shown else "")
-        + ", so no data set bundled with magtact describes it (the settings that change the FE "
-          "forces or the field: the body, the magnet's size and placement, the loading, the "
-          "bulk ratio, the field and structural solvers; heights and magnet sizes inside the "
-          "bundled ranges, G, the silicone, the grade and M_z, the chip and everything else "
-          "are answered from the bundled data): "
-        + (advice or "compute its own DOE and models (magtact run STUDY --recompute; or "
+        + ". No data set bundled with magtact describes it: they hold "
+        + "; ".join(h for h in held if h)
+        + " (what they answer: the same body, magnet size and placement, loading, bulk ratio and "
+          "solvers, heights inside their range; G, the silicone, the grade and M_z, the chip "
+          "and everything else are exact rescalings). "
+        + (advice or "Compute its own DOE and models (magtact run STUDY --recompute; or "
                      "magtact doe STUDY --out DOE, then magtact fit STUDY --data DOE/doe.nc "
                      "--out MODELS, and give --models MODELS)"))
