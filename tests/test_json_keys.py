@@ -4,7 +4,8 @@ module writes.
 
 The keys are collected from real documents: the bundled MagOne answer written into a folder
 (``design.json``, ``chosen.json``, ``sensor.json``, ``budget.json``), its calibration's summary
-(``calibration.json``) and a run's manifest (``run.json``). The source of ``report/`` and
+(``calibration.json``), a run's manifest (``run.json``) and a seed study's file
+(``publication.json``, written from records of known values). The source of ``report/`` and
 ``cli/`` is then scanned (``ast``) for those keys as string literals.
 
 Files the report writes itself (``card.json``, ``explorer.json``, ``captions.json``) are its
@@ -30,17 +31,23 @@ OWN = {"card.json", "explorer.json", "captions.json"}
 #: Modules that spell keys of the collected files for a stated reason: (reason, keys).
 ALLOWED: dict[str, tuple[str, set[str]]] = {
     "report/_explorer.py": ("writes and reads explorer.json, its own file, whose design keys "
-                            "are named as in chosen.json",
+                            "are named as in chosen.json and the seed records",
                             {"H_mm", "G_kPa", "M_z_A_per_m", "standoff_mm", "t_m", "F_r_c_N",
-                             "F_z_c_N"}),
+                             "F_z_c_N", "F_r_min", "F_z_max", "Gamma_r_max", "Gamma_z_max",
+                             "theta_m"}),
     "report/_fig_explorer.py": ("draws explorer.json (report/_explorer.py's file)",
-                                {"H_mm", "G_kPa", "F_z_c_N"}),
-    "report/_labels.py": ("the display name of a symbol (t_m), one home for every label",
-                          {"t_m"}),
-    "report/_publication.py": ("reads publication.json of magtact.publication, whose keys are "
-                               "named as these", {"G_kPa", "wall_time_s"}),
-    "report/_fig_publication.py": ("draws publication.json of magtact.publication",
-                                   {"H_mm", "t_m"}),
+                                {"H_mm", "G_kPa", "F_z_c_N", "F_z_max"}),
+    "report/_labels.py": ("the display name of a symbol (t_m, G_star, theta_m), one home for "
+                          "every label", {"t_m", "G_star", "theta_m"}),
+    "report/_fig_metamodel.py": ("the names of the force models, which also key the accuracy "
+                                 "of publication.json's records", {"f_r", "f_z"}),
+    "report/_card.py": ("names the seed-spread figures of publication.json it shows on the "
+                        "card (magtact.publication's figure names)",
+                        {"H_star", "G_star", "Gamma_r_orig", "Gamma_r_star", "Gamma_z_orig",
+                         "Gamma_z_star", "sigma_Fr_star", "sigma_Fz_star"}),
+    "cli/_budget.py": ("checks the held-out accuracy figures of publication.json's spread "
+                       "that --seeds takes (magtact.publication's figure names)",
+                       {"acc_f_r", "acc_f_z"}),
 }
 
 
@@ -76,6 +83,7 @@ def written_keys(tmp_path_factory, magone_design) -> dict[str, set[str]]:
         "id", "study", "magtact run", "now", stages=[StageRecord("doe", "DOE", "ok", 1.0)],
         doe_source="bundled", wall_time_s=2.0, interrupted="KeyboardInterrupt",
         finished="now").to_json()
+    docs["publication.json"] = _publication(tmp_path_factory.mktemp("publication"))
     out: dict[str, set[str]] = {}
     for name, doc in docs.items():
         if name in OWN:
@@ -84,6 +92,23 @@ def written_keys(tmp_path_factory, magone_design) -> dict[str, set[str]]:
             if scanned(k):
                 out.setdefault(k, set()).add(name)
     return out
+
+
+def _publication(folder: Path) -> dict:
+    """``publication.json`` of a seed study of known records (no GP fit), with a failed fit,
+    an infeasible choice and the chip's σ_F."""
+    from magtact.publication import Reproduction, comparison, spread
+    from magtact.study import load_study
+    from test_publication_report import _record
+
+    records = [_record("jacobian", 0, 1.0), _record("published", 0, 0.5),
+               {"definition": "published", "seed": 1, "ok": False, "message": "no model"}]
+    records[0]["chosen"] |= {"F_r_c_N": 0.1, "F_z_c_N": 1.0} | {
+        f"sigma_F{c}_{w}_mN": 1.0 for c in "rz" for w in ("0", "worst")}
+    records[1]["chosen_reference"] = {"infeasible": "no design"}
+    Reproduction(load_study("magone"), (0, 1), records, spread(records), comparison(records),
+                 1.0, 1).write(folder)
+    return json.loads((folder / "publication.json").read_text(encoding="utf-8"))
 
 
 def spelled(keys, sources: list[Path]) -> list[str]:
@@ -109,9 +134,11 @@ def sources() -> list[Path]:
 def test_the_keys_are_collected_from_every_file(written_keys):
     files = set().union(*written_keys.values())
     assert {"budget.json", "chosen.json", "design.json", "calibration.json",
-            "run.json"} <= files
+            "run.json", "publication.json"} <= files
     for key in ("at_rest_mN", "worst_mN", "smallest_pitch_mm", "Gamma_r_max_N_per_T",
-                "wall_time_s", "run_id", "F_r_mN", "sigma_F_r_mN", "g_r_N"):
+                "wall_time_s", "run_id", "F_r_mN", "sigma_F_r_mN", "g_r_N", "G_range_Pa",
+                "definition_of_study", "gamma_z_curve", "dF_z_rel", "max_over_min",
+                "scale_free", "theta_rad"):
         assert key in written_keys, key
 
 

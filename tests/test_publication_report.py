@@ -5,7 +5,15 @@ import json
 import numpy as np
 import pytest
 
-from magtact.publication import Reproduction, comparison, spread
+from magtact.publication import (
+    Conditioning,
+    PublicationFile,
+    Reproduction,
+    SeedRecord,
+    Sweep,
+    comparison,
+    spread,
+)
 from magtact.report import build_report, publication_figures
 from magtact.study import load_study
 
@@ -87,7 +95,7 @@ def test_resolution_range_lines_pass_through_the_origin(records, tmp_path, monke
     seen = {}
     monkeypatch.setattr(fp, "save", lambda fig, path: seen.setdefault("fig", fig) and [])
     sweep = records[0]["sweep"]
-    fp.fig_resolution_range(sweep, (10e3, 50e3), tmp_path / "rr", n_lines=3)
+    fp.fig_resolution_range(Sweep.from_json(sweep), (10e3, 50e3), tmp_path / "rr", n_lines=3)
     ax = seen["fig"].axes[0]
     assert ax.get_xlabel() == r"$F_{z,\max}$ [N]"
     solid = [ln for ln in ax.get_lines() if ln.get_linestyle() == "-"]
@@ -112,11 +120,58 @@ def test_figures_draw_records_whose_nan_were_written_as_null(records, tmp_path, 
     r["sweep"]["gamma_z_max"][2] = None
     seen = []
     monkeypatch.setattr(fp, "save", lambda fig, path: seen.append(fig) or [])
-    fp.fig_conditioning(r["conditioning"], tmp_path / "c")
-    fp.fig_gamma_over_H([r], 29.4e3, tmp_path / "g")
-    fp.fig_resolution_range(r["sweep"], (10e3, 50e3), tmp_path / "rr", n_lines=11)
+    fp.fig_conditioning(Conditioning.from_json(r["conditioning"]), tmp_path / "c")
+    fp.fig_gamma_over_H([SeedRecord.from_json(r)], 29.4e3, tmp_path / "g")
+    fp.fig_resolution_range(Sweep.from_json(r["sweep"]), (10e3, 50e3), tmp_path / "rr",
+                            n_lines=11)
     drop = seen[0].axes[1].lines[0].get_ydata()
     assert np.isnan(drop[3]) and np.allclose(np.delete(drop, 3), 10.0)
     assert np.isnan(seen[0].axes[0].lines[1].get_ydata()[4])
     gz = seen[1].axes[1].lines[0].get_ydata()
     assert np.isnan(gz[2]) and gz[1] == pytest.approx(29.4e3 * 4e-3 / 3.4)
+
+
+def test_the_file_reads_back_through_its_types(records, tmp_path):
+    """``publication.json`` reads back in SI through :class:`PublicationFile`."""
+    study = load_study("magone")
+    Reproduction(study, (0, 1), records, spread(records), comparison(records), 12.0,
+                 2).write(tmp_path)
+    doc = PublicationFile.read(tmp_path / "publication.json")
+    assert doc.study == study.name and doc.seeds == (0, 1) and doc.workers == 2
+    assert doc.G_range == tuple(study.design.G) and doc.wall_time_s == 12.0
+    assert len(doc.records) == 4 and all(r.ok for r in doc.records)
+    own = doc.reference_record()
+    assert own.definition == "jacobian" and own.seed == 0
+    assert own.original_G == pytest.approx(29.4e3)
+    assert own.chosen.H == pytest.approx(3e-3)
+    np.testing.assert_allclose(own.sweep.H, np.linspace(3e-3, 7e-3, 11))
+    assert own.conditioning.tol == 0.01 and own.gamma_z_curve.H == pytest.approx(7e-3)
+    assert doc.columns == ["jacobian/study", "jacobian/printed", "published/study",
+                           "published/printed"]
+    row = doc.comparison[0]
+    assert row.cell_text("jacobian/study") == "10"
+    assert {(f.definition, f.figure) for f in doc.spread} >= {("jacobian", "Gamma_r_orig")}
+
+
+@pytest.mark.parametrize("forged", [
+    {}, {"records": "x", "spread": [], "comparison": {}, "seeds": "abc", "gp": 3},
+    {"records": [None, {"ok": True, "sweep": {"H_mm": [1, "x"], "gamma_r_max": [1]},
+                        "original": {"G_kPa": "a"}}],
+     "comparison": [{"quantity": 1, "a/b": {"median": "x"}}],
+     "spread": {"d": {"f": {"min": "x", "n": True}}}},
+])
+def test_a_forged_file_reads_without_error(forged):
+    doc = PublicationFile.from_json(forged)
+    assert doc is not None
+    for r in doc.comparison:
+        assert r.cell_text("a/b") == "—"
+    assert PublicationFile.from_json([1]) is None
+
+
+def test_section_of_a_partial_file(tmp_path):
+    """A file with only some tables gives the section without an error."""
+    from magtact.report._publication import publication_section
+
+    (tmp_path / "publication.json").write_text(json.dumps({"spread": {}, "records": []}))
+    html = publication_section(tmp_path, None)
+    assert "0 GP seeds" in html and "— s, ? workers" in html

@@ -35,7 +35,7 @@ def reproduce_command(
 ) -> None:
     """Refit the force models with N seeds under the Jacobian and the published definition of
     Γ, rerun the optimisation, and compare with the publication (CSV, JSON, figures, report)."""
-    from ..publication import DEFINITIONS, cell_text, publication_text, reproduce
+    from ..publication import DEFINITIONS, ComparisonRow, reproduce
     from ..report import build_report, publication_figures
 
     if seeds < 1:
@@ -61,14 +61,13 @@ def reproduce_command(
     folder = out / "publication"
     table = Table(title=f"magtact and the publication ({s.name}; median [min, max] over "
                         f"{seeds} seeds)")
-    cols = [k for k in result.comparison[0] if "/" in k]
+    rows = [r for r in map(ComparisonRow.from_json, result.comparison) if r is not None]
+    cols = rows[0].columns if rows else []
     for c in ["quantity", "scale-free", "publication", *cols]:
         table.add_column(c, justify="left" if c == "quantity" else "right")
-    for r in result.comparison:
-        table.add_row(escape(f"{r['quantity']} [{r['unit']}]"),
-                      "yes" if r["scale_free"] else "no",
-                      escape(publication_text(r["publication"])),
-                      *(escape(cell_text(r[c])) for c in cols))
+    for r in rows:
+        table.add_row(escape(f"{r.quantity} [{r.unit}]"), "yes" if r.scale_free else "no",
+                      escape(r.publication_text()), *(escape(r.cell_text(c)) for c in cols))
     tables().print(table)
     console.print(f"{len(files)} files in {folder}; report {report} "
                   f"({result.wall_time_s:.0f} s, {result.workers} workers)", highlight=False)

@@ -15,6 +15,7 @@ from .._errors import MagtactError
 from .._files import write_csv, write_text
 from ..study import Study
 from ._compare import FIGURES, cell_text, comparison, publication_text, spread
+from ._file import document
 from ._seeds import DEFINITIONS, seed_study
 
 #: GP generations per force fit in the seed study. Half the design fit's budget: the study
@@ -55,14 +56,13 @@ class Reproduction:
         ``comparison.csv`` (user units) into ``out``; return the files."""
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
-        doc = {"title": "magtact and the publication", "study": self.study.name,
-               "definition_of_study": self.study.sensitivity.definition,
-               "seeds": list(self.seeds), "workers": self.workers,
-               "G_range_Pa": list(self.study.design.G),
-               "gp": {"generations": self.study.metamodel.generations,
-                      "population": self.study.metamodel.population},
-               "wall_time_s": self.wall_time_s, "spread": self.spread,
-               "comparison": self.comparison, "records": self.records}
+        doc = document(title="magtact and the publication", study=self.study.name,
+                       definition_of_study=self.study.sensitivity.definition,
+                       seeds=self.seeds, workers=self.workers, G_range=self.study.design.G,
+                       generations=self.study.metamodel.generations,
+                       population=self.study.metamodel.population,
+                       wall_time_s=self.wall_time_s, spread=self.spread,
+                       comparison=self.comparison, records=self.records)
         files = [_write(out / "publication.json", json.dumps(_finite(doc), indent=1,
                                                              ensure_ascii=False))]
         rows = [[r["definition"], r["seed"], r["ok"], r.get("fit_time_s", math.nan)]

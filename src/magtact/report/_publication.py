@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..study import to_si
+from ..publication import PublicationFile
 from ._fig_publication import (
     fig_conditioning,
     fig_gamma_over_H,
@@ -37,30 +37,21 @@ CAPTIONS = {
 }
 
 
-def _reference_record(doc: dict) -> dict | None:
-    """The record of the study's own definition and first seed (the study's own fit)."""
-    own = doc.get("definition_of_study", "jacobian")
-    recs = [r for r in doc.get("records", []) if r.get("ok")]
-    for r in recs:
-        if r["definition"] == own:
-            return r
-    return recs[0] if recs else None
-
-
 def publication_figures(folder: str | Path) -> list[Path]:
     """Draw the section's figures from ``folder/publication.json``; write ``captions.json``."""
     folder = Path(folder)
-    doc = json.loads((folder / "publication.json").read_text(encoding="utf-8"))
-    records = doc["records"]
+    doc = PublicationFile.from_json(
+        json.loads((folder / "publication.json").read_text(encoding="utf-8")))
+    records = list(doc.records) if doc is not None else []
     files = fig_seed_spread(records, folder / "seed_spread")
     files += fig_gamma_z_along_t(records, folder / "gamma_z_along_t")
-    own = _reference_record(doc)
+    own = doc.reference_record() if doc is not None else None
     if own is not None:
-        G = to_si(own["original"]["G_kPa"], "kPa")
-        files += fig_gamma_over_H(records, G, folder / "gamma_over_H")
-        files += fig_resolution_range(own["sweep"], tuple(doc["G_range_Pa"]),
-                                      folder / "resolution_range")
-        files += fig_conditioning(own["conditioning"], folder / "conditioning")
+        files += fig_gamma_over_H(records, own.original_G, folder / "gamma_over_H")
+        if own.sweep is not None and doc.G_range is not None:
+            files += fig_resolution_range(own.sweep, doc.G_range, folder / "resolution_range")
+        if own.conditioning is not None:
+            files += fig_conditioning(own.conditioning, folder / "conditioning")
     (folder / "captions.json").write_text(json.dumps(CAPTIONS, indent=1, ensure_ascii=False))
     return files
 
@@ -81,20 +72,18 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
             + (f"This run used the <b>{_e(run_definition)}</b> definition. "
                if run_definition else "") + "</p>")
     head += saturation_argument()
-    doc = _load_json(folder / "publication.json")
+    doc = PublicationFile.from_json(_load_json(folder / "publication.json"))
     if not doc:
         return (head + '<div class="missing">No seed study in this folder: run '
                 "<code>magtact reproduce --out FOLDER</code> (about ten minutes on two cores) "
                 "to add the side-by-side table and its figures.</div>")
-    cols = [k for k in doc["comparison"][0] if "/" in k] if doc["comparison"] else []
-    from ..publication import cell_text, publication_text
-
+    cols = doc.columns
     rows = "".join(
-        f'<tr><td class="l">{_e(r["quantity"])}</td><td>{_e(r["unit"])}</td>'
-        f'<td>{"yes" if r["scale_free"] else "no"}</td>'
-        f'<td>{_e(publication_text(r["publication"]))}</td>'
-        + "".join(f"<td>{_e(cell_text(r[c]))}</td>" for c in cols) + "</tr>"
-        for r in doc["comparison"])
+        f'<tr><td class="l">{_e(r.quantity)}</td><td>{_e(r.unit)}</td>'
+        f'<td>{"yes" if r.scale_free else "no"}</td>'
+        f'<td>{_e(r.publication_text())}</td>'
+        + "".join(f"<td>{_e(r.cell_text(c))}</td>" for c in cols) + "</tr>"
+        for r in doc.comparison)
     labels = "".join(f"<th>magtact, {_e(c.split('/')[0])}, G "
                      f"{'as the study reads it' if c.endswith('study') else 'as printed'}</th>"
                      for c in cols)
@@ -102,10 +91,10 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
              f"<th>scale-free</th><th>publication (G as printed)</th>{labels}</tr>{rows}"
              "</table>")
     spread_rows = "".join(
-        f'<tr><td class="l">{_e(d)}</td><td class="l">{_e(f["label"])}</td>'
-        f'<td>{_e(f["unit"])}</td><td>{f.get("n", "")}</td><td>{_num(f.get("min"))}</td>'
-        f'<td>{_num(f.get("max"))}</td><td>{_num(f.get("max_over_min"))}</td></tr>'
-        for d, figs in doc["spread"].items() for f in figs.values() if "min" in f)
+        f'<tr><td class="l">{_e(f.definition)}</td><td class="l">{_e(f.label)}</td>'
+        f'<td>{_e(f.unit)}</td><td>{"" if f.n is None else f.n}</td><td>{_num(f.min)}</td>'
+        f'<td>{_num(f.max)}</td><td>{_num(f.max_over_min)}</td></tr>'
+        for f in doc.spread)
     spread = ('<table><tr><th class="l">definition</th><th class="l">figure</th><th>unit</th>'
               "<th>seeds</th><th>min</th><th>max</th><th>max / min</th></tr>"
               f"{spread_rows}</table>")
@@ -113,9 +102,9 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
     figs = "".join(_figure(folder / f"{k}.png", c) for k, c in captions.items()
                    if (folder / f"{k}.png").is_file())
     text = ("<p>Median [min, max] over "
-            f"{len(doc['seeds'])} GP seeds per definition{_budget(doc)} "
-            f"({doc['wall_time_s']:.0f} s, {doc['workers']} workers). Rows marked scale-free do "
-            "not depend on how G is "
+            f"{len(doc.seeds)} GP seeds per definition{_budget(doc)} "
+            f"({_seconds(doc.wall_time_s)} s, {'?' if doc.workers is None else doc.workers} "
+            "workers). Rows marked scale-free do not depend on how G is "
             "read: they are where magtact and the publication can be compared directly. "
             "Every force and Γ is G times a function of H, so each height has a fixed ratio of "
             "worst sensitivity to measurable force (figure <i>resolution–range</i>): choosing "
@@ -152,10 +141,13 @@ def saturation_argument() -> str:
         "card).</p>")
 
 
-def _budget(doc: dict) -> str:
-    gp = doc.get("gp") or {}
-    return (f" (GP: {gp['generations']} generations, population {gp['population']})"
-            if "generations" in gp and "population" in gp else "")
+def _budget(doc: PublicationFile) -> str:
+    return (f" (GP: {doc.generations} generations, population {doc.population})"
+            if doc.generations is not None and doc.population is not None else "")
+
+
+def _seconds(v: float) -> str:
+    return f"{v:.0f}" if np.isfinite(v) else "—"
 
 
 def _num(v) -> str:
