@@ -21,8 +21,7 @@ Steps (each writes its part of ``bench/results/broad.json``)::
     python bench/bench_broad.py quick        # one design's answer from the broad data, timed
 
 ``doe`` runs ``magtact doe`` through the job cache ``bench/results/broad_cache`` (committed: a
-rerun reuses every finished path and computes the stalled ones again). ``MAGTACT_BROAD_SRC``
-may name another ``src`` folder to run (the environment's ``PYTHONPATH``).
+rerun reuses every finished path and computes the stalled ones again).
 """
 
 from __future__ import annotations
@@ -40,15 +39,13 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
-STUDIES = {"3x1": HERE / "magtact_broad_3x1.toml", "H_m": HERE / "magtact_broad.toml",
-           "6mm": HERE / "magtact_broad_6mm.toml",
-           "full": HERE / "magtact_broad_full.toml"}
+STUDIES = {"full": HERE / "magtact_broad_full.toml"}
 DOE_DIRS = {k: RESULTS / f"broad_{k}_doe" for k in STUDIES}
 FIT_DIRS = {k: RESULTS / f"broad_{k}_fit" for k in STUDIES}
 CACHE = RESULTS / "broad_cache"
 OUT = RESULTS / "broad.json"
-SHIP_DATA = ROOT / "src" / "magtact" / "doe" / "data" / "broad_doe.nc"
-SHIP_FIT = ROOT / "src" / "magtact" / "metamodel" / "data" / "broad"
+SHIP_DATA = ROOT / "src" / "magtact" / "doe" / "data"
+SHIP_FIT = ROOT / "src" / "magtact" / "metamodel" / "data"
 
 
 
@@ -66,14 +63,6 @@ def _update(section: str, values: dict) -> None:
     out[section] = values
     RESULTS.mkdir(exist_ok=True)
     OUT.write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
-
-
-def _env() -> dict:
-    env = dict(os.environ)
-    src = os.environ.get("MAGTACT_BROAD_SRC")
-    if src:
-        env["PYTHONPATH"] = src
-    return env
 
 
 def _magtact(*args: str) -> list[str]:
@@ -94,16 +83,16 @@ def _cache_cost() -> dict:
             "first_to_last_completion_s": stamps[-1] - stamps[0] if stamps else None}
 
 
-def doe(which: str, workers: int, section: str | None = None) -> None:
+def doe(which: str, workers: int) -> None:
     import xarray as xr
 
-    section = section or f"doe_{which}"
+    section = f"doe_{which}"
     out = DOE_DIRS[which]
     cmd = _magtact("doe", str(STUDIES[which]), "--out", str(out), "--workers", str(workers),
                    "--cache", str(CACHE))
     load_start = os.getloadavg()
     start = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=ROOT, env=_env())
+    proc = subprocess.run(cmd, cwd=ROOT)
     wall = time.perf_counter() - start
     data = _doe_file(which)
     if proc.returncode and data.name != "doe_partial.nc":
@@ -113,9 +102,7 @@ def doe(which: str, workers: int, section: str | None = None) -> None:
         sizes = {k: int(v) for k, v in ds.sizes.items()}
     jobs = [j for j in json.loads(attrs["jobs"]) if "job_wall_time" in j]
     _update(section, {
-        "command": (f"python bench/bench_broad.py "
-                    f"{'assemble' if section == 'assemble' else 'doe'} --study {which} "
-                    f"--workers {workers}"),
+        "command": f"python bench/bench_broad.py doe --study {which} --workers {workers}",
         "magtact_command": _command(cmd),
         "study": str(STUDIES[which].relative_to(ROOT)),
         "workers": workers, "wall_time_s": wall, "load_average_at_start": load_start,
@@ -234,7 +221,8 @@ def split() -> None:
             wall = time.perf_counter() - start
             record[name] = {
                 "magtact_command": _command(cmd), "wall_time_s": wall,
-                "paths_stalled": len(stalled), "points_missing": int(ds["F_z"].isel(G=0).isnull().sum()),
+                "paths_stalled": len(stalled),
+                "points_missing": int(ds["F_z"].isel(G=0).isnull().sum()),
                 "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
                              ["accuracy"] for k in ("f_r", "f_z")}}
             print(name, f"{wall:.0f} s", {k: v["test"]["max_abs_err_over_range"]
@@ -245,7 +233,7 @@ def split() -> None:
 
 def ship_sizes() -> None:
     """Copy each size's data set and fit (models, metamodels.md, PNG figures) into the package."""
-    data_dir, fit_root = SHIP_DATA.parent, SHIP_FIT.parent
+    data_dir, fit_root = SHIP_DATA, SHIP_FIT
     sizes = {}
     for folder in sorted(p for p in SIZE_DIR.iterdir() if (p / "doe.nc").is_file()):
         data = data_dir / f"broad_{folder.name}_doe.nc"
@@ -263,21 +251,6 @@ def ship_sizes() -> None:
                               "fit_bytes": sum(p.stat().st_size for p in fit_dir.iterdir())}
     _update("ship", {"command": "python bench/bench_broad.py ship_sizes", "sizes": sizes})
     print(json.dumps(sizes, indent=1))
-
-
-def ship(which: str) -> None:
-    shutil.copy2(_doe_file(which), SHIP_DATA)
-    SHIP_FIT.mkdir(parents=True, exist_ok=True)
-    for src in sorted(FIT_DIRS[which].iterdir()):
-        if src.suffix in (".json", ".md", ".png", ".svg") and not src.name.startswith("."):
-            shutil.copy2(src, SHIP_FIT / src.name)
-    sizes = {"data_bytes": SHIP_DATA.stat().st_size,
-             "fit_bytes": sum(p.stat().st_size for p in SHIP_FIT.iterdir())}
-    _update("ship", {"command": f"python bench/bench_broad.py ship --study {which}",
-                     "study": str(STUDIES[which].relative_to(ROOT)),
-                     "data": str(SHIP_DATA.relative_to(ROOT)),
-                     "fit": str(SHIP_FIT.relative_to(ROOT)), **sizes})
-    print(sizes)
 
 
 def whatif() -> None:
@@ -521,17 +494,15 @@ def magone() -> None:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("step", choices=("doe", "assemble", "fit", "ship", "whatif", "mesh", "runs",
-                                    "quick", "magone", "split", "ship_sizes"))
+    p.add_argument("step", choices=("doe", "fit", "whatif", "mesh", "runs", "quick", "magone",
+                                    "split", "ship_sizes"))
     p.add_argument("--study", choices=tuple(STUDIES), default="full")
     p.add_argument("--workers", type=int, default=1)
     a = p.parse_args()
     if a.step == "doe":
         doe(a.study, a.workers)
-    elif a.step == "assemble":
-        doe(a.study, a.workers, section="assemble")
-    elif a.step in ("fit", "ship"):
-        {"fit": fit, "ship": ship}[a.step](a.study)
+    elif a.step == "fit":
+        fit(a.study)
     else:
         {"whatif": whatif, "mesh": mesh, "runs": runs, "quick": quick,
          "magone": magone, "split": split, "ship_sizes": ship_sizes}[a.step]()

@@ -572,8 +572,8 @@ def broad_section(r: Results) -> list[str]:
                 f"{len(failed)} that stall before t = 1 (no progress of the Newton iterations, "
                 "as in §3 of the method): each keeps the load levels it reached, NaN beyond, and "
                 "the fit leaves the missing levels out:", ""]
-        out += [f"Those {len(failed)} paths took {(d['path_job_wall_time_s_sum'] - c['path_job_wall_time_s_sum']) / 60:.0f} "
-                f"min more, and the whole run {d['wall_time_s'] / 60:.0f} min with "
+        stalled_s = d["path_job_wall_time_s_sum"] - c["path_job_wall_time_s_sum"]
+        out += [f"Those {len(failed)} paths took {stalled_s / 60:.0f} min more, and the whole run {d['wall_time_s'] / 60:.0f} min with "
                 f"{d['workers']} workers (every finished path from the cache).", ""]
         out += table(["magnet [mm]", "θ [rad]", "H [mm]", "last level kept"],
                      [[f"{f['D_mm']:.3g} × {f['H_m_mm']:.3g}", f"{f['theta_rad']:.3g}",

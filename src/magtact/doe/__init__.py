@@ -30,8 +30,8 @@ from ._executor import default_workers
 from ._run import DOEFailed, JobFailure, RunStats, run_doe
 
 __all__ = [
-    "Domain", "check_design", "domain_of", "BROAD_SIZES", "BUNDLED_NAMES", "FORCE_SETTINGS", "data_study",
-    "rescaled_for",
+    "Domain", "check_design", "domain_of", "BROAD_SIZES", "BUNDLED_NAMES", "FORCE_SETTINGS",
+    "data_study", "rescaled_for",
     "DOE_SECTIONS", "ERROR_VARIABLES", "GEOMETRY_NAMES", "FINER_MESH", "CacheCorruptWarning",
     "CacheError", "DOEFailed", "JobCache", "JobFailure", "RunStats",
     "attach_discretisation_error", "bundled_for", "differences", "error_points", "geometry_dims",

@@ -15,7 +15,7 @@ import xarray as xr
 from rich.console import Console
 
 from .._errors import MagtactError
-from ..study import Study
+from ..study import Study, from_si
 from ._cache import JobCache
 from ._dataset import GEOMETRY_NAMES, assemble
 from ._discretisation import FINER_MESH, attach_discretisation_error, error_points
@@ -143,7 +143,7 @@ def _run_geometry(study: Study, **kw) -> xr.Dataset:
         try:
             part = run_doe(study.at(**geometry), **kw)
         except DOEFailed as exc:
-            where = ", ".join(f"{k}={v * 1e3:.4g} mm" for k, v in geometry.items())
+            where = ", ".join(f"{k}={from_si(v, 'mm'):.4g} mm" for k, v in geometry.items())
             failures += [replace(f, label=f"{f.label}, {where}") for f in exc.failures]
             part = exc.dataset
         # one new dimension per geometric variable, after the DOE's own (any number of them)

@@ -42,7 +42,8 @@ from ._select import Selection, select_metamodels
 from ._symbols import H, feature_jacobian, features, p, q, q_hessian, t, theta
 
 __all__ = [
-    "MAX_OMITTED", "POOR_OVER_RANGE", "POOR_R2", "SHIPPED", "FitQuality", "fit_quality", "fit_quality_rows",
+    "MAX_OMITTED", "POOR_OVER_RANGE", "POOR_R2", "SHIPPED", "FitQuality", "fit_quality",
+    "fit_quality_rows",
     "find_shipped", "shipped_models",
     "Accuracy", "ComposedForce", "ExactField", "FieldForceModel", "FitReport", "FitResult",
     "H", "Metamodel", "ModelSet", "OPERATOR_SETS", "RESPONSES", "Response", "Selection",
