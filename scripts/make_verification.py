@@ -573,8 +573,8 @@ def broad_section(r: Results) -> list[str]:
                 "as in §3 of the method): each keeps the load levels it reached, NaN beyond, and "
                 "the fit leaves the missing levels out:", ""]
         stalled_s = d["path_job_wall_time_s_sum"] - c["path_job_wall_time_s_sum"]
-        out += [f"Those {len(failed)} paths took {stalled_s / 60:.0f} min more, and the whole run {d['wall_time_s'] / 60:.0f} min with "
-                f"{d['workers']} workers (every finished path from the cache).", ""]
+        out += [f"Those {len(failed)} paths took {stalled_s / 60:.0f} min more, and the whole "
+                f"run {d['wall_time_s'] / 60:.0f} min with {d['workers']} workers (every finished path from the cache).", ""]
         out += table(["magnet [mm]", "θ [rad]", "H [mm]", "last level kept"],
                      [[f"{f['D_mm']:.3g} × {f['H_m_mm']:.3g}", f"{f['theta_rad']:.3g}",
                        f"{f['H_mm']:.3g}", f"t = {f['t_reached']:.3g}"] for f in failed])

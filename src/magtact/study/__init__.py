@@ -46,6 +46,6 @@ __all__ = [
     "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
     "Design", "HallChip", "HallPreset", "Loading", "Magnet", "Magnetics", "Material", "Mechanics",
     "PHYSICAL", "Requirements", "Sensitivity", "Study", "StudyError", "check_si", "checked_si",
-    "from_si", "hall_chip", "kpa", "load_study", "magone", "magone_printed", "mm", "mt", "study_from_dict",
-    "to_si",
+    "from_si", "hall_chip", "kpa", "load_study", "magone", "magone_printed", "mm", "mt",
+    "study_from_dict", "to_si",
 ]
