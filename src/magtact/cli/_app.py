@@ -155,8 +155,8 @@ def renamed(old: str, new: str, usage: str | None = None):
 #: The optional STUDY argument of every command: a TOML file or a preset name.
 StudyArg = Annotated[
     str | None,
-    typer.Argument(help="Study TOML file or preset ('magone', 'magone-printed'); "
-                        "default: the built-in MagOne study."),
+    typer.Argument(help="Study TOML file or preset ('magone', 'magone-publication', "
+                        "'magone-printed'); default: the built-in MagOne study."),
 ]
 
 

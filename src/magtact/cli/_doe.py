@@ -35,7 +35,11 @@ def doe_command(
                                      "(err_F_z, err_F_r; 5 is enough for a bilinear model and "
                                      "its check).")] = 0,
 ) -> None:
-    """Run STUDY's full-factorial DOE; write OUT/doe.nc (netCDF) and OUT/doe.csv (user units)."""
+    """Run STUDY's full-factorial DOE; write OUT/doe.nc (netCDF) and OUT/doe.csv (user units).
+
+    If jobs fail, the others stay cached and OUT/doe_partial.nc holds what finished (NaN on the
+    failed paths, a stalled path's levels before the stall kept); magtact fit accepts it.
+    """
     from .._files import write_text
     from ..doe import DOEFailed, run_doe, save_dataset, write_csv
     from ..metamodel import MAX_OMITTED
