@@ -192,15 +192,43 @@ def read_text_capped(path: str | os.PathLike, max_bytes: int) -> str:
                              f"{exc.start}); save it as UTF-8") from None
 
 
-def read_json_capped(path: str | os.PathLike, max_bytes: int):
+#: Deepest nesting of arrays and objects in a JSON file magtact reads (its own files nest a
+#: few levels; a forged one of thousands would exhaust the parser's recursion).
+MAX_JSON_DEPTH = 64
+
+#: Largest file of each kind that magtact reads back, its own outputs included [bytes]: JSON
+#: records and summaries, figures (PNG, embedded in the report), text (notes, TXT, TEX, a
+#: stage's stamp), tables (CSV) and the study file of a results folder.
+MAX_BYTES = {"json": 8 << 20, "figure": 8 << 20, "text": 1 << 20, "table": 8 << 20,
+             "stamp": 4096, "toml": 1 << 20}
+
+
+def json_depth(doc) -> int:
+    """The nesting depth of a parsed JSON document (a number or a string: 0), counted without
+    recursion."""
+    depth, stack = 0, [(doc, 1)]
+    while stack:
+        node, level = stack.pop()
+        if isinstance(node, dict):
+            node = list(node.values())
+        elif not isinstance(node, list):
+            continue
+        depth = max(depth, level)
+        stack.extend((child, level + 1) for child in node if isinstance(child, (dict, list)))
+    return depth
+
+
+def read_json_capped(path: str | os.PathLike, max_bytes: int,
+                     max_depth: int = MAX_JSON_DEPTH):
     """The JSON document of the file ``path`` (read by :func:`read_text_capped`); constants
-    such as ``NaN`` and ``Infinity``, which are not JSON, are refused.
+    such as ``NaN`` and ``Infinity``, which are not JSON, are refused, and so is nesting deeper
+    than ``max_depth``.
 
     Raises
     ------
     UnreadableFile
-        If the file is unreadable (as :func:`read_text_capped`) or is not JSON (the message
-        gives the line and column).
+        If the file is unreadable (as :func:`read_text_capped`), is not JSON (the message
+        gives the line and column) or nests too deeply.
     """
     text = read_text_capped(path, max_bytes)
 
@@ -208,13 +236,36 @@ def read_json_capped(path: str | os.PathLike, max_bytes: int):
         raise ValueError(f"{name} is not a JSON number")
 
     try:
-        return json.loads(text, parse_constant=constant)
+        doc = json.loads(text, parse_constant=constant)
     except json.JSONDecodeError as exc:
         raise UnreadableFile(f"is not JSON: {exc.msg} at line {exc.lineno}, column "
                              f"{exc.colno}") from None
-    except (ValueError, RecursionError) as exc:
-        what = "nests too deeply" if isinstance(exc, RecursionError) else str(exc)
-        raise UnreadableFile(f"is not JSON: {what}") from None
+    except RecursionError:
+        raise UnreadableFile(f"nests arrays or objects more than {max_depth} deep") from None
+    except ValueError as exc:
+        raise UnreadableFile(f"is not JSON: {exc}") from None
+    if json_depth(doc) > max_depth:
+        raise UnreadableFile(f"nests arrays or objects more than {max_depth} deep")
+    return doc
+
+
+def read_result(path: str | os.PathLike, kind: str):
+    """A file magtact reads back (its own outputs included) through :func:`read_bytes_capped`,
+    capped at :data:`MAX_BYTES` of ``kind``: ``"json"`` → the document (at most
+    :data:`MAX_JSON_DEPTH` deep), ``"figure"`` → bytes, ``"text"``, ``"stamp"``, ``"table"``,
+    ``"toml"`` → text (UTF-8).
+
+    Raises
+    ------
+    UnreadableFile
+        With the reason (not found, not a regular file, too large, not UTF-8, not JSON).
+    """
+    cap = MAX_BYTES[kind]
+    if kind == "json":
+        return read_json_capped(path, cap)
+    if kind == "figure":
+        return read_bytes_capped(path, cap)
+    return read_text_capped(path, cap)
 
 
 # ---- a result file read back: each value of the type its writer gives it, else nothing ----

@@ -44,7 +44,17 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from ._errors import MagtactError
-from ._files import json_dict, json_list, json_number, json_text, write_json, write_text
+from ._files import (
+    MAX_BYTES,
+    UnreadableFile,
+    json_dict,
+    json_list,
+    json_number,
+    json_text,
+    read_json_capped,
+    write_json,
+    write_text,
+)
 
 #: The lock file of a results folder.
 LOCK = ".magtact-lock"
@@ -76,6 +86,13 @@ class NotMagtactsFile(MagtactError):
     """A file or folder in the way of an output was not written by magtact (or was changed)."""
 
 
+def _read_json(path: Path):
+    """A JSON file of the folder's bookkeeping through the bounded reader (a regular file of
+    at most :data:`magtact._files.MAX_BYTES` ``["json"]``, nested at most
+    :data:`magtact._files.MAX_JSON_DEPTH` deep); :class:`UnreadableFile` otherwise."""
+    return read_json_capped(path, MAX_BYTES["json"])
+
+
 # ---- the lock --------------------------------------------------------------------------------
 def _now() -> str:
     return datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
@@ -84,10 +101,10 @@ def _now() -> str:
 def _holder_text(path: Path) -> str:
     """The holder recorded in a lock file, in words."""
     try:
-        info = json.loads(path.read_text(encoding="utf-8"))
+        info = _read_json(path)
         pid, host = int(info["pid"]), str(info["host"])
         started, command = str(info["started"]), str(info.get("command", ""))
-    except (OSError, ValueError, KeyError, TypeError):
+    except (UnreadableFile, ValueError, KeyError, TypeError):
         return "another magtact process (its details are not written yet)"
     alive = _pid_alive(pid) if host == platform.node() else None
     state = "" if alive is not False else ", no longer running: a worker it started still holds"
@@ -248,8 +265,8 @@ def _stamp_doc(folder: Path) -> dict:
     run's or its report's). Empty tables if there is none or it is unreadable."""
     doc = {"run_id": None, "files": {}, "commands": {}}
     try:
-        data = json.loads((folder / OWNED).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        data = _read_json(folder / OWNED)
+    except UnreadableFile:
         return doc
     if not isinstance(data, dict):
         return doc
@@ -436,14 +453,14 @@ def recover(folder: Path) -> bool:
     """Finish a swap that a killed run, or the placing of outputs that a killed command, left
     half done (call with the lock held); True if one was finished."""
     try:
-        journal = json.loads((folder / JOURNAL).read_text(encoding="utf-8"))
+        if not os.path.lexists(folder / JOURNAL):
+            return False
+        journal = _read_json(folder / JOURNAL)
         if isinstance(journal, dict) and journal.get("kind") == "place":
             return _recover_place(folder, journal)
         ok = all(isinstance(journal.get(k), str) for k in ("staging", "old")) and all(
             isinstance(journal.get(k), list) for k in ("names", "remove"))
-    except FileNotFoundError:
-        return False
-    except (OSError, ValueError, AttributeError):
+    except (UnreadableFile, AttributeError):
         ok = False
     if not ok or not _plain_names([journal["staging"], journal["old"], *journal["names"],
                                    *journal["remove"]]):
@@ -585,8 +602,8 @@ def interrupted_runs(folder: str | os.PathLike, held: bool = False) -> list[dict
     out = []
     for p in sorted(folder.glob(f"{STAGING}*")):
         try:
-            manifest = json.loads((p / MANIFEST).read_text(encoding="utf-8"))
-        except (OSError, ValueError, RecursionError):
+            manifest = _read_json(p / MANIFEST)
+        except UnreadableFile:
             manifest = None
         out.append({"staging": p.name, "manifest": RunManifest.from_json(manifest)})
     return out
@@ -623,8 +640,8 @@ def _governs(parent: Path, rel: str) -> bool:
         return True
     if os.path.lexists(parent / LOCK) and in_use(parent):
         try:
-            writes = json.loads((parent / LOCK).read_text(encoding="utf-8"))["writes"]
-        except (OSError, ValueError, KeyError, TypeError):
+            writes = _read_json(parent / LOCK)["writes"]
+        except (UnreadableFile, KeyError, TypeError):
             writes = []
         return isinstance(writes, list) and rel.split("/", 1)[0] in writes
     return False

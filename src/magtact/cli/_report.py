@@ -17,4 +17,8 @@ def report_command(
     """Rebuild FOLDER/report.html from the files in FOLDER (absent stages are reported)."""
     from ..report import build_report
 
-    console.print(f"wrote {build_report(folder)}", highlight=False)
+    damaged: dict[str, str] = {}
+    path = build_report(folder, damaged=damaged)
+    for name, problem in sorted(damaged.items()):
+        console.print(f"left out {name}: {problem}", highlight=False, markup=False)
+    console.print(f"wrote {path}", highlight=False)

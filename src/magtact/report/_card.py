@@ -3,7 +3,6 @@ and plain words (no internal keys; the JSON keeps every number)."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from .._files import write_json
@@ -241,21 +240,49 @@ def read_card(folder, publication=None) -> dict | None:
     (default ``../publication``, written by ``magtact reproduce`` into the same results folder)
     when that holds the same study, else a row saying how to measure it.
     """
+    from ._fragments import load_json
+
     folder = Path(folder)
-    card = _load(folder / "card.json")
-    if not isinstance(card, dict) or not isinstance(card.get("rows"), list):
+    card = load_json(folder / "card.json", card_problem)
+    if card is None:
         return None
     publication = folder.parent / "publication" if publication is None else Path(publication)
-    pub = _load(publication / "publication.json")
-    card["rows"] = card["rows"] + spread_rows(pub, card, len(card.get("header", [])))
+    pub = load_json(publication / "publication.json")
+    card["rows"] = card["rows"] + spread_rows(pub, card, len(card["header"]))
     return card
 
 
-def _load(path: Path):
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
+#: Most columns (designs) and rows a card may hold (the writer gives two designs and a few
+#: tens of rows).
+MAX_CARD_COLUMNS = 16
+MAX_CARD_ROWS = 500
+
+
+def card_problem(card) -> str | None:
+    """What is wrong with a card document's shape (None where it is the shape
+    :func:`write_card` writes): a header of at most :data:`MAX_CARD_COLUMNS` texts, at most
+    :data:`MAX_CARD_ROWS` rows of as many texts, a verdict of requirement objects and parts
+    of [label, value] pairs where given."""
+    if not isinstance(card, dict):
+        return "is not a design card (a JSON object)"
+    header, rows = card.get("header"), card.get("rows")
+    if not isinstance(header, list) or not 1 <= len(header) <= MAX_CARD_COLUMNS or not all(
+            isinstance(h, str) for h in header):
+        return f"header must be 1 to {MAX_CARD_COLUMNS} texts"
+    if not isinstance(rows, list) or len(rows) > MAX_CARD_ROWS:
+        return f"rows must be a list of at most {MAX_CARD_ROWS} rows"
+    for k, r in enumerate(rows):
+        if not isinstance(r, list) or len(r) != len(header) or not all(
+                isinstance(c, str) for c in r):
+            return f"row {k + 1} must be {len(header)} texts, one per header column"
+    verdict, parts = card.get("verdict", []), card.get("parts", [])
+    if not isinstance(verdict, list) or len(verdict) > MAX_CARD_ROWS or not all(
+            isinstance(v, dict) for v in verdict):
+        return f"verdict must be a list of at most {MAX_CARD_ROWS} requirements"
+    if not isinstance(parts, list) or len(parts) > MAX_CARD_ROWS or not all(
+            isinstance(q, list) and len(q) == 2 for q in parts):
+        return f"parts must be a list of at most {MAX_CARD_ROWS} [label, value] pairs"
+    return None
 
 
 #: Seed-study figures on the card: label, unit, key for the chosen and for the original design.
@@ -270,28 +297,61 @@ SPREAD: tuple[tuple[str, str, str, str | None], ...] = (
 
 
 def spread_rows(publication: dict | None, card: dict, columns: int) -> list[list[str]]:
-    """Rows of the card for the seed spread (min – max over the GP seeds of a seed study)."""
+    """Rows of the card for the seed spread (min – max over the GP seeds of a seed study); a
+    figure whose count, minimum or maximum is not a number is left out."""
+    from .._files import json_dict, json_text
+
     pad = max(columns - 2, 0)
     figs = None
     if isinstance(publication, dict) and publication.get("study") == card.get("study"):
-        figs = (publication.get("spread") or {}).get(card.get("definition"))
+        figs = json_dict(publication.get("spread")).get(json_text(card.get("definition")))
     if not isinstance(figs, dict):
         return [["seed spread of the answer",
                  "not measured: `magtact reproduce` refits the models with 8 GP seeds and "
                  "adds it here", *[""] * pad]]
     rows = []
     for label, unit, chosen, original in SPREAD:
-        f = figs.get(chosen) or {}
-        if not f.get("n"):
+        f = _spread(figs.get(chosen))
+        if f is None:
             continue
         cells = [_range(f, unit)]
         if pad:
-            o = figs.get(original) if original else None
-            cells.append(_range(o, unit) if o and o.get("n") else "(fixed)")
-        rows.append([f"{label} over {f['n']} GP seeds (min – max)", *cells,
+            o = _spread(figs.get(original)) if original else None
+            cells.append(_range(o, unit) if o is not None else "(fixed)")
+        rows.append([f"{label} over {f[0]:.0f} GP seeds (min – max)", *cells,
                      *[""] * max(pad - 1, 0)])
     return rows
 
 
-def _range(f: dict, unit: str) -> str:
-    return f"{f['min']:.3g} – {f['max']:.3g} {unit}"
+def _spread(f) -> tuple[float, float, float] | None:
+    """(n, min, max) of one seed-spread figure, or None where it is not three numbers, n > 0."""
+    from .._files import json_dict, json_number
+
+    f = json_dict(f)
+    n, lo, hi = (json_number(f.get(k)) for k in ("n", "min", "max"))
+    return None if None in (n, lo, hi) or not n > 0 else (n, lo, hi)
+
+
+def _range(f: tuple[float, float, float], unit: str) -> str:
+    return f"{f[1]:.3g} – {f[2]:.3g} {unit}"
+
+
+def infeasible_card(answer, study=None) -> dict:
+    """The card of a specification no design meets (:class:`magtact.designer.Infeasible`): the
+    verdict (each requirement with the best figure reached), no parts, and rows saying what
+    binds and what to relax; ``infeasible`` keeps the answer's JSON."""
+    from .._display import infeasible_rows
+
+    doc = answer.to_json()
+    rows = [[k, v] for k, v in infeasible_rows(doc)[1][len(doc["verdict"]):]]
+    card = {"verdict": doc["verdict"], "parts": [], "header": ["", "best reachable"],
+            "rows": rows, "infeasible": doc}
+    if study is not None:
+        card |= {"study": study.name, "definition": study.sensitivity.definition}
+    return card
+
+
+def write_infeasible_card(answer, folder, study=None) -> Path:
+    """Write :func:`infeasible_card` as ``card.json`` into ``folder``."""
+    return write_json(Path(folder) / "card.json", infeasible_card(answer, study), indent=1,
+                      ensure_ascii=False)

@@ -122,11 +122,84 @@ def write_explorer(result, folder: str | Path) -> Path | None:
     return write_json(Path(folder) / "explorer.json", data, indent=1, ensure_ascii=False)
 
 
+#: Most heights and moduli of the grid, and most Pareto points, an explorer file may hold (the
+#: writer gives N_H + 2, N_G + 2 and the Pareto set of the optimiser's population).
+MAX_LEVELS = 64
+MAX_PARETO = 10_000
+#: Keys of every grid cell (numbers; ``sat_F_z`` may be null).
+CELL_NUMBERS = ("H_mm", "F_z_max", "F_r_min", "Gamma_r_max", "Gamma_z_max")
+PARETO_NUMBERS = ("H_mm", "G_kPa", "Gamma_r_max", "Gamma_z_max", "F_r_min", "F_z_max")
+
+
+def _number(v) -> bool:
+    import math
+
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def explorer_problem(data) -> str | None:
+    """What is wrong with an explorer document's shape (None where it is the shape
+    :func:`explorer_data` writes): the format, the levels (numbers, at most
+    :data:`MAX_LEVELS`), a grid of exactly one cell per height and modulus, the chosen and the
+    original design, the constraints, and at most :data:`MAX_PARETO` Pareto points."""
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        return f"is not an explorer file (format {FORMAT})"
+    H, G, grid = data.get("H_mm"), data.get("G_kPa"), data.get("grid")
+    for name, levels in (("H_mm", H), ("G_kPa", G)):
+        if not isinstance(levels, list) or not 1 <= len(levels) <= MAX_LEVELS or not all(
+                _number(v) and v > 0 for v in levels):
+            n = len(levels) if isinstance(levels, list) else "no"
+            return (f"{name} must be 1 to {MAX_LEVELS} positive numbers (the file has {n} "
+                    "entries or other values)")
+    if not isinstance(grid, list) or len(grid) != len(H) or not all(
+            isinstance(row, list) and len(row) == len(G) for row in grid):
+        return f"grid must be {len(H)} rows of {len(G)} cells (one per H_mm and G_kPa)"
+    for row in grid:
+        for cell in row:
+            if not isinstance(cell, dict) or not all(_number(cell.get(k))
+                                                     for k in CELL_NUMBERS):
+                return f"a grid cell lacks one of the numbers {', '.join(CELL_NUMBERS)}"
+            if not isinstance(cell.get("saturates_in_region"), bool):
+                return "a grid cell's saturates_in_region is not true or false"
+            if not (cell.get("sat_F_z") is None or _number(cell.get("sat_F_z"))):
+                return "a grid cell's sat_F_z is not a number"
+            for k in ("sigma_r_worst", "sigma_z_worst", "sigma_r_0", "sigma_z_0"):
+                if k in cell and not _number(cell[k]):
+                    return f"a grid cell's {k} is not a number"
+    for name in ("chosen", "original"):
+        d = data.get(name)
+        if not isinstance(d, dict) or not (_number(d.get("H_mm")) and _number(d.get("G_kPa"))):
+            return f"{name} must hold the numbers H_mm and G_kPa"
+    c = data.get("constraints")
+    if not isinstance(c, dict) or not all(_number(c.get(k)) for k in ("F_r_c_N", "F_z_c_N")):
+        return "constraints must hold the numbers F_r_c_N and F_z_c_N"
+    pareto = data.get("pareto", [])
+    if not isinstance(pareto, list) or len(pareto) > MAX_PARETO:
+        return f"pareto must be a list of at most {MAX_PARETO:,} points"
+    if not all(isinstance(q, dict) and all(_number(q.get(k)) for k in PARETO_NUMBERS)
+               for q in pareto):
+        return f"a Pareto point lacks one of the numbers {', '.join(PARETO_NUMBERS)}"
+    fixed = data.get("fixed", {})
+    if not isinstance(fixed, dict) or ("standoff_mm" in fixed
+                                       and not _number(fixed["standoff_mm"])):
+        return "fixed must be a table (standoff_mm a number)"
+    if not (data.get("M_z_A_per_m") is None or _number(data.get("M_z_A_per_m"))):
+        return "M_z_A_per_m must be a number or null"
+    return None
+
+
+def read_explorer(folder: Path) -> dict | None:
+    """``folder/explorer.json`` read through the bounded reader and checked against the
+    shape :func:`explorer_data` writes (:func:`explorer_problem`); None where it is missing,
+    and noted in the report where it is damaged."""
+    return load_json(folder / "explorer.json", explorer_problem)
+
+
 def explorer_section(folder: Path) -> str:
     """The explorer's HTML (controls, live table, verdict, Pareto set with its cards) from
     ``folder/explorer.json``; nothing without the file."""
-    data = load_json(folder / "explorer.json")
-    if not isinstance(data, dict) or data.get("format") != FORMAT or not data.get("grid"):
+    data = read_explorer(folder)
+    if data is None:
         return ""
     heights, moduli = data["H_mm"], data["G_kPa"]
     chosen = data["chosen"]

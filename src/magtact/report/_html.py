@@ -26,6 +26,7 @@ from .._runfolder import MANIFEST, RunManifest, StageRecord
 from ..study import from_si
 from ._card import read_card
 from ._explorer import explorer_section
+from ._fragments import collecting, damaged_section, load_captions, read_text
 from ._fragments import escape as _e
 from ._fragments import figure as _figure
 from ._fragments import load_json as _load_json
@@ -99,7 +100,8 @@ nav.toc{font-size:.85em}
 """
 
 
-def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> Path:
+def build_report(folder: str | Path, *, evidence: str | Path | None = None,
+                 damaged: dict[str, str] | None = None) -> Path:
     """Write ``report.html`` for a results folder and return its path.
 
     The folder's lock is taken while the report is built (a run writing the folder makes this
@@ -114,6 +116,9 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
         docstring; absent parts are reported as absent).
     evidence : path, optional
         Folder of benchmark JSON files to show in addition to ``folder/evidence``.
+    damaged : dict, optional
+        Filled with the files left out of the report (file → what is wrong), which the report
+        also lists above its sections.
 
     Returns
     -------
@@ -129,27 +134,61 @@ def build_report(folder: str | Path, *, evidence: str | Path | None = None) -> P
     magtact._runfolder.NotMagtactsFile
         If ``folder/report.html`` exists and is not a report magtact wrote.
     """
+    from .._files import file_problem
     from .._runfolder import RunLock, claim, interrupted_runs, recover
 
     folder = Path(folder)
-    if not folder.is_dir():
+    problem = file_problem(folder, "folder")
+    if problem == "not found":
         raise MissingFileError(f"{folder}: no such results folder")
+    if problem is not None:
+        raise MissingFileError(f"{folder}: not a results folder: it is {problem}")
     with RunLock(folder, "magtact report"):
         recover(folder)
         doc = report_document(folder, evidence=evidence,
-                              interrupted=interrupted_runs(folder, held=True))
+                              interrupted=interrupted_runs(folder, held=True), damaged=damaged)
         return claim(folder, "report.html", doc)
 
 
 def report_document(folder: Path, *, shown: Path | None = None,
                     evidence: str | Path | None = None,
-                    interrupted: list[dict] | None = None) -> str:
+                    interrupted: list[dict] | None = None,
+                    damaged: dict[str, str] | None = None) -> str:
     """The HTML of the report of ``folder`` (see :func:`build_report`).
 
     ``shown`` is the results folder the report describes when ``folder`` is the staging folder
     of a run (its name is printed, and ``shown/publication`` read); ``interrupted`` are the
-    runs of :func:`magtact._runfolder.interrupted_runs`.
+    runs of :func:`magtact._runfolder.interrupted_runs`; ``damaged`` (a dict) is filled with
+    the files left out (file → what is wrong).
     """
+    with collecting(folder) as notes:
+        parts, study_name = _document_parts(folder, shown, evidence, interrupted)
+    parts.insert(2, damaged_section(notes))
+    if damaged is not None:
+        damaged.update(notes)
+    doc = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+           f"<title>magtact report — {_e(study_name)}</title><style>{CSS}</style></head>"
+           "<body>\n" + "\n".join(p for p in parts if p) + "\n</body></html>\n")
+    return _live_links(doc)
+
+
+def _live_links(doc: str) -> str:
+    """``doc`` with the navigation's links to sections it does not hold left out (a run that
+    stopped early, or found no design, has no explorer or design card)."""
+    ids = set(re.findall(r'\sid="([^"]+)"', doc))
+
+    def nav(m: re.Match) -> str:
+        links = [a for a in m.group(2).split(" · ")
+                 if (h := re.search(r'href="#([^"]+)"', a)) is None or h.group(1) in ids]
+        return m.group(1) + " · ".join(links) + m.group(3)
+
+    return re.sub(r'(<nav class="toc">)(.*?)(</nav>)', nav, doc, count=1, flags=re.S)
+
+
+def _document_parts(folder: Path, shown: Path | None, evidence, interrupted
+                    ) -> tuple[list[str], str]:
+    """The sections of :func:`report_document` (the first two: the title and the intro) and
+    the study's name."""
     shown = folder if shown is None else Path(shown)
     manifest = RunManifest.from_json(_load_json(folder / MANIFEST))  # a forged one: none
     stages = {} if manifest is None else {s.key: s for s in manifest.stages}
@@ -200,10 +239,7 @@ def report_document(folder: Path, *, shown: Path | None = None,
     parts.append(_settings(folder / "study.toml"))
     parts.append(_method())
     parts.append(_versions(manifest))
-    doc = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-           f"<title>magtact report — {_e(study_name)}</title><style>{CSS}</style></head>"
-           "<body>\n" + "\n".join(p for p in parts if p) + "\n</body></html>\n")
-    return doc
+    return parts, study_name
 
 
 # ---- sections ------------------------------------------------------------------------------
@@ -270,9 +306,11 @@ def _glance(folder: Path, run_id: str | None) -> str:
              ("calibration", "calibration", "Calibration: error of the firmware map over the "
               "stable region, and the candidates' size against their error")]
     figs = []
-    explorer = _load_json(folder / "optimise" / "explorer.json")
-    if (isinstance(explorer, dict) and explorer.get("grid") and _of_run(folder / "optimise",
-                                                                        run_id)):
+    from ._explorer import read_explorer
+
+    explorer = (read_explorer(folder / "optimise") if _of_run(folder / "optimise", run_id)
+                else None)
+    if explorer is not None:
         from ._fig_explorer import design_curves_png
 
         figs.append(_figure_bytes(design_curves_png(explorer), "Resolution and normal range "
@@ -282,7 +320,7 @@ def _glance(folder: Path, run_id: str | None) -> str:
     for key, stem, caption in picks:
         png = folder / key / f"{stem}.png"
         if png.is_file() and _of_run(folder / key, run_id):
-            captions = _load_json(folder / key / "captions.json") or {}
+            captions = load_captions(folder / key / "captions.json")
             shown = _figure(png, caption or captions.get(stem))
             # a wide figure (three panels in a row) takes the whole width
             figs.append(f'<div class="span">{shown}</div>' if stem == "calibration" else shown)
@@ -519,7 +557,7 @@ def _stage(folder: Path, key: str, title: str, what: str, info: StageRecord | No
     if key == "validation" and _is_synthetic(folder):
         out.append('<div class="banner"><b>SYNTHETIC example data</b> — generated from the model '
                    "with noise, drift and sensor-to-sensor scatter; not a measurement.</div>")
-    captions = _load_json(folder / "captions.json") or {}
+    captions = load_captions(folder / "captions.json")
     files = sorted(p for p in folder.iterdir() if p.is_file() and not p.name.startswith("."))
     summaries = [p for p in files if p.suffix == ".json" and p.name not in SKIP_JSON]
     for p in summaries:  # a stage's summary (a JSON with a title) comes first
@@ -530,16 +568,25 @@ def _stage(folder: Path, key: str, title: str, what: str, info: StageRecord | No
             out.append(_figure(p, captions.get(p.stem)))
     for p in files:
         if p.suffix == ".md":
-            out.append(render_markdown(p.read_text(encoding="utf-8", errors="replace")))
+            text = read_text(p)
+            if text is not None:
+                out.append(render_markdown(text))
     for p in files:
         if p.suffix == ".csv":
             out.append(_csv_table(p, captions.get(p.stem)))
     for p in files:
         if p.suffix in (".txt", ".tex"):
-            text = p.read_text(encoding="utf-8", errors="replace")
-            out.append(f"<details><summary>{_e(p.name)}</summary><pre>{_e(text)}</pre>"
-                       "</details>")
+            text = read_text(p)
+            if text is not None:
+                out.append(f"<details><summary>{_e(p.name)}</summary><pre>{_e(text)}</pre>"
+                           "</details>")
     for p in summaries:  # other JSON files (model files, ...): collapsed
+    from .._files import file_problem
+    from ._fragments import note
+
+    for p in sorted(folder.iterdir()):  # a FIFO, a device, a link loop: named, never opened
+        if not p.name.startswith(".") and not p.is_file() and not p.is_dir():
+            note(p, f"is {file_problem(p)}")
         if not (isinstance(_load_json(p), dict) and "title" in _load_json(p)):
             out.append(f"<details><summary>{_e(p.name)}</summary>{_json_summary(p)}</details>")
     others = [p.name for p in files if p.suffix not in (".png", ".csv", ".txt", ".tex", ".md",
@@ -604,16 +651,15 @@ def _of_run(folder: Path, run_id: str | None) -> bool:
     if the manifest names no run (a folder laid out by hand)."""
     if run_id is None or not folder.is_dir() or not any(folder.iterdir()):
         return True
-    stamp = folder / RUN_STAMP
-    return stamp.is_file() and stamp.read_text(encoding="utf-8", errors="replace").strip() == \
-        run_id
+    text = read_text(folder / RUN_STAMP, "stamp")
+    return text is not None and text.strip() == run_id
 
 
 def _other_run(folder: Path, key: str, title: str, what: str) -> str:
     """The section of a stage whose folder was written by another run: nothing of it shown."""
-    stamp = folder / RUN_STAMP
-    other = (f"run {stamp.read_text(encoding='utf-8', errors='replace').strip()[:32]}"
-             if stamp.is_file() else "a run that did not stamp it, or by hand")
+    stamp = read_text(folder / RUN_STAMP, "stamp")
+    other = (f"run {stamp.strip()[:32]}" if stamp is not None
+             else "a run that did not stamp it, or by hand")
     return (f'<h2 id="{key}">{_e(title)}</h2><p>{_e(what)}</p><div class="missing">The files '
             f"in <code>{_e(key)}/</code> are not of this run (the folder was written by "
             f"{_e(other)}); nothing of them is shown. Remove the folder or run into a new "
@@ -638,14 +684,14 @@ def _evidence(folders: list[Path]) -> str:
 def _settings(path: Path) -> str:
     """The study's settings, section by section: what each setting is (its description in the
     study's schema), its value in its unit, and a value that means "not set" in words."""
-    if not path.is_file():
+    if not path.is_file() and not path.is_symlink() and not path.exists():
         return ('<h2 id="settings">Study settings</h2><div class="missing">No study.toml in this '
                 "folder.</div>")
     import tomllib
 
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        data = tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:
         return (f'<h2 id="settings">Study settings</h2><div class="missing">study.toml '
                 f"unreadable ({_e(exc)}).</div>")
     schema = _schema()
@@ -662,6 +708,10 @@ def _settings(path: Path) -> str:
                        for k, v in items if not isinstance(v, dict))
         head = "" if section is None else f"<h3>{_e(section)}</h3>"
         out.append(f'{head}<table class="settings"><tr><th class="l">setting</th>'
+    text = read_text(path, "toml")
+    if text is None:
+        return ('<h2 id="settings">Study settings</h2><div class="missing">study.toml '
+                "unreadable (see the files left out of this report).</div>")
                    f'<th class="l">value</th><th class="l">what it is</th></tr>{rows}</table>')
     return "\n".join(out)
 
@@ -738,9 +788,9 @@ def _versions(manifest: RunManifest | None) -> str:
 # ---- pieces --------------------------------------------------------------------------------
 def _csv_table(path: Path, caption: str | None) -> str:
     try:
-        with path.open(newline="", encoding="utf-8") as f:
-            rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        rows = [r for r in csv.reader(io.StringIO(text, newline="")) if r
+                and not r[0].startswith("#")]
+    except csv.Error as exc:
         return f"<p>{_e(path.name)}: unreadable ({_e(exc)})</p>"
     if not rows:
         return f"<p>{_e(path.name)}: empty table</p>"
@@ -756,6 +806,11 @@ def _csv_table(path: Path, caption: str | None) -> str:
                         for r in body[:MAX_ROWS])
     table = ("<div style=\"overflow-x:auto\"><table><tr>"
              + "".join(f"<th>{_e(label(h))}</th>" for h in head) + "</tr>" + html_rows
+    import io
+
+    text = read_text(path, "table")
+    if text is None:
+        return f"<p>{_e(path.name)}: left out (see the files left out of this report)</p>"
              + "</table></div>")
     if len(body) <= MAX_ROWS:
         return f"<h3>{_e(title)}</h3><p><small>{_e(path.name)}</small></p>{table}"
@@ -826,7 +881,8 @@ def _is_synthetic(folder: Path) -> bool:
         return False
     if any("synthetic" in p.name.lower() for p in folder.iterdir()):
         return True
-    return any((_load_json(p) or {}).get("synthetic") is True for p in folder.glob("*.json"))
+    return any(isinstance(d := _load_json(p), dict) and d.get("synthetic") is True
+               for p in folder.glob("*.json"))
 
 
 def _plain(v) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -40,8 +41,9 @@ CAPTIONS = {
 def publication_figures(folder: str | Path) -> list[Path]:
     """Draw the section's figures from ``folder/publication.json``; write ``captions.json``."""
     folder = Path(folder)
-    doc = PublicationFile.from_json(
-        json.loads((folder / "publication.json").read_text(encoding="utf-8")))
+    from .._files import read_result
+
+    doc = PublicationFile.from_json(read_result(folder / "publication.json", "json"))
     records = list(doc.records) if doc is not None else []
     files = fig_seed_spread(records, folder / "seed_spread")
     files += fig_gamma_z_along_t(records, folder / "gamma_z_along_t")
@@ -98,9 +100,11 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
     spread = ('<table><tr><th class="l">definition</th><th class="l">figure</th><th>unit</th>'
               "<th>seeds</th><th>min</th><th>max</th><th>max / min</th></tr>"
               f"{spread_rows}</table>")
-    captions = _load_json(folder / "captions.json") or {}
+    from ._fragments import load_captions
+
+    captions = load_captions(folder / "captions.json")
     figs = "".join(_figure(folder / f"{k}.png", c) for k, c in captions.items()
-                   if (folder / f"{k}.png").is_file())
+                   if k in CAPTIONS and os.path.lexists(folder / f"{k}.png"))
     text = ("<p>Median [min, max] over "
             f"{len(doc.seeds)} GP seeds per definition{_budget(doc)} "
             f"({_seconds(doc.wall_time_s)} s, {'?' if doc.workers is None else doc.workers} "
