@@ -67,6 +67,11 @@ MAX_FIELD = 2.0
 MAX_FORCE = 1000.0
 #: Range of a press's noise figures [SI]: σ_B 1 nT to 10 mT, σ_F 1 µN to 100 N.
 SIGMA_BOUNDS = {"sigma_B": (1e-9, 1e-2), "sigma_F": (1e-6, 100.0)}
+#: Physical range of a built unit's scales: the stiffness of a cast silicone body within a
+#: factor 5 of its design's (batches, mixing ratio, cure), the remanence of its magnet within
+#: ±50 % (sintered NdFeB grades span B_r 1.17–1.48 T; a bonded or heated magnet less). A fit
+#: outside is no unit of this design: wrong units, sign or design.
+SCALE_RANGE = {"G_scale": (0.2, 5.0), "B_scale": (0.5, 1.5)}
 
 
 @dataclass(frozen=True)
@@ -424,6 +429,7 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
                         ftol=1e-12, gtol=1e-12, max_nfev=200, tr_solver="lsmr")
     theta, w = prob.unpack(sol.x)
     fit_rms = float(np.sqrt(np.mean(sol.fun ** 2)))
+    _check_scales(theta, free, n)
     if not fit_rms <= MAX_RMS_RESIDUAL:
         B, F = _model(exact, theta, w)
         rb = from_si(float(np.sqrt(np.mean((B - presses.B) ** 2))), "uT")
@@ -459,6 +465,29 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
     p, q = w[:, 0], np.hypot(w[:, 1], w[:, 2])
     loads = np.stack([p, np.arctan2(q, p), np.arctan2(w[:, 2], w[:, 1])], axis=-1)
     return UnitCalibration(unit, std, corrected, B - presses.B, F - presses.F, loads, presses)
+
+
+def _check_scales(theta: np.ndarray, free: np.ndarray, n: int) -> None:
+    """Refuse a fit whose stiffness or remanence scale is negative (the presses' sign
+    convention is not the map's) or outside :data:`SCALE_RANGE`."""
+    g, b = float(theta[0]), float(theta[1])
+    if (free[0] and not g > 0) or (free[1] and not b > 0):
+        which = " and ".join(f"{name} {v:.3g}" for name, v, f in
+                             (("G_scale", g, free[0]), ("B_scale", b, free[1])) if f and not v > 0)
+        raise MagtactError(
+            f"these {n} presses fit only a unit with a negative scale ({which}): forces look "
+            "like the load's sign: F_z must be positive in compression (the reaction of the "
+            "base on the body, as force.h returns it; negate F_x, F_y, F_z of a load cell "
+            "that reads the load applied on the top), and B_z positive with the magnet above "
+            "the chip")
+    for name, v, f in (("G_scale", g, free[0]), ("B_scale", b, free[1])):
+        lo, hi = SCALE_RANGE[name]
+        if f and not lo <= v <= hi:
+            what = "stiffness of the body" if name == "G_scale" else "remanence of the magnet"
+            raise MagtactError(
+                f"these {n} presses fit {name} = {v:.3g}, outside the physical range {lo:g} to "
+                f"{hi:g} of a unit of this design (the {what} over the design's): check the "
+                "columns' units (T, N), their sign and the design (H, G)")
 
 
 def fe_readings(dataset, smap: SensorMap, unit: UnitParameters, azimuth=None, seed: int = 0
