@@ -67,6 +67,30 @@ def assert_reads_required_loads(result, n=(60, 15)):
     return B
 
 
+def assert_shear_line_holds_on_the_chip(result, n=(201, 41)):
+    """The verdict's shear line against the loads on the paths (the models' forces) and the
+    chip's field from magpylib: the largest shear within the required normal force up to where
+    the chip leaves its range on each path is the verdict's figure, and the line says yes
+    exactly when it reaches the required shear (and the body is stable up to it)."""
+    a = result.chosen
+    study, d = a.study, a.design
+    req = study.requirements
+    th = np.linspace(0.0, d.theta_m, n[1])
+    t = np.linspace(0.0, d.t_m, n[0])
+    T, TH = (v.ravel() for v in np.meshgrid(t, th, indexing="ij"))
+    F_r, F_z = (np.asarray(f).reshape(n) for f in result.models.forces(T, TH, d.H, d.G))
+    B = field_magpylib(study, d.H, T, TH).reshape(2, *n)
+    out = (np.abs(B[0]) > a.chip.range_x) | (np.abs(B[1]) > a.chip.range_z)
+    before = np.cumsum(out, axis=0) == 0  # the loads before the chip leaves its range
+    read = np.abs(F_r[before & (F_z <= req.F_z)]).max()
+    # a grid of 201 levels: within a level's shear of the root-found figure
+    assert a.verdict.shear_read == pytest.approx(read, abs=0.01 * req.F_r)
+    line = a.verdict["shear"]
+    assert line.met is bool(read >= req.F_r and -d.F_r_min >= req.F_r)
+    if not line.met and -d.F_r_min >= req.F_r:
+        assert f"{a.verdict.shear_read:.3g} N" in line.answer, line.answer
+
+
 def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_card(result):
     B = assert_reads_required_loads(result)
     a = result.chosen
@@ -75,7 +99,10 @@ def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_c
     req = [r.statement for r in a.verdict.requirements]
     assert [r[0] for r in rows[:len(req)]] == req
     assert req[0] == "reads 0–5 N normal without saturating"
-    assert a.verdict.met and rows[0][1].startswith("yes, saturates at")
+    assert a.verdict["normal"].met and rows[0][1].startswith("yes, saturates at")
+    # the shear requirement at the loads where it occurs within the normal range: this body
+    # carries 0.25 N of shear stably only beyond 5 N normal, and the verdict says so
+    assert_shear_line_holds_on_the_chip(result)
     # the original MagOne design fails the range requirement, and the card says so
     o = result.original.verdict
     assert not o["normal"].met and o["normal"].margin < 0
@@ -96,9 +123,10 @@ def test_a_light_specification_gets_its_rate_and_range(result):
     study = _study(requirements={"F_z_N": 2.0, "rate_Hz": 100.0})
     r = magtact.design(study, models=prefitted_dir())
     a = r.chosen
-    assert a.chip.figures.rate >= 100 and a.verdict.met
+    assert a.chip.figures.rate >= 100 and a.verdict["normal"].met
     assert a.design.F_z_max >= 2.0 and a.verdict["normal"].margin > 0
     assert_reads_required_loads(r)
+    assert_shear_line_holds_on_the_chip(r)
     # a lighter specification buys a lower noise than the 5 N one
     assert r.sensor_design.choice.sigma < result.sensor_design.choice.sigma
 
@@ -129,11 +157,13 @@ def test_evaluate_reports_each_requirement_with_its_margin(result):
     # a taller, stiffer body: shear turns unstable below 0.25 N
     a = result.evaluate(H_mm=4.11, G_kPa=29.4)
     assert not a.verdict["shear"].met and a.verdict["shear"].margin < 0
-    assert a.verdict["shear"].margin == pytest.approx(-a.design.F_r_min - 0.25, rel=1e-12)
+    assert a.verdict["shear"].margin == pytest.approx(
+        min(-a.design.F_r_min, a.verdict.shear_read) - 0.25, rel=1e-12)
     assert "shear turns unstable" in a.verdict["shear"].answer
     # the original design: the chip saturates long before 5 N
     o = result.evaluate(H_mm=3.0, G_kPa=29.4, standoff_mm=0.0)
-    assert not o.verdict["normal"].met and "saturates at 1.5" in o.verdict["normal"].answer
+    assert not o.verdict["normal"].met and o.verdict.F_saturation < 2.0
+    assert f"saturates at {o.verdict.F_saturation:.3g} N" in o.verdict["normal"].answer
     # a weaker magnet farther away reads more of the load
     far = result.evaluate(H_mm=3.0, G_kPa=29.4, grade="N35", standoff_mm=2.5)
     assert far.verdict.F_saturation > o.verdict.F_saturation
@@ -161,9 +191,9 @@ def test_a_design_on_the_constraint_boundary_meets_it(result):
     for F_z_max, met in ((req.F_z * (1 - 1e-8), True), (req.F_z * (1 - 1e-3), False)):
         v = verdict(result.models, study, At(F_z_max=F_z_max), chip)
         assert v["normal"].met is met, v["normal"].text
-    for F_r_min, met in ((-req.F_r * (1 - 1e-8), True), (-req.F_r * (1 - 1e-3), False)):
+    for F_r_min, stable in ((-req.F_r * (1 - 1e-8), True), (-req.F_r * (1 - 1e-3), False)):
         v = verdict(result.models, study, At(F_r_min=F_r_min), chip)
-        assert v["shear"].met is met, v["shear"].text
+        assert ("turns unstable" not in v["shear"].answer) is stable, v["shear"].text
 
 
 def test_nsga2_meets_the_exact_reduction_and_is_seeded():

@@ -199,7 +199,8 @@ class Result:
 
     def evaluate(self, *, H_mm: float, G_kPa: float, M_z_A_per_m: float | None = None,
                  label: str = "design", grade: str | None = None,
-                 standoff_mm: float | None = None, **geometry_mm: float) -> DesignAnswer:
+                 standoff_mm: float | None = None, robust: bool = False,
+                 **geometry_mm: float) -> DesignAnswer:
         """The designer's answer for any design, given in user units.
 
         Parameters
@@ -214,6 +215,10 @@ class Result:
             The magnet's grade (a catalogue name, sets M_z); default the study's magnet.
         standoff_mm : float, optional
             The chip's distance below the body [mm]; default ``[hall] standoff_mm``.
+        robust : bool
+            Also the verdict over the built units (``answer.robust``: each requirement at
+            the worst corner of ``[tolerances]`` and as a yield,
+            :func:`magtact.tolerance.robust_verdict`; about 2 s).
         **geometry_mm : float
             ``R_m_mm``, ``H_m_mm``, ``R_mm`` where the study has them as design variables
             (default: the study's own value).
@@ -247,7 +252,8 @@ class Result:
         study = self.study
         if grade is not None or standoff_mm is not None:
             study = _with_parts(study, grade, standoff_mm)
-        return _answer(self.models, study, values | own, label)
+        a = _answer(self.models, study, values | own, label)
+        return with_robust(self, a) if robust else a
 
     def budget(self, answer: DesignAnswer | None = None, *, dataset=None,
                seeds: dict | None = None, noise: tuple[float, float] | None = None) -> Budget:
@@ -308,6 +314,20 @@ class Result:
         from ._display import html_block, result_rows
 
         return html_block(*result_rows(self))
+
+
+def with_robust(result: Result, answer: DesignAnswer) -> DesignAnswer:
+    """``answer`` with its verdict over the built units (``answer.robust``,
+    :func:`magtact.tolerance.robust_verdict`: each requirement at the worst corner of the
+    study's ``[tolerances]`` and as a yield with its confidence interval)."""
+    from dataclasses import replace
+
+    from .tolerance import robust_verdict
+
+    if answer.robust is not None or answer.verdict is None or answer.study is None:
+        return answer
+    models, _ = result.of(answer)
+    return replace(answer, robust=robust_verdict(models, answer))
 
 
 def error_budget(result: Result, answer: DesignAnswer | None = None, *, dataset=None,
@@ -634,11 +654,40 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
     sensor = optimise_sensor(models, study, opt.reduction.table, constraints)
     c = sensor.choice
     chosen = _answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen")
+    sensor = _root_found_saturation(models, study, sensor, chosen.verdict.F_saturation)
+    from .chip import exact_field_models
+    from .tolerance import robust_verdict
+
+    chosen = replace(chosen, robust=robust_verdict(exact_field_models(models, chosen.study),
+                                                   chosen))
     original = _answer(models, study, {"H": study.design.H_original,
                                        "G": study.design.G_original}, "original")
     values = {"H": c.H, "G": c.G, "M_z": c.M_z, "standoff": c.standoff}
     return Result(study, models, models_source, opt, chosen, original, values, dataset,
                   sensor)
+
+
+def _root_found_saturation(models: ModelSet, study: Study, sensor, F_chosen: float):
+    """``sensor`` with the saturation figure of its designs root-found along the paths
+    (:func:`magtact.chip.saturation_force`, the verdict's figure) instead of the first
+    saturated level of the optimiser's grid: one figure in every file."""
+    from dataclasses import replace
+
+    from .chip import exact_field_models, saturation_force
+    from .optimise import per_design
+    from .study import hall_chip
+
+    def figure(d):
+        if d == sensor.choice:
+            return F_chosen
+        s = d.apply(study)
+        m = exact_field_models(models, s)
+        box = per_design(m, d.H, d.G, s)
+        return saturation_force(s, m, d.H, d.G, hall_chip(s), box.t_m, box.theta_m)
+
+    red = sensor.reduction_choice
+    return replace(sensor, choice=replace(sensor.choice, F_saturation=F_chosen),
+                   reduction_choice=replace(red, F_saturation=figure(red)))
 
 
 def models_for(study: Study, *, data: str | Path | None = None,

@@ -7,7 +7,15 @@ The chips' datasheet tables are :mod:`magtact.parts` data; the study's ``[hall]`
 :func:`magtact.study.hall_chip`."""
 
 from ._options import ChipOption, chip_options, require_noise
-from ._range import Saturation, check_rest_field, chip_margin, saturation
+from ._range import (
+    Saturation,
+    check_rest_field,
+    chip_margin,
+    field_ratio,
+    onset,
+    saturation,
+    saturation_force,
+)
 from ._reading import (
     N_T,
     N_THETA,
@@ -21,5 +29,5 @@ from ._setting import SettingChoice, setting_for, with_setting
 
 __all__ = ["N_T", "N_THETA", "READ_MARGIN", "ChipOption", "Saturation", "SensorGrid",
            "SettingChoice", "check_rest_field", "chip_margin", "chip_options",
-           "exact_field_models", "require_noise", "saturation", "sensor_grid", "setting_for",
-           "unit_magnet", "with_setting"]
+           "exact_field_models", "field_ratio", "onset", "require_noise", "saturation",
+           "saturation_force", "sensor_grid", "setting_for", "unit_magnet", "with_setting"]

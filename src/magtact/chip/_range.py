@@ -15,8 +15,11 @@ import numpy as np
 from ..metamodel import ExactField, ModelSet
 from ..study import HallChip, Study, StudyError, hall_chip, mm, mt
 
-#: Load levels and angles of the saturation scan along the paths.
-N_SCAN_T, N_SCAN_THETA = 201, 21
+#: Load levels and angles of the saturation scan along the paths (the scan brackets where the
+#: chip leaves its range; a bisection locates it, :func:`onset`).
+N_SCAN_T, N_SCAN_THETA = 101, 21
+#: Halvings of the bracket of :func:`onset` (t to 2^-50 of a level's width).
+ONSET_ITERATIONS = 50
 
 #: Grid over each height's stable region (fractions of t_m and θ_m) on which the field is read.
 N_T, N_THETA = 41, 11
@@ -60,11 +63,13 @@ def chip_margin(study: Study, H, t_m, theta_m, geometry: dict | None = None) -> 
 
 @dataclass(frozen=True)
 class Saturation:
-    """The largest field along the paths against the chip's range."""
+    """The largest field along the paths against the chip's range, and where the chip first
+    leaves it (:func:`saturation`)."""
 
     B_max_x: float
     B_max_z: float
-    #: First load t (and its θ, axis, forces [N]) at which the chip saturates; None: never.
+    #: The load t (and its θ, axis, forces [N]) at which the chip leaves its range on the
+    #: path where that happens at the smallest normal force; None: never.
     t: float | None = None
     theta: float | None = None
     axis: str | None = None
@@ -82,6 +87,117 @@ class Saturation:
     def in_region(self) -> bool:
         """Whether the chip saturates inside the stable region (where the sensor is used)."""
         return bool(self.region_margin > 0)
+
+
+def onset(ratio, theta, t_max, n_scan: int = N_SCAN_T, iterations: int = ONSET_ITERATIONS
+          ) -> np.ndarray:
+    """The load t at which the chip first leaves its range on each path, by a scan of
+    ``n_scan`` levels over [0, t_max] that brackets the first crossing and a bisection of the
+    bracket (``iterations`` halvings: t to 2^-iterations of a level's width).
+
+    Parameters
+    ----------
+    ratio : callable
+        ``ratio(t, theta)`` → max(|B_x| / range_x, |B_z| / range_z) at loads t and angles θ;
+        called with ``t`` of shape (n_scan,) + θ's shape and of θ's shape (so that it may
+        hold per-path arrays of θ's shape); the chip has left its range where it exceeds 1.
+    theta, t_max : array_like
+        The paths' angles [rad] and the largest load of each (broadcast together).
+
+    Returns
+    -------
+    numpy.ndarray
+        The first t with ratio > 1 on each path (0: at rest); NaN where the chip stays in
+        its range up to t_max.
+
+    Notes
+    -----
+    A crossing narrower than a level of the scan is not seen: the field varies along a path
+    on the scale of the magnet–chip distance, far wider than 1/``n_scan`` of the path.
+    """
+    theta, t_max = np.broadcast_arrays(np.asarray(theta, float), np.asarray(t_max, float))
+    s = np.linspace(0.0, 1.0, n_scan).reshape((-1,) + (1,) * theta.ndim)
+    T = s * t_max[None]
+    over = ratio(T, np.broadcast_to(theta, T.shape)) > 1.0
+    hit = over.any(axis=0)
+    i = np.argmax(over, axis=0)
+    hi = np.take_along_axis(T, i[None], axis=0)[0]
+    lo = np.take_along_axis(T, np.maximum(i - 1, 0)[None], axis=0)[0]
+    todo = hit & (i > 0)
+    if todo.any():  # every path is bisected (ratio may close over per-path arrays)
+        for _ in range(iterations):
+            mid = 0.5 * (lo + hi)
+            out = (ratio(mid, theta) > 1.0) | ~todo
+            hi, lo = np.where(out, mid, hi), np.where(out, lo, mid)
+    return np.where(hit, np.where(todo, hi, 0.0), np.nan)
+
+
+def field_ratio(study: Study, H, chip: HallChip | tuple[float, float]):
+    """``ratio(t, θ)`` of :func:`onset` for the exact field of ``study``'s magnet and chip
+    position at height(s) H [m], against the range of ``chip`` (or (range_x, range_z) [T])."""
+    rx, rz = (chip.range_x, chip.range_z) if isinstance(chip, HallChip) else chip
+    B_r, B_z = ExactField(study, "B_r"), ExactField(study, "B_z")
+
+    def ratio(t, theta):
+        return np.maximum(np.abs(B_r.value(t, theta, H)) / rx,
+                          np.abs(B_z.value(t, theta, H)) / rz)
+    return ratio
+
+
+def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChip,
+               t_max: float = 1.0, theta_max: float | None = None) -> Saturation:
+    """Where the exact field first leaves the chip's range, over the paths θ ∈ [0, θ_max]
+    up to the load t_max (default: the whole paths, t ∈ [0, 1], θ ∈ [0, loading.theta_max]).
+
+    On each of ``N_SCAN_THETA`` paths the load at which the chip leaves its range is found by
+    :func:`onset` (a root of the field's ratio to the range along the path); the path of the
+    least normal force at that load is then refined between its neighbours (bounded Brent
+    search over θ). The normal force there is *the* saturation figure of the design. A range
+    below the field at rest shows as saturation at t = 0 (see :func:`check_rest_field` for
+    the study-wide check).
+    """
+    from scipy.optimize import minimize_scalar
+
+    theta_max = study.loading.theta_max if theta_max is None else float(theta_max)
+    t = np.linspace(0.0, t_max, N_SCAN_T)
+    th = np.linspace(0.0, theta_max, N_SCAN_THETA)
+    T, TH = np.meshgrid(t, th, indexing="ij")
+    B_x = np.abs(ExactField(study, "B_r").value(T, TH, H))
+    B_z = np.abs(ExactField(study, "B_z").value(T, TH, H))
+    out = dict(B_max_x=float(B_x.max()), B_max_z=float(B_z.max()))
+    ratio = field_ratio(study, H, chip)
+    t_on = onset(ratio, th, t_max)
+    if np.isnan(t_on).all():
+        return Saturation(**out)
+
+    def F_z_at(theta):  # the normal force where the chip leaves its range on path θ
+        ts = onset(ratio, np.array([theta]), t_max)[0]
+        return np.inf if np.isnan(ts) else float(models.forces(ts, theta, H, G)[1])
+
+    F_z = np.where(np.isnan(t_on), np.inf,
+                   np.asarray(models.forces(np.nan_to_num(t_on), th, H, G)[1], float))
+    j = int(np.argmin(F_z))
+    best_theta, best_F = float(th[j]), float(F_z[j])
+    if th.size > 1:
+        lo, hi = th[max(j - 1, 0)], th[min(j + 1, th.size - 1)]
+        r = minimize_scalar(F_z_at, bounds=(lo, hi), method="bounded",
+                            options={"xatol": 1e-6 * max(theta_max, 1e-9)})
+        if np.isfinite(r.fun) and r.fun < best_F:
+            best_theta, best_F = float(r.x), float(r.fun)
+    ts = float(onset(ratio, np.array([best_theta]), t_max)[0])
+    bx = abs(float(ExactField(study, "B_r").value(ts, best_theta, H))) / chip.range_x
+    bz = abs(float(ExactField(study, "B_z").value(ts, best_theta, H))) / chip.range_z
+    F_r, F_z_s = models.forces(ts, best_theta, H, G)
+    return Saturation(**out, t=ts, theta=best_theta, axis="x" if bx > bz else "z",
+                      F_r=float(F_r), F_z=float(F_z_s))
+
+
+def saturation_force(study: Study, models: ModelSet, H: float, G: float, chip: HallChip,
+                     t_m: float, theta_m: float) -> float:
+    """The design's saturation figure: the smallest normal force [N] at which the chip leaves
+    its range inside the stable region t ≤ t_m, θ ≤ θ_m (:func:`saturation`); inf: never."""
+    s = saturation(study, models, H, G, chip, t_m, theta_m)
+    return float("inf") if s.F_z is None else s.F_z
 
 
 def _weakest(study: Study) -> Study:
@@ -125,28 +241,3 @@ def check_rest_field(study: Study) -> None:
                              f"(|B_{axis}| = {mt(b):.4g} mT even at the tallest, H = "
                              f"{mm(H):.3g} mm{below}): the {chip.name} would read nothing but "
                              "its limit")
-
-
-def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChip
-               ) -> Saturation:
-    """The exact field along every path (t ∈ [0, 1], θ ∈ [0, θ_max]) against the chip's range.
-
-    A range below the field at rest shows as saturation at t = 0 (see
-    :func:`check_rest_field` for the study-wide check).
-    """
-    t = np.linspace(0.0, 1.0, N_SCAN_T)
-    th = np.linspace(0.0, study.loading.theta_max, N_SCAN_THETA)
-    T, TH = np.meshgrid(t, th, indexing="ij")
-    B = {"x": np.abs(ExactField(study, "B_r").value(T, TH, H)),
-         "z": np.abs(ExactField(study, "B_z").value(T, TH, H))}
-    limit = {"x": chip.range_x, "z": chip.range_z}
-    over = (B["x"] > limit["x"]) | (B["z"] > limit["z"])
-    out = dict(B_max_x=float(B["x"].max()), B_max_z=float(B["z"].max()))
-    if not over.any():
-        return Saturation(**out)
-    i = int(np.argmax(over.any(axis=1)))  # first load level with a saturated angle
-    j = int(np.argmax(over[i]))
-    axis = "x" if B["x"][i, j] > limit["x"] else "z"
-    F_r, F_z = models.forces(t[i], th[j], H, G)
-    return Saturation(**out, t=float(t[i]), theta=float(th[j]), axis=axis,
-                      F_r=float(F_r), F_z=float(F_z))

@@ -5,6 +5,7 @@ the chip's limits along the paths, and the margin for the tolerance of G (docs/m
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import minimize
@@ -24,6 +25,9 @@ from ..parts import SettingFigures, grade, silicones_around
 from ..sensitivity import force_noise
 from ..study import MU0, HallChip, Study, from_si, hall_chip, mm, mt
 from ._verdict import Verdict, verdict
+
+if TYPE_CHECKING:
+    from ..tolerance import RobustVerdict
 
 #: Points per side of the grid over the stable box (the worst σ_F starts from its best point).
 N_BOX = 41
@@ -100,6 +104,9 @@ class DesignAnswer:
     verdict: Verdict | None = None
     #: The study of this design: its magnet, the chip's standoff and setting.
     study: Study | None = None
+    #: Each requirement over the built units: worst corner, yield, what limits it
+    #: (:func:`magtact.tolerance.robust_verdict`; None: not computed).
+    robust: RobustVerdict | None = None
 
     @property
     def standoff(self) -> float:
@@ -219,6 +226,8 @@ def answer_json(a: DesignAnswer) -> dict:
                 "sigma_Fr_required_loads_mN": from_si(v.sigma_r, "mN"),
                 "sigma_Fz_required_loads_mN": from_si(v.sigma_z, "mN"),
                 "saturation_F_z_N": None if np.isinf(v.F_saturation) else v.F_saturation}
+    if a.robust is not None:
+        out["robust_verdict"] = a.robust.to_json()
     f = a.chip.figures
     if f is not None:
         out |= {"setting": {k: v for k, v in f.setting.__dict__.items() if v is not None},

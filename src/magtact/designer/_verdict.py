@@ -1,11 +1,17 @@
 """The verdict on a design: each requirement of the study met or not, with its margin
 (docs/method.md §10).
 
-The chip's reading is checked on a fine grid over the design's stable region
-(:data:`N_FINE` load levels × shear angles): the sensor reads 0 to F_z,req normal when the body
-carries F_z,req stably and no grid point whose normal force is at most F_z,req lies outside the
-range of the chip's setting; it carries and reads the shear force when, besides, its stable
-shear reaches F_r,req.
+The requirements name a load envelope: every load on the loading paths inside the design's
+stable region whose normal force is at most F_z,req, with the shear that comes with it up to
+F_r,req (the shear requirement at the loads where it occurs under the normal range). The
+sensor reads 0 to F_z,req normal when the body carries F_z,req stably and the chip stays
+inside its setting's range on every path up to F_z,req: the normal force at which it first
+leaves its range (root-found along each path, :func:`magtact.chip.saturation`) lies above
+F_z,req. It carries and reads the shear when the body is stable up to F_r,req and the paths
+reach a shear of F_r,req within the normal range before the chip leaves its range; else the
+answer names the largest shear read within F_z,req ("reads shear up to 0.23 N within 5 N
+normal"). The chip's y axis has the x axis's range and, by the body's symmetry, sees on a
+shear along y what x sees on a shear along x: the x check holds for both.
 """
 
 from __future__ import annotations
@@ -13,12 +19,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..chip import sensor_grid
+import numpy as np
+
+from ..chip import field_ratio, onset, saturation, sensor_grid
 from ..metamodel import ModelSet
 from ..optimise import DesignResult
 from ..study import HallChip, Study, from_si
 
-#: Load levels and shear angles of the grid on which the verdict checks the chip's reading.
+#: Load levels and shear angles of the grid on which the verdict takes σ_F over the required
+#: loads; the shear envelope's paths take N_FINE[1] angles and N_FINE[0] levels each.
 N_FINE = (201, 21)
 
 
@@ -63,6 +72,10 @@ class Verdict:
     #: Smallest normal force [N] at which the chip has left its range (inf: never in the
     #: stable region).
     F_saturation: float
+    #: The largest shear [N] on the paths within the normal range F_z ≤ F_z,req that the body
+    #: carries stably, and that the chip reads (before it leaves its range).
+    shear_within: float = float("nan")
+    shear_read: float = float("nan")
 
     @property
     def met(self) -> bool:
@@ -100,11 +113,12 @@ BOUNDARY_RTOL = 1e-6
 
 def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip) -> Verdict:
     """The verdict on ``design`` with ``chip`` at its setting, against ``[requirements]``
-    (``study`` holds the design's magnet and the chip's standoff)."""
+    (``study`` holds the design's magnet and the chip's standoff; see the module notes)."""
     req = study.requirements
     grid = sensor_grid(models, study, design.H, design.t_m, design.theta_m, n=N_FINE)
     M_z = study.magnet.M_z
-    F_sat = float(grid.F_saturation(design.G, M_z, chip.range_x, chip.range_z)[0])
+    sat = saturation(study, models, design.H, design.G, chip, design.t_m, design.theta_m)
+    F_sat = math.inf if sat.F_z is None else sat.F_z
     if chip.noise is None:
         s_r = s_z = math.nan
     else:
@@ -124,16 +138,22 @@ def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
                              f"reads 0–{_n(req.F_z)} N normal without saturating", text,
                              min(design.F_z_max, F_sat) - req.F_z, "N"))
     shear = -design.F_r_min
+    within, read = shear_envelope(models, study, design, chip, req.F_z)
     stable = shear >= req.F_r * (1.0 - BOUNDARY_RTOL)
+    occurs = within >= req.F_r * (1.0 - BOUNDARY_RTOL)
+    read_all = read >= req.F_r * (1.0 - BOUNDARY_RTOL)
     if not stable:
         text = f"no: shear turns unstable at {_n(shear)} N"
-    elif not reads:
-        text = "no: the chip saturates within the required loads"
+    elif not occurs:
+        text = (f"no: the body carries at most {_n(within)} N of shear within {_n(req.F_z)} N "
+                "normal")
+    elif not read_all:
+        text = f"no: reads shear up to {_n(read)} N within {_n(req.F_z)} N normal"
     else:
         text = f"yes, stable up to {_n(shear)} N"
-    items.append(Requirement("shear", stable and reads,
+    items.append(Requirement("shear", stable and occurs and read_all,
                              f"carries and reads 0–{_n(req.F_r)} N shear", text,
-                             shear - req.F_r, "N"))
+                             min(shear, read) - req.F_r, "N"))
     if req.rate > 0:
         rate = None if chip.figures is None else chip.figures.rate
         if rate is None:
@@ -160,4 +180,34 @@ def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
                                  f"fits a body radius of {_n(from_si(req.R_max, 'mm'))} mm",
                                  f"{'yes' if R <= req.R_max else 'no'}, "
                                  f"{_n(from_si(R, 'mm'))} mm", req.R_max - R, "m"))
-    return Verdict(tuple(items), s_r, s_z, F_sat)
+    return Verdict(tuple(items), s_r, s_z, F_sat, within, read)
+
+
+def shear_envelope(models: ModelSet, study: Study, design: DesignResult, chip: HallChip,
+                   F_z: float, n: tuple[int, int] = N_FINE) -> tuple[float, float]:
+    """The largest shear |F_r| [N] on the paths of the stable region within the normal force
+    F_z [N]: that the body carries (every load up to F_z on each path), and that the chip
+    reads (the loads before it leaves its range on each path).
+
+    On each of ``n[1]`` paths θ ∈ [0, θ_m] the load at which the normal force reaches F_z and
+    the load at which the chip leaves its range are root-found; |F_r| is taken on ``n[0]``
+    levels up to each (both ends included).
+    """
+    H, G, t_m = design.H, design.G, design.t_m
+    th = np.linspace(0.0, design.theta_m, n[1])
+    t_F = np.full(th.size, t_m)  # where G f_z reaches F_z (f_z grows along a path)
+    below = np.asarray(models.forces(t_m, th, H, G)[1], float) > F_z
+    if below.any():
+        lo, hi = np.zeros(int(below.sum())), np.full(int(below.sum()), t_m)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            over = np.asarray(models.forces(mid, th[below], H, G)[1], float) > F_z
+            hi, lo = np.where(over, mid, hi), np.where(over, lo, mid)
+        t_F[below] = lo
+    t_on = onset(field_ratio(study, H, chip), th, t_m)
+    t_read = np.where(np.isnan(t_on), t_F, np.minimum(t_F, t_on))
+    s = np.linspace(0.0, 1.0, n[0])[:, None]
+    F_r_body = np.abs(np.asarray(models.forces(s * t_F, th, H, G)[0], float))
+    # the chip reads up to (not at) the load where it leaves its range
+    F_r_read = np.abs(np.asarray(models.forces(s * t_read, th, H, G)[0], float))
+    return float(F_r_body.max()), float(F_r_read.max())

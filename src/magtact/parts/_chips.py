@@ -132,6 +132,17 @@ class ChipTable:
     def B_sat(self) -> float:
         return self.data["saturation"]["B_sat_mT"] * 1e-3
 
+    def tolerance(self) -> tuple[float, float, float, str] | None:
+        """The datasheet's band of the sensitivity (relative, ±) and of the offset on x and z
+        [T] over the temperature range, and where they come from; None where the data give
+        none."""
+        d = self.data.get("tolerance")
+        if d is None:
+            return None
+        x, z = self.lsb(d["offset_gain_sel"], d["offset_res"])
+        return (d["sensitivity_percent"] / 100.0, d["offset_LSB"] * x, d["offset_LSB"] * z,
+                d["source"])
+
     @staticmethod
     def axis_time(osr: int, dig_filt: int) -> float:
         """T_CONVM = 67 + 64 · 2^OSR · (2 + 2^DIG_FILT) µs, in s (Table 8)."""

@@ -36,7 +36,7 @@ from ._model import (
     Tolerances,
     holdout_limit,
 )
-from ._rules import check_field_mesh, check_holdout, check_study
+from ._rules import ROOM_C, check_field_mesh, check_holdout, check_study
 from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
@@ -45,7 +45,8 @@ __all__ = [
     "ARRAY_LAYOUTS", "Array", "Environment", "Tolerances",
     "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
     "Design", "HallChip", "HallPreset", "Loading", "Magnet", "Magnetics", "Material", "Mechanics",
-    "PHYSICAL", "Requirements", "Sensitivity", "Study", "StudyError", "check_si", "checked_si",
+    "PHYSICAL", "ROOM_C", "Requirements", "Sensitivity", "Study", "StudyError", "check_si",
+    "checked_si",
     "from_si", "hall_chip", "kpa", "load_study", "magone", "magone_printed", "mm", "mt",
     "study_from_dict", "to_si",
 ]

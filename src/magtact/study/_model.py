@@ -447,8 +447,12 @@ class Environment:
 
 @dataclass(frozen=True)
 class Tolerances:
-    """Fabrication tolerances of the error budget's Monte Carlo (docs/method.md §12): each the
-    standard deviation of a normal distribution around the nominal value."""
+    """Fabrication tolerances (docs/method.md §12, §16): the error budget's Monte Carlo and
+    the robust verdict. The spreads of G, the magnet's size, the chip's height and the body's
+    height are standard deviations of normal distributions around the nominal value; the
+    robust verdict truncates each at ±``coverage`` of them. The magnet's remanence is its
+    grade's catalogue range (``remanence`` is the spread of a custom magnet); the temperature,
+    the chip's sensitivity and offset and the FE forces' bias are ranges."""
 
     G: float = setting(0.05, "pct", minimum=0.0, bounds=(0.0, 0.3),
                        doc="spread of the elastomer's shear modulus (relative)")
@@ -471,6 +475,39 @@ class Tolerances:
                            doc="Monte-Carlo samples")
     seed: int = setting(0, integer=True, minimum=0, maximum=2**32 - 1,
                         doc="seed of the Monte Carlo")
+    body_height: float = setting(0.05e-3, "mm", minimum=0.0, bounds=(1e-9, 1e-3),
+                                 doc="spread of the body's base height H (the mould and the "
+                                     "cast; assumed, no cited figure)")
+    coverage: float = setting(3.0, positive=True, bounds=(0.5, 6.0),
+                              doc="the robust verdict's tolerance box: each normal spread "
+                                  "truncated at ± this many standard deviations")
+    temperature_C: tuple[float, float] = setting(
+        (10.0, 40.0), bounds=(-60.0, 200.0),
+        doc="working temperature range [°C] of the robust verdict: the remanence follows the "
+            "grade's coefficient from 20 °C (assumed indoor use, no cited figure)")
+    chip_sensitivity: float = setting(0.0, "pct", minimum=0.0, bounds=(0.0, 0.5),
+                                      doc="band of the chip's sensitivity (±, relative) over "
+                                          "the temperature range; 0: the chip's datasheet "
+                                          "figure (MLX90393: 3 %, Table 9 SENSTHD)")
+    chip_offset_x: float = setting(0.0, "uT", minimum=0.0, bounds=(0.0, 0.1),
+                                   doc="band of the chip's x and y offset (±) over the "
+                                       "temperature range; 0: the chip's datasheet figure "
+                                       "(MLX90393: 1000 LSB at GAIN_SEL 7, RES 0 = 150 µT, "
+                                       "Table 9 OFFSTHD)")
+    chip_offset_z: float = setting(0.0, "uT", minimum=0.0, bounds=(0.0, 0.1),
+                                   doc="band of the chip's z offset (±); 0: the chip's "
+                                       "datasheet figure (MLX90393: 242 µT)")
+    fe_force_bias: float = setting(0.05, "pct", minimum=0.0, bounds=(0.0, 0.5),
+                                   doc="how far the FE forces may lie above the converged ones "
+                                       "(one-sided): the default mesh's F_z(t = 1) at H = 3 mm, "
+                                       "+5.0 % (docs/verification.md; +8.4 % at H = 7 mm)")
+    robust_samples: int = setting(1024, integer=True, minimum=64, maximum=1_048_576,
+                                  doc="units of the robust verdict's quasi-Monte Carlo (a "
+                                      "power of 2; split in robust_replicates scrambled Sobol "
+                                      "sets)")
+    robust_replicates: int = setting(8, integer=True, minimum=2, maximum=1024,
+                                     doc="independently scrambled Sobol sets of the yield; "
+                                         "their spread gives its confidence interval")
 
 
 def holdout_limit(n_theta: int, n_H: int) -> int:

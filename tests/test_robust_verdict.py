@@ -1,0 +1,121 @@
+"""The robust verdict: the tolerance box with its cited sources, the yield by quasi-Monte Carlo
+against exact cases (only the remanence varies: the yield is the probability that it lies
+below the threshold where the chip saturates at the required force), the worst corner against
+every sampled unit, and the built units of the default design against an independent field."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from magtact.study import StudyError
+from magtact.tolerance import (
+    INPUTS,
+    Tolerance,
+    ToleranceBox,
+    corners,
+    design_context,
+    robust_verdict,
+    tolerance_box,
+    unit_figures,
+)
+
+
+@pytest.fixture(scope="module")
+def chosen(magone_design):
+    a = magone_design.chosen
+    return magone_design.of(a)[0], a
+
+
+def only_remanence(box: ToleranceBox) -> ToleranceBox:
+    """``box`` with every input but the remanence fixed at its nominal value."""
+    fixed = tuple(t if t.name == "B_r" else replace(t, low=t.nominal, high=t.nominal)
+                  for t in box.inputs)
+    return replace(box, inputs=fixed)
+
+
+def at_threshold(models, a, box, share=0.4):
+    """The answer with the required normal force where the unit whose remanence factor is k0
+    (``share`` of the way from nominal to the box's high end) saturates; the saturation
+    figure falls as the remanence grows, so the units that read it are those below k0."""
+    ctx = design_context(models, a, box)
+    b = box.inputs[box.index("B_r")]
+    k0 = b.nominal + share * (b.high - b.nominal)
+    x = box.nominal.copy()
+    x[box.index("B_r")] = k0
+    F_z = float(unit_figures(ctx, box, x[None, :])["F_sat"][0])
+    study = replace(a.study, requirements=replace(a.study.requirements, F_z=F_z))
+    return replace(a, study=study), k0
+
+
+def test_the_yield_of_a_uniform_remanence_is_its_probability_below_the_threshold(chosen):
+    models, a = chosen
+    box = only_remanence(tolerance_box(a.study))
+    b = box.inputs[0]
+    assert b.distribution == "uniform" and (b.low, b.high) == pytest.approx(
+        (1.39 / 1.415, 1.44 / 1.415))  # the N50 grade's catalogue range
+    answer, k = at_threshold(models, a, box)
+    exact = (k - b.low) / (b.high - b.low)  # reads where B_r lies below the threshold
+    r = robust_verdict(models, answer, box)["normal"]
+    lo, hi = r.interval
+    assert lo <= exact <= hi and hi - lo < 0.05, (exact, r.yield_fraction, r.interval)
+    assert r.limited_by == "B_r" and not r.met  # the strongest magnet saturates below F_z
+
+
+def test_the_yield_of_a_normal_remanence_is_its_probability_below_the_threshold(chosen):
+    models, a = chosen
+    custom = replace(a.study, magnet=replace(a.study.magnet, grade="custom"))
+    box = only_remanence(tolerance_box(custom))
+    b = box.inputs[0]
+    assert b.distribution == "normal" and b.sigma == custom.tolerances.remanence
+    answer, k = at_threshold(models, replace(a, study=custom), box)
+    c = custom.tolerances.coverage  # truncated at ± c σ
+    z = (k - 1.0) / b.sigma
+    exact = (stats.norm.cdf(z) - stats.norm.cdf(-c)) / (stats.norm.cdf(c) - stats.norm.cdf(-c))
+    r = robust_verdict(models, answer, box)["normal"]
+    assert r.interval[0] <= exact <= r.interval[1], (exact, r.yield_fraction, r.interval)
+
+
+def test_the_nominal_unit_is_the_nominal_verdict(chosen):
+    models, a = chosen
+    box = tolerance_box(a.study)
+    fig = unit_figures(design_context(models, a, box), box, box.nominal[None, :])
+    v = a.verdict
+    assert fig["F_sat"][0] == pytest.approx(v.F_saturation, rel=1e-3)
+    assert fig["shear_read"][0] == pytest.approx(v.shear_read, rel=1e-3)
+    assert fig["F_z_max"][0] == pytest.approx(a.design.F_z_max, rel=1e-9)
+    assert fig["shear_stable"][0] == pytest.approx(-a.design.F_r_min, rel=1e-9)
+
+
+def test_no_sampled_unit_is_worse_than_the_worst_corner(chosen):
+    models, a = chosen
+    r = robust_verdict(models, a)
+    assert r.corner_bounds_samples
+    assert r.samples == a.study.tolerances.robust_samples
+    for q in r.requirements:  # the worst corner is no better than the nominal unit
+        assert q.worst <= q.nominal * (1 + 1e-9)
+        assert q.limited_by in INPUTS
+        assert q.answer.startswith(("yes for ", "no for ")) and "worst case" in q.answer
+    assert r.sigma_worst >= r.sigma_nominal
+
+
+def test_the_box_cites_its_sources_and_refuses_a_reversed_temperature_range(chosen):
+    _, a = chosen
+    box = tolerance_box(a.study)
+    assert box.names == INPUTS
+    chip = box.inputs[box.index("chip_sensitivity")]
+    assert chip.high == pytest.approx(0.03) and "Table 9" in chip.source  # MLX90393 SENSTHD
+    assert box.offset == pytest.approx((150e-6, 242e-6))  # 1000 LSB at GAIN_SEL 7, RES 0
+    assert box.inputs[box.index("fe_bias")].high == pytest.approx(0.05)
+    assert corners(box).shape == (128, len(INPUTS))
+    bad = replace(a.study, tolerances=replace(a.study.tolerances, temperature_C=(40.0, 10.0)))
+    with pytest.raises(StudyError, match=r"tolerances\.temperature_C.*lowest temperature"):
+        tolerance_box(bad)
+
+
+def test_a_tolerance_of_zero_width_is_its_nominal_value():
+    t = Tolerance("G", 0.0, 0.0, 0.0, "normal", 0.0, "none")
+    assert np.all(t.ppf(np.linspace(0, 1, 5)) == 0.0)
