@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
+from ._display import mN, sig
 from ._errors import MagtactError, MissingFileError
 from ._files import write_text
 from ._front import solve
@@ -53,17 +54,37 @@ class StageSkipped(Exception):
 
 @dataclass(frozen=True)
 class RunResult:
-    """Outcome of :func:`run_study`: the folder, the report file and the stage records."""
+    """Outcome of :func:`run_study`: the folder, the report file, the stage records and the
+    answer (the design card's verdict and parts, or what binds where no design meets the
+    requirements: ``answer["infeasible"]``)."""
 
     folder: Path
     report: Path
     stages: tuple[StageRecord, ...]
     wall_time_s: float
+    answer: dict | None = None
 
     @property
     def ok(self) -> bool:
-        """True if every stage succeeded."""
-        return all(s.status in ("ok", "warning") for s in self.stages)
+        """True if every stage succeeded (stages skipped because no design meets the
+        requirements count as done: that is the answer)."""
+        return all(s.status in ("ok", "warning") or (self.infeasible and s.status == "skipped")
+                   for s in self.stages)
+
+    @property
+    def infeasible(self) -> bool:
+        """True if no design meets the study's requirements (the answer says what binds)."""
+        return isinstance(self.answer, dict) and isinstance(self.answer.get("infeasible"), dict)
+
+    def __str__(self) -> str:
+        from ._display import run_rows, text_block
+
+        return text_block(*run_rows(self))
+
+    def _repr_html_(self) -> str:
+        from ._display import html_block, run_rows
+
+        return html_block(*run_rows(self))
 
 
 @dataclass
@@ -83,6 +104,10 @@ class _Context:
     models_source: str = "none"
     result: object = None
     doe_source: str = "none"
+    #: The answer where no design meets the requirements (:class:`magtact.designer.Infeasible`).
+    infeasible: object = None
+    #: The design card of the run (its verdict and parts), for the caller.
+    card: dict | None = None
 
 
 def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: bool = False,
@@ -172,7 +197,7 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
         swap(folder, stage, run_id)
         remove_dead(folder)
     return RunResult(folder=folder, report=folder / "report.html", stages=tuple(records),
-                     wall_time_s=time.perf_counter() - start)
+                     wall_time_s=time.perf_counter() - start, answer=ctx.card)
 
 
 def _run_stages(ctx: _Context, run_id: str, manifest: RunManifest, start: float
@@ -308,12 +333,24 @@ def _fit_geometry(ctx: _Context, rec: StageRecord) -> str:
 def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     if ctx.models is None:
         raise StageSkipped("needs the metamodels, which are missing")
+    from .designer import InfeasibleSpecification
     from .optimise import FrontGapWarning, describe
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", FrontGapWarning)
-        result = solve(ctx.models, ctx.study, models_source=ctx.models_source,
-                       dataset=ctx.dataset)
+        try:
+            result = solve(ctx.models, ctx.study, models_source=ctx.models_source,
+                           dataset=ctx.dataset)
+        except InfeasibleSpecification as exc:  # an answer, not a failure
+            from .report import write_infeasible_card
+
+            ctx.infeasible = exc.answer
+            (ctx.folder / "optimise").mkdir(parents=True, exist_ok=True)
+            write_infeasible_card(exc.answer, ctx.folder / "optimise", ctx.study)
+            ctx.card = _card_of(ctx.folder / "optimise")
+            relax = exc.answer.relaxation
+            return ("no design meets the requirements; "
+                    + (f"relax {relax.text}" if relax is not None else str(exc)))
     for w in caught:  # a disagreement of NSGA-II and the exact reduction is said in the report
         if issubclass(w.category, FrontGapWarning):
             rec.notes.append(f"WARNING: {w.message}")
@@ -323,6 +360,7 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
     # the budget is a stage of its own; the explorer's grid is for the report
     result.write_into(ctx.folder / "optimise", budget=False, explorer=True)
     ctx.result = result
+    ctx.card = _card_of(ctx.folder / "optimise")
     if ctx.study.geometric_variables:
         r = result.optimisation
         return (f"design chosen: {describe(r.choice.values)} (exact reduction: "
@@ -334,6 +372,8 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
 def _one_geometry(ctx: _Context, what: str):
     """The run's result for a stage that belongs to one geometry (else the stage is skipped,
     saying why)."""
+    if ctx.infeasible is not None:
+        raise StageSkipped(NO_DESIGN)
     if ctx.result is None:
         raise StageSkipped("needs the chosen design, which is missing")
     if ctx.study.geometric_variables:
@@ -350,8 +390,7 @@ def _stage_budget(ctx: _Context, rec: StageRecord) -> str:
     budgets = result.budgets  # computed for the design card
     write_budgets(budgets, ctx.study, ctx.folder / "budget", figures=budget_figures)
     top = budgets[0].largest(1)[0]
-    return (f"largest row of the chosen design: {top.name} ({top.component}), "
-            f"{1e3 * top.worst:.3g} mN worst")
+    return f"largest row of the chosen design: {top.name} ({top.component}), {mN(top.worst)} worst"
 
 
 #: The firmware candidates a run measures (``magtact calibrate`` measures the full sweep of
@@ -369,11 +408,11 @@ def _stage_calibration(ctx: _Context, rec: StageRecord) -> str:
     write_calibration_outputs(cal, ctx.folder / "calibration", figures=calibration_figures)
     a = cal.firmware.chosen
     if not cal.firmware.reached:
-        rec.notes.append("no firmware candidate of the run's sweep reaches σ_F: `magtact "
-                         "calibrate` measures the full sweep")
+        rec.notes.append("no firmware candidate of the run's sweep reaches σ_F: magtact "
+                         "calibrate measures the full sweep")
     return (f"chosen design's map for firmware: {a.kind}, {a.bytes} bytes, largest error "
-            f"{1e3 * a.err_r:.3g} / {1e3 * a.err_z:.3g} mN (F_r / F_z) against σ_F "
-            f"{1e3 * cal.sigma_F[0]:.3g} / {1e3 * cal.sigma_F[1]:.3g} mN")
+            f"{mN(a.err_r)} shear, {mN(a.err_z)} normal, against σ_F {mN(cal.sigma_F[0])} / "
+            f"{mN(cal.sigma_F[1])}")
 
 
 def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
@@ -384,6 +423,12 @@ def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
                            "geometry with its own study (fixed R_m, H_m, R)")
     from .validation import PathModel, read_experiment, synthetic_files, validate, write_outputs
 
+    if not ctx.data:
+        other = _other_sensor(ctx.study)
+        if other:  # the example was made on the MagOne sensor
+            raise StageSkipped("the shipped example data belong to the MagOne sensor, not "
+                               f"this study's ({other}): give measurements of this sensor "
+                               "(--measured)")
     files = ctx.data or synthetic_files()
     if not ctx.data:
         rec.notes.append("no data given: the shipped SYNTHETIC example data set was used")
@@ -398,7 +443,7 @@ def _stage_validation(ctx: _Context, rec: StageRecord) -> str:
     worst = max(result.rows(), key=lambda r: r["eps_percent"]
                 if r["eps_percent"] == r["eps_percent"] else -1.0)
     kind = "SYNTHETIC data" if result.synthetic else "experiment"
-    return (f"{kind}, {result.n_tests} tests; largest ε = {worst['eps_percent']:.3g} % "
+    return (f"{kind}, {result.n_tests} tests; largest ε = {sig(worst['eps_percent'])} % "
             f"({worst['response']})")
 
 
@@ -414,6 +459,33 @@ STAGES: tuple[tuple[str, str, Callable], ...] = (
 
 
 # ---- helpers ---------------------------------------------------------------------------------
+#: Why the stages after the optimisation have nothing to work on.
+NO_DESIGN = "no design meets the requirements (the verdict says what binds and what to relax)"
+
+
+def _card_of(folder: Path) -> dict | None:
+    """The design card the optimisation wrote (its verdict and parts), or None."""
+    from .report import read_card
+
+    return read_card(folder)
+
+
+def _other_sensor(study: Study) -> str:
+    """How ``study``'s sensor differs from the MagOne sensor the shipped example data were
+    made on ("" where it is that sensor): magnet, body and loading."""
+    from .study import load_study
+
+    ref = load_study("magone")
+    names = {"magnet": ("R_m", "H_m", "M_z", "placement"), "body": ("R", "H_g", "R_g", "R_h"),
+             "loading": ("dz_sat",)}
+    words = {"R_m": "magnet radius", "H_m": "magnet height", "M_z": "magnetisation",
+             "placement": "magnet placement", "R": "body radius", "H_g": "gap height",
+             "R_g": "gap radius", "R_h": "hole radius", "dz_sat": "saturation depth"}
+    differ = [words[k] for section, keys in names.items() for k in keys
+              if getattr(getattr(study, section), k) != getattr(getattr(ref, section), k)]
+    return ", ".join(f"{w} differs" for w in differ[:3])
+
+
 def _forget_previous_run(folder: Path) -> None:
     """Before a run (its lock held): finish the swap of a run killed while putting its results
     in place, and refuse if a file or folder where this run will write is not magtact's."""

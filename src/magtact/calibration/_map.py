@@ -145,6 +145,16 @@ class SensorMap:
     force_source: str = "models"
     fe: FEForces | None = None
 
+    def __str__(self) -> str:
+        from .._display import sensor_map_rows, text_block
+
+        return text_block(*sensor_map_rows(self))
+
+    def _repr_html_(self) -> str:
+        from .._display import html_block, sensor_map_rows
+
+        return html_block(*sensor_map_rows(self))
+
     def __post_init__(self):
         if self.field_source not in ("models", "exact"):
             raise ValueError(f"field_source must be 'models' or 'exact', got "

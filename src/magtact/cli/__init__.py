@@ -42,7 +42,9 @@ def main() -> None:
     """Entry point of the ``magtact`` console script.
 
     Every non-zero exit says why: a user's error in one line (exit 2), a fault with its
-    traceback (exit 1), SIGTERM in one line (exit 143). A broken pipe is quiet only when it is
+    traceback (exit 1), a specification no design meets with its answer on standard output
+    (exit 3: each requirement's best figure, what binds, what to relax), SIGTERM in one line
+    (exit 143). A broken pipe is quiet only when it is
     the terminal's own output that was closed (``magtact ... | head``); any other, e.g. to a
     worker process that failed to start, is a fault with its traceback.
     """
@@ -54,6 +56,12 @@ def main() -> None:
                       "results are left as they were", highlight=False, soft_wrap=True)
         sys.exit(128 + signal.SIGTERM)
     except USER_ERRORS as exc:
+        if getattr(exc, "answer", None) is not None:  # no design meets the specification
+            from ..report import infeasible_card
+            from ._app import EXIT_INFEASIBLE, print_answer
+
+            print_answer(infeasible_card(exc.answer), exc.answer.study or "the study")
+            sys.exit(EXIT_INFEASIBLE)
         console.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
         sys.exit(2)
     except OSError as exc:  # a file or folder the user named cannot be read or written

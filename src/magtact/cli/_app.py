@@ -7,6 +7,7 @@ import select
 import sys
 import tempfile
 from collections.abc import Iterator
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -17,7 +18,7 @@ from typer.core import TyperGroup
 from .._errors import MagtactError
 from .._numbers import parse_float, parse_int
 from .._runfolder import CommandOutputs, command_outputs
-from ..study import Study, load_study
+from ..study import MESH_DENSITIES, Study, load_study
 
 
 class BrokenPipeFault(RuntimeError):
@@ -123,6 +124,69 @@ def tables() -> Console:
     return out if out.is_terminal else Console(width=TABLE_WIDTH)
 
 
+#: Exit status of a command whose answer is that no design meets the study's requirements
+#: (the answer is printed: each requirement's best figure, what binds, what to relax).
+EXIT_INFEASIBLE = 3
+
+
+def answer_lines(card: dict, tail: list[tuple[str, str]] | None = None
+                 ) -> list[tuple[str, str]]:
+    """The answer of a design card (``card.json``: its ``verdict``, ``parts`` and, for a
+    specification no design meets, ``infeasible``) as ``(label, value)`` rows: each
+    requirement with its answer and margin, then the parts, the force noise and ``tail``."""
+    from .._display import infeasible_rows, requirement_rows, round_text
+
+    infeasible = card.get("infeasible")
+    if isinstance(infeasible, dict):
+        return infeasible_rows(infeasible)[1] + list(tail or [])
+    rows = requirement_rows(card.get("verdict"))
+    parts = [p for p in card.get("parts") or [] if isinstance(p, (list, tuple)) and len(p) == 2]
+    rows += [(str(k), round_text(str(v))) for k, v in parts]
+    answers = card.get("answers") or [{}]
+    first = answers[0] if isinstance(answers[0], dict) else {}
+    s_r, s_z = (first.get(f"sigma_F{a}_required_loads_mN") for a in "rz")
+    if isinstance(s_r, float) and isinstance(s_z, float) and s_r == s_r:
+        from .._display import sig
+
+        rows.append(("force noise σ_F (1 σ)", f"{sig(s_r)} mN shear, {sig(s_z)} mN normal, "
+                                              "worst over the required loads"))
+    return rows + list(tail or [])
+
+
+def answer_title(card: dict, study: str) -> str:
+    """The first line of a printed answer: the study and the verdict in a few words."""
+    from .._display import verdict_title
+
+    if isinstance(card.get("infeasible"), dict):
+        return f"{study}: no design meets the requirements"
+    return f"{study}, chosen design: {verdict_title(card.get('verdict'))}"
+
+
+def answer_text(card: dict, study: str, tail: list[tuple[str, str]] | None = None
+                ) -> list[str]:
+    """The lines :func:`print_answer` prints: the title, each requirement (mark and statement)
+    over its answer and margin, then the parts, the force noise and ``tail``, one per line."""
+    lines = [answer_title(card, study)]
+    for label, value in answer_lines(card, tail):
+        if label[:1] in "✓✗?" and label[1:2] == " ":
+            lines += [f"  {label}", f"      {value}"]
+        else:
+            lines.append(f"  {label}: {value}" if label else f"  {value}")
+    return lines
+
+
+def print_answer(card: dict, study: str, tail: list[tuple[str, str]] | None = None,
+                 out: Console | None = None) -> None:
+    """Print the answer of a design card on standard output (:func:`answer_text`), short
+    enough to stay on an 80 × 24 terminal's last screen: the verdict with margins, the parts,
+    then ``tail`` (where the files are). Lines are whole (a terminal wraps them)."""
+    from rich.text import Text
+
+    out = out or tables()
+    for k, line in enumerate(answer_text(card, study, tail)):
+        out.print(Text(line, style="bold" if k == 0 else ""), soft_wrap=True)
+
+
 def _version(value: bool) -> None:
     if value:
         from .. import __version__
@@ -152,6 +216,16 @@ def renamed(old: str, new: str, usage: str | None = None):
     return typer.Option(old, hidden=True, callback=refuse, expose_value=True,
                         help=f"renamed: {new}")
 
+class Solver(StrEnum):
+    """Field solvers of the command line."""
+
+    fe = "fe"
+    exact = "exact"
+
+
+#: Named mesh densities of the half body (``magtact.study.MESH_DENSITIES``).
+MeshDensity = StrEnum("MeshDensity", {name: name for name in MESH_DENSITIES})
+
 #: The optional STUDY argument of every command: a TOML file or a preset name.
 StudyArg = Annotated[
     str | None,
@@ -171,6 +245,24 @@ def check_out(path: Path) -> Path:
 
 OutOpt = Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).",
                                       callback=check_out)]
+#: ``--workers``: worker processes of the FE jobs (DOE, seed study), one meaning everywhere.
+WorkersOpt = Annotated[int | None, typer.Option(
+    "--workers", "-j", min=0,
+    help="Worker processes of the FE jobs (default: the number of cores; 0: run them in this "
+         "process).")]
+#: ``--cache``: the FE job cache, one meaning everywhere.
+CacheOpt = Annotated[Path, typer.Option(
+    "--cache", help="Job cache folder of the FE jobs: finished jobs are kept there and never "
+                    "recomputed.")]
+#: ``--data``: a DOE data set, one meaning everywhere.
+DataOpt = Annotated[Path | None, typer.Option(
+    "--data", help="DOE data set (.nc, magtact doe); default: the data set bundled with "
+                   "magtact.")]
+#: ``--models``: model files of ``magtact fit``, one meaning everywhere.
+ModelsOpt = Annotated[Path | None, typer.Option(
+    "--models", help="Folder of metamodel files (B_r.json, B_z.json, f_r.json, f_z.json; "
+                     "magtact fit); default: the fit shipped with magtact where it matches the "
+                     "bundled data set, else a new fit to it.")]
 
 
 def get_study(source: str | None) -> Study:

@@ -10,23 +10,18 @@ from typing import Annotated
 
 import typer
 
-from ._app import OutOpt, StudyArg, app, console, get_study, outputs
+from ._app import CacheOpt, OutOpt, StudyArg, WorkersOpt, app, console, get_study, outputs
 
 
 @app.command("doe")
 def doe_command(
-    out: OutOpt,
     study: StudyArg = None,
-    workers: Annotated[int | None, typer.Option(
-        "--workers", "-j", min=0,
-        help="Local worker processes (default: the number of cores; 0: run in this "
-             "process).")] = None,
+    out: OutOpt = Path("doe"),
+    workers: WorkersOpt = None,
     scheduler: Annotated[str | None, typer.Option(
         "--scheduler", help="Address of a dask.distributed scheduler (tcp://host:8786); the "
                             "jobs run on its workers instead of local processes.")] = None,
-    cache: Annotated[Path, typer.Option(
-        "--cache", help="Job cache folder: finished jobs are kept there and never recomputed.")]
-    = Path(".magtact-cache"),
+    cache: CacheOpt = Path(".magtact-cache"),
     no_cache: Annotated[bool, typer.Option("--no-cache", help="Compute every job afresh.")]
     = False,
     error_paths: Annotated[int, typer.Option(

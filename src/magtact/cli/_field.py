@@ -3,25 +3,18 @@
 from __future__ import annotations
 
 import time
-from enum import StrEnum
+from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from ._app import OutOpt, StudyArg, app, console, get_study, outputs
-
-
-class Solver(StrEnum):
-    """Field solvers of the command line."""
-
-    fe = "fe"
-    exact = "exact"
+from ._app import OutOpt, Solver, StudyArg, app, console, get_study, outputs
 
 
 @app.command("field")
 def field_command(
-    out: OutOpt,
     study: StudyArg = None,
+    out: OutOpt = Path("field"),
     solver: Annotated[Solver | None, typer.Option(
         "--solver", help="'fe': axisymmetric finite elements; 'exact': closed form. "
                          "Default: the study's magnetics.solver.")] = None,

@@ -10,21 +10,20 @@ import typer
 from rich.table import Table
 
 from .._display import sig
-from ._app import OutOpt, StudyArg, app, console, get_study, outputs, renamed, tables
+from ._app import DataOpt, OutOpt, StudyArg, app, console, get_study, outputs, renamed, tables
 
 
 @app.command()
 def fit(
     study: StudyArg = None,
     out: OutOpt = Path("fit"),
-    data: Annotated[Path | None, typer.Option(
-        "--data", help="DOE data set (.nc); default: the bundled MagOne data set.")] = None,
+    data: DataOpt = None,
     generations: Annotated[int | None, typer.Option(
         help="Override [metamodel] generations.", min=1)] = None,
     H_mm: Annotated[float | None, typer.Option(
-        "--H", help="Design height of the figures [mm]; default: the original design.")] = None,
+        "--H", help="Body height H [mm] of the figures; default: the original design.")] = None,
     G_kpa: Annotated[float | None, typer.Option(
-        "--G", help="Shear modulus of the figures [kPa]; default: original design.")] = None,
+        "--G", help="Shear modulus G [kPa] of the figures; default: the original design.")] = None,
     _old_H: Annotated[str | None, renamed("--H-mm", "--H")] = None,
     _old_G: Annotated[str | None, renamed("--G-kpa", "--G")] = None,
 ) -> None:

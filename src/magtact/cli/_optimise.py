@@ -13,14 +13,7 @@ from rich.table import Table
 from .._display import sig
 from .._errors import MagtactError
 from ..study import Study, checked_si, from_si
-from ._app import OutOpt, StudyArg, app, console, get_study, outputs, renamed, tables
-
-ModelsOpt = Annotated[
-    Path | None,
-    typer.Option("--models", help="Folder of metamodel files (B_r.json, B_z.json, f_r.json, "
-                                  "f_z.json); default: fit them to the bundled DOE data set."),
-]
-
+from ._app import ModelsOpt, OutOpt, StudyArg, app, console, get_study, outputs, renamed, tables
 
 #: Files ``magtact optimise`` always writes (:meth:`magtact.Result.write`).
 OPTIMISE_OUTPUTS = ("design.json", "pareto.csv", "reduction.csv", "maps.csv", "card.json",
@@ -59,8 +52,8 @@ def study_models(study: Study, models: Path | None):
 
 @app.command("optimise")
 def optimise_command(
-    out: OutOpt,
     study: StudyArg = None,
+    out: OutOpt = Path("optimise"),
     Frc: Annotated[float | None, typer.Option(
         "--Frc", help="Shear constraint F_r,c [N]: F_r,min must be at most this.")] = None,
     Fzc: Annotated[float | None, typer.Option(

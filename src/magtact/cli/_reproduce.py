@@ -10,28 +10,28 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..publication import SEED_GENERATIONS
-from ._app import StudyArg, app, console, get_study, outputs, tables
+from ._app import DataOpt, StudyArg, WorkersOpt, app, check_out, console, get_study, outputs, tables
 
 
 @app.command("reproduce")
 def reproduce_command(
     study: StudyArg = None,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Results folder (created); the "
-                                      "section lands in OUT/publication and OUT/report.html.")]
-    = Path("results"),
+    out: Annotated[Path, typer.Option("--out", "-o", callback=check_out,
+                                      help="Output folder (created if needed): a results folder "
+                                      "of magtact run; the section lands in OUT/publication and "
+                                      "OUT/report.html.")] = Path("results"),
     seeds: Annotated[int, typer.Option(
         "--seeds", help="GP seeds per sensitivity definition (at least 1).")] = 8,
-    workers: Annotated[int | None, typer.Option(
-        "--workers", "-j", min=1, help="Worker processes (default: the number of cores).")] = None,
-    data: Annotated[Path | None, typer.Option(
-        "--data", help="DOE data set (.nc); default: the bundled MagOne data set.")] = None,
+    workers: WorkersOpt = None,
+    data: DataOpt = None,
     generations: Annotated[int, typer.Option(
         "--generations", min=1, max=10_000,
         help="GP generations of every force fit (the design fit's budget is [metamodel] "
              "generations, 100 for magone).")] = SEED_GENERATIONS,
     definition: Annotated[list[str] | None, typer.Option(
-        "--definition", help="Sensitivity definition to include (repeat for several); "
-                             "default: jacobian and published.")] = None,
+        "--definition", metavar="[jacobian|published]",
+        help="Sensitivity definition to include: jacobian or published (repeat for "
+             "several); default: both.")] = None,
 ) -> None:
     """Refit the force models with N seeds under the Jacobian and the published definition of
     Γ, rerun the optimisation, and compare with the publication (CSV, JSON, figures, report)."""
@@ -50,7 +50,7 @@ def reproduce_command(
     with outputs("reproduce", out, *(f"publication/{n}" for n in names)) as o:
         folder = o.folder / "publication"
         # the cache of fits stays in place (resumable; its entries are named by their inputs)
-        result = reproduce(s, seeds=seeds, workers=workers, data=data,
+        result = reproduce(s, seeds=seeds, workers=1 if workers == 0 else workers, data=data,
                            cache=out / "publication" / "fits", generations=generations,
                            definitions=tuple(definition) if definition else DEFINITIONS,
                            log=lambda m: console.print(m, highlight=False, markup=False))

@@ -7,14 +7,27 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 
-from ._app import StudyArg, app, check_out, console, get_study, out_dir
+from ._app import (
+    EXIT_INFEASIBLE,
+    CacheOpt,
+    StudyArg,
+    WorkersOpt,
+    app,
+    check_out,
+    console,
+    get_study,
+    out_dir,
+    print_answer,
+    renamed,
+)
 
 
 @app.command("run")
 def run_command(
     study: StudyArg = None,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Results folder (created).",
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).",
                                       callback=check_out)]
     = Path("results"),
     recompute: Annotated[bool, typer.Option(
@@ -23,37 +36,52 @@ def run_command(
     refit: Annotated[bool, typer.Option(
         "--refit", help="Fit the metamodels even when the fit shipped with magtact matches the "
                         "data and settings.")] = False,
-    data: Annotated[list[Path] | None, typer.Option(
-        "--data", help="Validation CSV file (repeat the option for several); default: the "
-                       "shipped SYNTHETIC example.")] = None,
-    cache: Annotated[Path, typer.Option("--cache", help="DOE job cache folder (--recompute).")]
-    = Path(".magtact-cache"),
-    workers: Annotated[int | None, typer.Option(
-        "--workers", "-j", min=0,
-        help="DOE worker processes (default: the number of cores).")] = None,
+    measured: Annotated[list[Path] | None, typer.Option(
+        "--measured", help="CSV file of measured repeat tests of this sensor, for the "
+                           "validation (repeat the option for several); default: the shipped "
+                           "SYNTHETIC example of the MagOne sensor.")] = None,
+    cache: CacheOpt = Path(".magtact-cache"),
+    workers: WorkersOpt = None,
     evidence: Annotated[Path | None, typer.Option(
         "--evidence", help="Folder of benchmark results (*.json, e.g. bench/results of a source "
                            "checkout) to include in the report.")] = None,
+    quiet: Annotated[bool, typer.Option(
+        "--quiet", "-q", help="No progress lines on standard error; the answer and any warning "
+                              "are still printed.")] = False,
+    _old_data: Annotated[list[str] | None, renamed("--data", "--measured")] = None,
 ) -> None:
-    """Run STUDY: field, DOE, metamodels, optimisation, validation; write OUT/report.html."""
+    """Run STUDY: field, DOE, metamodels, optimisation, validation; write OUT/report.html.
+
+    Progress goes to standard error; the answer (each requirement met or not with its margin,
+    and the parts) is printed last on standard output. Exit status 0: done; 3: no design meets
+    the requirements (the answer says what binds and what to relax); 1: a stage failed.
+    """
     from ..pipeline import run_study
 
     s = get_study(study)
-    result = run_study(s, out_dir(out), recompute=recompute, refit=refit, data=data, cache=cache,
-                       workers=workers, command="magtact " + " ".join(sys.argv[1:]),
-                       evidence=evidence,
-                       log=lambda m: console.print(m, highlight=False, markup=False))
-    from ..report import read_card
-    from ._optimise import print_card
-
-    print_card(read_card(result.folder / "optimise"))
-    console.print(f"report: {result.report} ({result.wall_time_s:.1f} s)", highlight=False)
+    log = (lambda m: None) if quiet else (lambda m: console.print(m, highlight=False,
+                                                                  markup=False))
+    result = run_study(s, out_dir(out), recompute=recompute, refit=refit, data=measured,
+                       cache=cache, workers=workers, command="magtact " + " ".join(sys.argv[1:]),
+                       evidence=evidence, log=log)
+    # warnings first (standard error), so that the answer ends the output
     for r in result.stages:  # a poor fit or a front gap: the answer stands, with its caveat
         for note in (n for n in r.notes if r.status == "warning" and n.startswith("WARNING")):
-            console.print(f"[bold yellow]{r.title}:[/] {note}", highlight=False)
-    bad = [r for r in result.stages if r.status not in ("ok", "warning")]
+            console.print(f"[bold yellow]{escape(r.title)}:[/] {escape(note)}", highlight=False)
+    bad = [r for r in result.stages if r.status not in ("ok", "warning")
+           and not (result.infeasible and r.status == "skipped")]
     if bad:
         console.print("[bold yellow]incomplete:[/] "
-                      + "; ".join(f"{r.title}: {r.status} ({r.message})" for r in bad),
+                      + escape("; ".join(f"{r.title}: {r.status} ({r.message})" for r in bad)),
                       highlight=False)
+    tail = [("report", f"{result.report} ({result.wall_time_s:.0f} s)")]
+    if result.answer:
+        tail.insert(0, ("card", str(result.folder / "optimise" / "card.json")))
+        sys.stderr.flush()
+        print_answer(result.answer, s.name, tail)
+    else:
+        console.print(f"report: {result.report} ({result.wall_time_s:.0f} s)", highlight=False)
+    if result.infeasible:
+        raise typer.Exit(EXIT_INFEASIBLE)
+    if bad:
         raise typer.Exit(1)

@@ -3,26 +3,22 @@
 from __future__ import annotations
 
 import math
-from enum import StrEnum
+from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from .._errors import MagtactError
 from .._files import write_csv
-from ..study import MESH_DENSITIES
-from ._app import OutOpt, StudyArg, app, console, get_study, outputs
-
-#: Named mesh densities of the half body (``magtact.study.MESH_DENSITIES``).
-MeshDensity = StrEnum("MeshDensity", {name: name for name in MESH_DENSITIES})
+from ._app import MeshDensity, OutOpt, StudyArg, app, console, get_study, outputs
 
 
 @app.command("simulate")
 def simulate_command(
-    out: OutOpt,
-    H: Annotated[float, typer.Option("--H", help="Base height H [mm].")],
+    H: Annotated[float, typer.Option("--H", help="Body height H [mm].")],
     theta: Annotated[float, typer.Option("--theta", help="Shear angle θ [rad].")],
     study: StudyArg = None,
+    out: OutOpt = Path("simulate"),
     G: Annotated[float | None, typer.Option(
         "--G", help="Shear modulus G [kPa]; default: the study's material.G_ref.")] = None,
     mesh: Annotated[MeshDensity | None, typer.Option(

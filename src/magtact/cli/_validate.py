@@ -11,9 +11,9 @@ from rich.table import Table
 
 from .._errors import MagtactError
 from .._floor import RELATIVE_FLOOR
-from ..study import MESH_DENSITIES, PRESETS, Study, checked_si, mm, to_si
+from ..study import PRESETS, Study, checked_si, mm, to_si
 from ..validation import MAX_GRID, N_GRID
-from ._app import app, check_out, console, get_study, outputs, tables
+from ._app import MeshDensity, Solver, app, check_out, console, get_study, outputs, tables
 
 #: Highest filter cut-off accepted (cycles per mm of u_z; the samples are far coarser).
 MAX_CYCLES_PER_MM = 1e6
@@ -67,20 +67,22 @@ def validate_command(
         metavar="[STUDY] DATA...",
         help="Optional study (preset or .toml), then CSV files of repeat tests; no files: the "
              "shipped SYNTHETIC example.")] = None,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.", callback=check_out)]
-    = Path("validation"),
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).",
+                                      callback=check_out)] = Path("validation"),
     H: Annotated[float | None, typer.Option("--H", help="Body height H of the tested design "
                                             "[mm]; default: the data's metadata.")] = None,
     G: Annotated[float | None, typer.Option("--G", help="Shear modulus G of the tested design "
                                             "[kPa]; default: the data's metadata.")] = None,
     models: Annotated[Path | None, typer.Option(
-        "--models", help="Folder of metamodel JSON files (from 'magtact fit'); default: "
-                         "simulate the design directly (one structural path).")] = None,
-    solver: Annotated[str, typer.Option(help="Field solver of the direct simulation: exact|fe.")]
-    = "exact",
-    mesh: Annotated[str | None, typer.Option(
-        help=f"Structural mesh of the direct simulation: {'|'.join(MESH_DENSITIES)}; default: "
-             "the study's.")] = None,
+        "--models", help="Folder of metamodel files (B_r.json, B_z.json, f_r.json, f_z.json; "
+                         "magtact fit); default: simulate the design directly (one structural "
+                         "path).")] = None,
+    solver: Annotated[Solver, typer.Option(
+        "--solver", help="Field solver of the direct simulation: 'fe': axisymmetric finite "
+                         "elements; 'exact': closed form.")] = Solver.exact,
+    mesh: Annotated[MeshDensity | None, typer.Option(
+        "--mesh", help="Mesh density of the direct simulation; default: the study's "
+                       "mechanics.mesh.")] = None,
     f_lo: Annotated[float, typer.Option("--f-lo", help="Low cut-off (cycles per mm of u_z).")]
     = 0.0,
     f_hi: Annotated[float, typer.Option("--f-hi", help="High cut-off (cycles per mm of u_z); 0: no "
@@ -109,10 +111,8 @@ def validate_command(
                       f"({len(data)} files)", highlight=False)
     H_m = None if H is None else checked_si(H, "mm", "--H")
     G_pa = None if G is None else checked_si(G, "kPa", "--G")
-    if solver not in ("exact", "fe"):
-        raise MagtactError(f"--solver must be 'exact' or 'fe', got {solver!r}")
-    if mesh is not None and mesh not in MESH_DENSITIES:
-        raise MagtactError(f"--mesh must be one of {', '.join(MESH_DENSITIES)}, got {mesh!r}")
+    solver = Solver(solver).value
+    mesh = None if mesh is None else MeshDensity(mesh).value
     for name, value in (("--f-lo", f_lo), ("--f-hi", f_hi)):
         if not (math.isfinite(value) and 0.0 <= value <= MAX_CYCLES_PER_MM):
             raise MagtactError(f"{name} must be between 0 and {MAX_CYCLES_PER_MM:g} cycles per mm "

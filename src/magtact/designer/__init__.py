@@ -20,9 +20,16 @@ from ._answer import (
     parts_of,
     resolution,
 )
+from ._infeasible import (
+    Infeasible,
+    InfeasibleSpecification,
+    Relaxation,
+    infeasibility,
+)
 from ._verdict import N_FINE, Requirement, Verdict, verdict
 
-__all__ = ["HALL_PRESETS", "N_FINE", "DesignAnswer", "HallChip", "HallPreset", "Parts",
-           "Requirement", "Resolution", "Saturation", "SettingChoice", "Verdict", "answer",
-           "answer_json", "best_setting", "check_rest_field", "hall_chip", "parts_of",
-           "resolution", "saturation", "setting_for", "verdict", "with_setting"]
+__all__ = ["HALL_PRESETS", "N_FINE", "DesignAnswer", "HallChip", "HallPreset", "Infeasible",
+           "InfeasibleSpecification", "Parts", "Relaxation", "Requirement", "Resolution",
+           "Saturation", "SettingChoice", "Verdict", "answer", "answer_json", "best_setting",
+           "check_rest_field", "hall_chip", "infeasibility", "parts_of", "resolution",
+           "saturation", "setting_for", "verdict", "with_setting"]

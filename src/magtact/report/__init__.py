@@ -5,7 +5,14 @@ what the stages' writers accept as their ``figures`` argument (the stages themse
 nothing). :func:`build_report` turns a results folder into one self-contained HTML file.
 """
 
-from ._card import card_rows, parts_list, read_card, write_card
+from ._card import (
+    card_rows,
+    infeasible_card,
+    parts_list,
+    read_card,
+    write_card,
+    write_infeasible_card,
+)
 from ._explorer import explorer_data, write_explorer
 from ._fig_budget import budget_figures, budget_labels, draw_budget, fig_budget
 from ._fig_calibration import (
@@ -36,7 +43,7 @@ from ._style import CMAP_DIV, CMAP_SEQ, save, style
 __all__ = [
     "budget_figures", "budget_labels", "draw_budget", "fig_budget", "calibration_figures",
     "draw_calibration", "fig_calibration", "report_document", "calibration_figure",
-    "explorer_data", "write_explorer", "parts_list",
+    "explorer_data", "write_explorer", "parts_list", "infeasible_card", "write_infeasible_card",
     "CMAP_DIV", "CMAP_SEQ", "build_report", "card_rows", "draw_geometry_pareto", "draw_maps",
     "draw_pareto", "optimise_figure_objects",
     "field_figures", "fig_deformed_body", "fig_doe", "fig_field", "fig_force_map", "fig_gamma",
