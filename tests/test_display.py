@@ -12,7 +12,6 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-import magtact
 from magtact._display import MAX_LINES, Card, round_text, sig, significant_digits
 
 #: A decimal number as the displays write one (not a dotted version, not inside a word).
