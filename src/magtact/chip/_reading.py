@@ -20,7 +20,7 @@ smallest such G is :meth:`SensorGrid.G_range`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -35,10 +35,13 @@ N_T, N_THETA = 31, 7
 READ_MARGIN = 0.02
 
 
-def exact_field_models(models: ModelSet, study: Study) -> ModelSet:
+def exact_field_models(models: ModelSet, study: Study, standoff=None) -> ModelSet:
     """``models`` with the exact field of ``study``'s magnet and chip position as B_r, B_z
-    (the field models fitted to a DOE hold at its chip position only)."""
-    return replace(models, B_r=ExactField(study, "B_r"), B_z=ExactField(study, "B_z"))
+    (the field models fitted to a DOE hold at its chip position only); ``standoff`` [m]: the
+    chip's standoff instead of the study's, an array broadcasting against the evaluation
+    points for a standoff per point (:class:`magtact.metamodel.ExactField`)."""
+    return replace(models, B_r=ExactField(study, "B_r", standoff),
+                   B_z=ExactField(study, "B_z", standoff))
 
 
 def unit_magnet(study: Study, standoff: float | None = None) -> Study:
@@ -73,6 +76,10 @@ class SensorGrid:
     b_x: np.ndarray
     b_z: np.ndarray
     j: np.ndarray
+
+    def take(self, rows) -> SensorGrid:
+        """The grid of the designs ``rows`` (index array or mask)."""
+        return SensorGrid(*(getattr(self, f.name)[rows] for f in fields(self)))
 
     def saturated(self, M_z, range_x, range_z) -> np.ndarray:
         """Where the chip leaves its range (±range_x, ±range_z [T]) with magnetisation M_z
@@ -118,20 +125,46 @@ class SensorGrid:
 
 
 def sensor_grid(models: ModelSet, study: Study, H, t_m, theta_m,
-                standoff: float | None = None, n: tuple[int, int] = (N_T, N_THETA)
-                ) -> SensorGrid:
+                standoff=None, n: tuple[int, int] = (N_T, N_THETA)) -> SensorGrid:
     """:class:`SensorGrid` of designs at heights H [m] with stable bounds t_m, θ_m (arrays of
-    shape (n,)) and the chip at ``standoff`` [m] (default the study's); ``n``: load levels and
-    shear angles of the grid."""
+    shape (n,)) and the chip at ``standoff`` [m] (default the study's; an array of shape (n,)
+    gives each design its own); ``n``: load levels and shear angles of the grid.
+
+    All designs are evaluated together: one evaluation of the force models and one of the
+    exact field (at every design's own standoff) for the whole set.
+    """
     H, t_m, theta_m = (np.atleast_1d(np.asarray(v, float)) for v in (H, t_m, theta_m))
+    per_design = standoff is not None and np.ndim(standoff) > 0
+    if per_design:
+        standoff = np.broadcast_to(np.asarray(standoff, float), H.shape)
+    step = max(1, CHUNK_POINTS // (n[0] * n[1]))
+    parts = []
+    for a in range(0, H.size, step):  # designs in chunks: the field's work arrays stay small
+        b = slice(a, a + step)
+        parts.append(_grid(models, study, H[b], t_m[b], theta_m[b],
+                           standoff[b] if per_design else standoff, n))
+    if len(parts) == 1:
+        return parts[0]
+    return SensorGrid(*(np.concatenate([getattr(p, f.name) for p in parts])
+                        for f in fields(SensorGrid)))
+
+
+#: Grid points per evaluation of the field in :func:`sensor_grid`.
+CHUNK_POINTS = 50_000
+
+
+def _grid(models, study, H, t_m, theta_m, standoff, n) -> SensorGrid:
     s = np.linspace(0.0, 1.0, n[0])[None, :, None]
     u = np.linspace(0.0, 1.0, n[1])[None, None, :]
     T = s * t_m[:, None, None] + 0.0 * u
     TH = u * theta_m[:, None, None] + 0.0 * s
     HH = np.broadcast_to(H[:, None, None], T.shape)
-    unit = exact_field_models(models, unit_magnet(study, standoff))
+    if standoff is not None and np.ndim(standoff) > 0:
+        unit = exact_field_models(models, unit_magnet(study), standoff[:, None, None])
+    else:
+        unit = exact_field_models(models, unit_magnet(study, standoff))
     f_r, f_z = unit.forces(T, TH, HH, 1.0)
-    b_x, b_z = unit.fields(T, TH, HH)
     j = dF_dB(unit, T, TH, HH, 1.0)
+    b_x, b_z = unit.fields(T, TH, HH)
     return SensorGrid(T, TH, np.asarray(f_r), np.asarray(f_z), np.asarray(b_x),
                       np.asarray(b_z), np.asarray(j))

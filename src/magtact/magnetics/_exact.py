@@ -43,36 +43,46 @@ def cel(kc, p, c, s) -> np.ndarray:
     cases are K(k) = cel(k_c, 1, 1, 1), E(k) = cel(k_c, 1, 1, k_c²), with k_c² = 1 − k².
     """
     kc, p, c, s = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (kc, p, c, s)))
+    return _cel_sets(kc, [(p, c, s)])[0]
+
+
+def _cel_sets(kc: np.ndarray, sets: list[tuple]) -> list[np.ndarray]:
+    """:func:`cel` for one ``kc`` array and several (p, c, s) sets of its shape: the
+    Landen/AGM sequence of k_c is shared by every set, so several integrals over the same
+    modulus cost little more than one."""
     if np.any(kc == 0):
         raise ValueError("cel: kc must be non-zero (the integral diverges)")
-    if np.any(p < 0):
+    if any(np.any(p < 0) for p, _, _ in sets):
         raise ValueError("cel: p must be >= 0")
     k = np.abs(kc)
+    state = []
+    for p, c, s in sets:
+        # p > 0 in every call the cylinder field makes except on the mantle line r = R (p = 0),
+        # where the general branch of Bulirsch's algorithm applies.
+        pos = p > 0
+        pp = np.where(pos, np.sqrt(np.where(pos, p, 1.0)), 0.0)
+        cc = c.copy()
+        ss = np.where(pos, s / np.where(pos, pp, 1.0), s)
+        if not np.all(pos):
+            pg = np.where(pos, 0.0, p)  # the general branch, evaluated where p <= 0 only
+            f = kc * kc
+            q = 1.0 - f
+            g = 1.0 - pg
+            f = f - pg
+            q = q * (s - c * pg)
+            pn = np.sqrt(f / g)
+            cn = (c - s) / g
+            sn = -q / (g * g * pn) + cn * pn
+            pp = np.where(pos, pp, pn)
+            cc = np.where(pos, cc, cn)
+            ss = np.where(pos, ss, sn)
+        f = cc
+        cc = cc + ss / pp
+        g = k / pp
+        ss = 2.0 * (ss + f * g)
+        pp = g + pp
+        state.append([cc, ss, pp])
     em = np.ones_like(k)
-    # p > 0 in every call the cylinder field makes except on the mantle line r = R (p = 0),
-    # where the general branch of Bulirsch's algorithm applies.
-    pos = p > 0
-    pp = np.where(pos, np.sqrt(np.where(pos, p, 1.0)), 0.0)
-    cc = c.copy()
-    ss = np.where(pos, s / np.where(pos, pp, 1.0), s)
-    if not np.all(pos):
-        pg = np.where(pos, 0.0, p)  # the general branch, evaluated where p <= 0 only
-        f = kc * kc
-        q = 1.0 - f
-        g = 1.0 - pg
-        f = f - pg
-        q = q * (s - c * pg)
-        pn = np.sqrt(f / g)
-        cn = (c - s) / g
-        sn = -q / (g * g * pn) + cn * pn
-        pp = np.where(pos, pp, pn)
-        cc = np.where(pos, cc, cn)
-        ss = np.where(pos, ss, sn)
-    f = cc
-    cc = cc + ss / pp
-    g = k / pp
-    ss = 2.0 * (ss + f * g)
-    pp = g + pp
     g = em
     em = k + em
     kk = k
@@ -81,16 +91,17 @@ def cel(kc, p, c, s) -> np.ndarray:
             break
         k = 2.0 * np.sqrt(kk)
         kk = k * em
-        f = cc
-        cc = cc + ss / pp
-        g = kk / pp
-        ss = 2.0 * (ss + f * g)
-        pp = g + pp
+        for st in state:
+            cc, ss, pp = st
+            f = cc
+            cc = cc + ss / pp
+            gp = kk / pp
+            st[:] = cc, 2.0 * (ss + f * gp), gp + pp
         g = em
         em = k + em
     else:  # pragma: no cover - the iteration converges quadratically for every valid input
         raise RuntimeError("cel: no convergence")
-    return 0.5 * np.pi * (ss + cc * em) / (em * (em + pp))
+    return [0.5 * np.pi * (ss + cc * em) / (em * (em + pp)) for cc, ss, pp in state]
 
 
 def cylinder_field(r, z, R_m, H_m, M_z) -> tuple[np.ndarray, np.ndarray]:
@@ -149,14 +160,15 @@ def cylinder_field(r, z, R_m, H_m, M_z) -> tuple[np.ndarray, np.ndarray]:
                                                                   atol=1e-12 * a)
     r = np.where(rim, 0.0, r)  # evaluate a harmless point there, replaced by NaN below
     gamma = (a - r) / (a + r)
-    B_r = np.zeros(r.shape)
-    B_z = np.zeros(r.shape)
-    for sign in (1.0, -1.0):
-        zs = z + sign * b
-        den = np.sqrt(zs * zs + (a + r) ** 2)
-        kc = np.sqrt(zs * zs + (a - r) ** 2) / den
-        B_r += sign * (a / den) * cel(kc, 1.0, 1.0, -1.0)
-        B_z += sign * (zs / den) * cel(kc, gamma * gamma, 1.0, gamma)
+    # both faces (z ± b) in one array, both integrals over one AGM sequence
+    zs = np.stack([z + b, z - b])
+    den = np.sqrt(zs * zs + (a + r) ** 2)
+    kc = np.sqrt(zs * zs + (a - r) ** 2) / den
+    one = np.ones(kc.shape)
+    gam = np.broadcast_to(gamma, kc.shape)
+    c_r, c_z = _cel_sets(kc, [(one, one, -one), (gam * gam, one, gam)])
+    t_r, t_z = (a / den) * c_r, (zs / den) * c_z
+    B_r, B_z = t_r[0] - t_r[1], t_z[0] - t_z[1]
     B0 = MU0 * M_z / np.pi
     B_r = np.where(rim, np.nan, B0 * B_r)
     B_z = np.where(rim, np.nan, B0 * a / (a + r) * B_z)

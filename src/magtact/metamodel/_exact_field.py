@@ -86,6 +86,10 @@ class ExactField:
         ``H_m`` is a design variable, the model depends on it (:attr:`geometry`): the calls take
         its values [m] by name, as :class:`magtact.metamodel.Metamodel` calls do.
     name : {"B_r", "B_z"}
+    standoff : float or array_like, optional
+        The chip's standoff [m] instead of the study's: an array that broadcasts against the
+        ``t, theta`` arrays of the calls puts each point's chip at its own standoff (many chip
+        positions in one evaluation).
 
     Notes
     -----
@@ -95,7 +99,7 @@ class ExactField:
 
     units = "T"
 
-    def __init__(self, study: Study, name: str):
+    def __init__(self, study: Study, name: str, standoff=None):
         if name not in ("B_r", "B_z"):
             raise ValueError(f"ExactField name must be 'B_r' or 'B_z', got {name!r}")
         from ..geometry import hall_from_magnet_centre, loading_path
@@ -104,8 +108,24 @@ class ExactField:
         self.geometry = tuple(k for k in ("R_m", "H_m") if k in study.geometric_variables)
         self.a0, self.a1, self.a2 = _coefficients(
             lambda s, h: float(loading_path(s, 1.0, 0.0, h)[1]), study)
-        self.z0, self.z1, self.z2 = _coefficients(
-            lambda s, h: float(hall_from_magnet_centre(s, 0.0, 0.0, h)[1]), study)
+
+        def hall(sub):
+            return _coefficients(lambda s, h: float(hall_from_magnet_centre(s, 0.0, 0.0, h)[1]),
+                                 sub)
+
+        self.z0, self.z1, self.z2 = hall(study)
+        if standoff is not None:  # the Hall point's height at each standoff
+            from dataclasses import replace
+
+            levels, where = np.unique(np.asarray(standoff, float), return_inverse=True)
+            z0 = np.empty(levels.size)
+            for i, v in enumerate(levels):
+                c0, c1, c2 = hall(replace(study, hall=replace(study.hall, standoff=float(v))))
+                if not np.allclose((c1, c2), (self.z1, self.z2), rtol=1e-9, atol=1e-12):
+                    raise ValueError("the Hall point's height is not the study's shifted by "
+                                     "the standoff")
+                z0[i] = c0
+            self.z0 = z0[where].reshape(np.shape(standoff))
         self.info = {"kind": "exact closed-form field (magtact.magnetics.cylinder_field)"}
 
     def bind(self, **geometry: float) -> ExactField:
@@ -147,20 +167,36 @@ class ExactField:
             return {(0, 0): self._field(X, Z, magnet)}
         o = _OFFSETS * STEP
         W = self._W
-        if order == 1:  # the centre weight of a first derivative is zero: the axes suffice
-            F = self._field(np.concatenate([X[..., None] + o, np.broadcast_to(X[..., None],
-                                                                              X.shape + (7,))],
-                                           axis=-1),
-                            np.concatenate([np.broadcast_to(Z[..., None], Z.shape + (7,)),
-                                            Z[..., None] + o], axis=-1),
-                            (np.asarray(R_m)[..., None], np.asarray(H_m)[..., None], M_z))
-            return {(0, 0): F[..., 3], (1, 0): F[..., :7] @ W[1] / STEP,
-                    (0, 1): F[..., 7:] @ W[1] / STEP}
+        if order == 1:
+            return self._first_derivatives(X, Z, magnet)
         F = self._field(X[..., None, None] + o[:, None], Z[..., None, None] + o[None, :],
                         (np.asarray(R_m)[..., None, None], np.asarray(H_m)[..., None, None],
                          M_z))
         return {(i, j): np.einsum("...ab,a,b->...", F, W[i], W[j]) / STEP ** (i + j)
                 for i in range(order + 1) for j in range(order + 1 - i)}
+
+    def _first_derivatives(self, X, Z, magnet):
+        """Value and first derivatives in (X, Z) from one stencil along Z.
+
+        Outside the magnet's surfaces the field is curl- and divergence-free: with
+        ρ = |X|, ∂B_z/∂ρ = ∂B_ρ/∂z and ∂B_ρ/∂ρ = −B_ρ/ρ − ∂B_z/∂z (on the axis, where
+        B_ρ/ρ → ∂B_ρ/∂ρ, ∂B_ρ/∂ρ = −½ ∂B_z/∂z). The derivatives along Z of both components
+        therefore give the derivatives along X as well: seven points per field point.
+        """
+        R_m, H_m, M_z = magnet
+        o = _OFFSETS * STEP
+        rho = np.abs(X)
+        b_rho, b_z = _both_components(np.broadcast_to(rho[..., None], rho.shape + (7,)),
+                                      Z[..., None] + o, np.asarray(R_m)[..., None],
+                                      np.asarray(H_m)[..., None], M_z)
+        w = self._W[1] / STEP
+        d_rho, d_z = b_rho @ w, b_z @ w  # ∂B_ρ/∂Z, ∂B_z/∂Z
+        sign = np.sign(X)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            over = np.where(rho > 0, b_rho[..., 3] / np.where(rho > 0, rho, 1.0), -0.5 * d_z)
+        if self.name == "B_r":  # B_r = sign(X) B_ρ(|X|): ∂B_r/∂X = ∂B_ρ/∂ρ
+            return {(0, 0): sign * b_rho[..., 3], (1, 0): -over - d_z, (0, 1): sign * d_rho}
+        return {(0, 0): b_z[..., 3], (1, 0): sign * d_rho, (0, 1): d_z}
 
     def value(self, t, theta, H, **geometry) -> np.ndarray:
         """Field component [T] at (t, θ, H) (broadcast); ``geometry``: values [m] of the

@@ -19,6 +19,7 @@ from ._design import (
     heights_batch,
     per_design,
     per_height,
+    per_heights,
 )
 from ._geometry import (
     DesignSet,
@@ -93,5 +94,5 @@ __all__ = [
     "front_gap", "heights_batch", "CAPTIONS", "ChosenFile", "design_file_definition",
     "nondominated",
     "optimise", "pareto_nsga2", "per_design",
-    "per_height", "shear_bound_conditioning", "sweep", "write_optimise_outputs",
+    "per_height", "per_heights", "shear_bound_conditioning", "sweep", "write_optimise_outputs",
 ]

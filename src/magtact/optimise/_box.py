@@ -271,6 +271,77 @@ class BatchOptimum:
     value: np.ndarray
     kkt: np.ndarray
     converged: np.ndarray
+    #: The start of each row's refinement (the best grid point, or the given start) and the
+    #: response there; Newton iterations of the returned row.
+    start_t: np.ndarray | None = None
+    start_theta: np.ndarray | None = None
+    start_value: np.ndarray | None = None
+    iterations: np.ndarray | None = None
+
+
+def grid_local_optima(V: np.ndarray, k: int) -> np.ndarray:
+    """Flat indices of up to ``k`` best local minima of each row's grid ``V`` (n, a, b),
+    best first, shape (n, k); a row with fewer repeats its best.
+
+    A point is a local minimum when no neighbour among its eight (fewer on an edge) is lower.
+    """
+    n, a, b = V.shape
+    P = np.pad(V, ((0, 0), (1, 1), (1, 1)), constant_values=np.inf)
+    local = np.ones(V.shape, bool)
+    for di in (-1, 0, 1):
+        for dj in (-1, 0, 1):
+            if di or dj:
+                local &= V <= P[:, 1 + di:1 + di + a, 1 + dj:1 + dj + b]
+    W = np.where(local, V, np.inf).reshape(n, -1)
+    order = np.argsort(W, axis=1, kind="stable")[:, :k]
+    best = np.argmin(V.reshape(n, -1), axis=1)
+    ok = np.isfinite(np.take_along_axis(W, order, axis=1))
+    order[:, 0] = best  # the best point is a local minimum unless every value is inf
+    return np.where(ok | (np.arange(order.shape[1]) == 0), order, best[:, None])
+
+
+def multistart_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *,
+                       maximise: bool, grid: tuple[int, int], tol: float, starts: int = 4,
+                       maxiter: int = 100) -> BatchOptimum:
+    """Optimise over n boxes at once from the best ``starts`` local optima of a dense grid.
+
+    Every box gets a uniform ``grid`` of points (including its bounds); the ``starts`` best
+    grid points that no neighbour improves on start a projected Newton refinement each
+    (:func:`batch_optimum`, all rows and starts in one call), and each box keeps its best
+    result. Where a response has several basins on the box the grid's resolution picks out
+    every one deeper than its neighbours, and the refinement reaches each basin's optimum.
+    Arguments as :func:`batch_optimum`; ``start_*`` of the result is the best grid point.
+    """
+    lo, hi = np.atleast_2d(np.asarray(lo, float)), np.atleast_2d(np.asarray(hi, float))
+    n = lo.shape[0]
+    sign = -1.0 if maximise else 1.0
+    rows = np.arange(n)
+    width = hi - lo
+    s_t, s_th = np.linspace(0, 1, grid[0]), np.linspace(0, 1, grid[1])
+    S_t, S_th = (a.ravel() for a in np.meshgrid(s_t, s_th, indexing="ij"))
+    T = lo[:, :1] + width[:, :1] * S_t
+    TH = lo[:, 1:] + width[:, 1:] * S_th
+    V = sign * np.asarray(fun(rows[:, None], T, TH), float)
+    V = np.where(np.isfinite(V), V, np.inf)
+    k = grid_local_optima(V.reshape(n, grid[0], grid[1]), max(1, int(starts)))
+    m = k.shape[1]
+    orig = np.repeat(rows, m)
+    x0 = np.stack([T[orig, k.ravel()], TH[orig, k.ravel()]], axis=1)
+
+    def on(f):
+        return lambda r, t, th: f(orig[np.asarray(r)], t, th)
+
+    res = batch_optimum(on(fun), on(jac), on(hess), lo[orig], hi[orig], maximise=maximise,
+                        grid=grid, tol=tol, maxiter=maxiter, start=x0)
+    val = (sign * res.value).reshape(n, m)
+    val = np.where(np.isfinite(val), val, np.inf)
+    # the first of equally good results (within round-off): the best grid point's basin
+    best = val.min(axis=1, keepdims=True)
+    pick = np.argmax(val <= best + _ROUNDOFF * np.maximum(np.abs(best), 1e-300), axis=1)
+    j = rows * m + pick
+    b0 = k[:, 0]
+    return BatchOptimum(res.t[j], res.theta[j], res.value[j], res.kkt[j], res.converged[j],
+                        T[rows, b0], TH[rows, b0], sign * V[rows, b0], res.iterations[j])
 
 
 def batch_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *, maximise: bool,
@@ -338,8 +409,10 @@ def batch_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *, maxim
     scale = np.maximum(np.abs(f), spread * 1e-3)
     scale = np.where(scale > 0, scale, 1.0)
 
+    x_start, f_start = x.copy(), sign * f
     done = np.zeros(n, bool)
     kkt = np.full(n, np.inf)
+    iterations = np.zeros(n, int)
     for _ in range(maxiter):
         r = np.flatnonzero(~done)
         if r.size == 0:
@@ -387,6 +460,7 @@ def batch_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *, maxim
             pending[p[ok | same]] = False
             alpha[p[~(ok | same)]] *= 0.5
         x[r] = x_new
+        iterations[r[moved]] += 1
         done[r[~moved]] = True  # no descent possible any more: converged to round-off
     converged = kkt <= tol
     # final values and KKT measure at the returned points
@@ -395,7 +469,8 @@ def batch_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *, maxim
     pg = _projected_gradient(g, x, lo, hi)
     kkt = np.max(np.abs(pg) * width, axis=1) / np.maximum(np.abs(value), scale)
     converged = converged | (kkt <= max(tol, 1e-9))
-    return BatchOptimum(x[:, 0].copy(), x[:, 1].copy(), value, kkt, converged)
+    return BatchOptimum(x[:, 0].copy(), x[:, 1].copy(), value, kkt, converged,
+                        x_start[:, 0], x_start[:, 1], f_start, iterations)
 
 
 def _newton_step(g, Hs, act) -> tuple[np.ndarray, np.ndarray]:

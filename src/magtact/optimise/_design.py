@@ -17,7 +17,7 @@ from .._files import significant, write_csv
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study, from_si
-from ._box import BatchOptimum, BoxOptimum, batch_optimum, box_optimum
+from ._box import BatchOptimum, BoxOptimum, _active, batch_optimum, multistart_optimum
 
 #: Stage-2 responses, maximised over [0, t_m] × [0, θ_m].
 MAXIMISED: tuple[str, ...] = ("f_z", "gamma_r", "gamma_z")
@@ -139,7 +139,7 @@ class DesignResult:
 
 
 def per_height(models: Responses | ModelSet, H: float, study: Study) -> HeightResult:
-    """Per-unit-G extrema at height H [m]: GA start + trust-region refinement for each.
+    """Per-unit-G extrema at height H [m] (:func:`per_heights` of one height).
 
     Parameters
     ----------
@@ -148,33 +148,50 @@ def per_height(models: Responses | ModelSet, H: float, study: Study) -> HeightRe
     H : float
         Base height [m].
     study : Study
-        Supplies θ_max and the ``[optimise]`` settings (population, seed, ga_generations, tol).
+        Supplies θ_max and the ``[optimise]`` settings (start_t, start_theta, tol).
 
     Returns
     -------
     HeightResult
+    """
+    return per_heights(models, [float(H)], study)[0]
+
+
+#: Grid points that start a refinement in each per-height problem (the best local optima of the
+#: dense start grid).
+STARTS = 4
+
+
+def per_heights(models: Responses | ModelSet, H, study: Study) -> tuple[HeightResult, ...]:
+    """Per-unit-G extrema at every height of ``H`` [m], all heights solved together.
 
     Notes
     -----
     Step 1 minimises f_r over [0, 1] × [0, θ_max] → (t_m, θ_m). Step 2 maximises f_z, γ_r, γ_z over
     [0, t_m] × [0, θ_m]; a side of zero width (degenerate box) fixes that variable, and the
-    single point (0, 0) is simply evaluated. Each problem: :func:`box_optimum`.
+    single point (0, 0) is simply evaluated. Each problem, for all heights at once:
+    :func:`magtact.optimise.multistart_optimum` on a ``start_t × start_theta`` grid over its
+    box, the ``STARTS`` best local optima of the grid refined by projected Newton steps with
+    the exact gradient and Hessian to the relative tolerance ``tol``.
     """
-    R = as_responses(models).at(float(H))
-    o = study.optimise
-    kw = {"population": o.population, "generations": o.ga_generations, "seed": o.seed,
-          "tol": o.tol}
+    H = np.atleast_1d(np.asarray(H, dtype=float))
+    if H.ndim != 1:
+        raise ValueError(f"heights must be a 1-D array, got shape {H.shape}")
+    fr, rest = _extrema(as_responses(models), H, {}, study, starts=STARTS)
+    lo = np.zeros(2)
+    full = np.array([1.0, study.loading.theta_max])
 
-    def funcs(name):
-        return (lambda x: R.value(name, x[:, 0], x[:, 1]),
-                lambda x: R.grad(name, x[:, 0], x[:, 1]),
-                lambda x: R.hess(name, x[:, 0], x[:, 1]))
+    def box(res, i, hi) -> BoxOptimum:
+        x = np.array([res.t[i], res.theta[i]])
+        return BoxOptimum(float(x[0]), float(x[1]), float(res.value[i]), float(res.start_t[i]),
+                          float(res.start_theta[i]), float(res.start_value[i]),
+                          int(res.iterations[i]), float(res.kkt[i]), _active(x, lo, hi))
 
-    fr = box_optimum(*funcs("f_r"), [0.0, 0.0], [1.0, study.loading.theta_max],
-                     maximise=False, **kw)
-    hi = [fr.t, fr.theta]
-    rest = [box_optimum(*funcs(n), [0.0, 0.0], hi, maximise=True, **kw) for n in MAXIMISED]
-    return HeightResult(float(H), fr, *rest)
+    out = []
+    for i, h in enumerate(H):
+        hi = np.array([fr.t[i], fr.theta[i]])
+        out.append(HeightResult(float(h), box(fr, i, full), *(box(r, i, hi) for r in rest)))
+    return tuple(out)
 
 
 def per_design(models: Responses | ModelSet, H: float, G: float, study: Study,
@@ -258,14 +275,28 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
     H = np.atleast_1d(np.asarray(H, dtype=float))
     geo = {k: np.broadcast_to(np.asarray(v, dtype=float), H.shape)
            for k, v in (geometry or {}).items()}
-    R = as_responses(models)
+    fr, res = _extrema(as_responses(models), H, geo, study, warm=warm,
+                       coarse_start=coarse_start, maxiter=maxiter)
+    conv = fr.converged & np.logical_and.reduce([r.converged for r in res])
+    locs = [np.stack([r.t, r.theta], axis=1) for r in res]
+    return HeightTable(H, fr.t, fr.theta, fr.value, res[0].value, res[1].value, res[2].value,
+                       *locs, conv, {k: np.array(v) for k, v in geo.items()})
+
+
+def _extrema(R: Responses, H: np.ndarray, geo: dict, study: Study,
+             warm: HeightTable | None = None, coarse_start: bool = True, maxiter: int = 100,
+             starts: int = 1) -> tuple[BatchOptimum, list[BatchOptimum]]:
+    """The two steps of the per-height problem for every height of ``H`` at once: the minimum
+    of f_r (its location the stable box) and the maxima of ``MAXIMISED`` over the box. Without
+    ``warm``, each problem starts from its ``start_t × start_theta`` grid (the ``starts`` best
+    local optima of it); with it, see :func:`heights_batch`."""
     o = study.optimise
     n = H.size
 
     def at(r, t):
         return R.at(_rows(H, r, t), **{k: _rows(v, r, t) for k, v in geo.items()})
 
-    def solve(name, lo, hi, maximise, starts):
+    def solve(name, lo, hi, maximise, warm_starts):
         def fun(r, t, th):
             return at(r, t).value(name, t, th)
 
@@ -276,28 +307,29 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
             return at(r, t).hess(name, t, th)
 
         kw = {"maximise": maximise, "tol": o.tol, "maxiter": maxiter}
-        if starts is None:
+        if warm_starts is None:
+            if starts > 1:
+                return multistart_optimum(fun, jac, hess, lo, hi,
+                                          grid=(o.start_t, o.start_theta), starts=starts, **kw)
             return batch_optimum(fun, jac, hess, lo, hi, grid=(o.start_t, o.start_theta), **kw)
         runs = [batch_optimum(fun, jac, hess, lo, hi, grid=(6, 4), **kw)] if coarse_start else []
         runs += [batch_optimum(fun, jac, hess, lo, hi, grid=(6, 4), start=s, **kw)
-                 for s in starts]
+                 for s in warm_starts]
         return _best(runs, maximise)
 
     lo = np.zeros((n, 2))
     hi = np.tile([1.0, study.loading.theta_max], (n, 1))
-    starts = [None] * 4
+    warm_starts = [None] * 4
     if warm is not None:
         sides = _bracket(warm.H, H, *_groups(warm.geometry, geo))
-        starts = [[np.stack([warm.t_m[k], warm.theta_m[k]], axis=1) for k in sides],
-                  [warm.loc_f_z[k] for k in sides], [warm.loc_gamma_r[k] for k in sides],
-                  [warm.loc_gamma_z[k] for k in sides]]
-    fr = solve("f_r", lo, hi, False, starts[0])
+        warm_starts = [[np.stack([warm.t_m[k], warm.theta_m[k]], axis=1) for k in sides],
+                       [warm.loc_f_z[k] for k in sides], [warm.loc_gamma_r[k] for k in sides],
+                       [warm.loc_gamma_z[k] for k in sides]]
+    fr = solve("f_r", lo, hi, False, warm_starts[0])
     box = np.stack([fr.t, fr.theta], axis=1)
-    res = [solve(name, lo, box, True, s) for name, s in zip(MAXIMISED, starts[1:], strict=True)]
-    conv = fr.converged & np.logical_and.reduce([r.converged for r in res])
-    locs = [np.stack([r.t, r.theta], axis=1) for r in res]
-    return HeightTable(H, fr.t, fr.theta, fr.value, res[0].value, res[1].value, res[2].value,
-                       *locs, conv, {k: np.array(v) for k, v in geo.items()})
+    res = [solve(name, lo, box, True, s)
+           for name, s in zip(MAXIMISED, warm_starts[1:], strict=True)]
+    return fr, res
 
 
 def _best(runs: list[BatchOptimum], maximise: bool) -> BatchOptimum:
@@ -375,7 +407,7 @@ class DesignMaps:
     G : numpy.ndarray, shape (n_G,)
         Shear moduli [Pa].
     heights : tuple of HeightResult
-        The per-unit-G extrema at each H (GA + trust region).
+        The per-unit-G extrema at each H (:func:`per_heights`).
 
     Properties ``F_r_min, F_z_max, Gamma_r_max, Gamma_z_max`` are arrays of shape (n_H, n_G)
     [N, N, N/T, N/T].
@@ -427,10 +459,9 @@ class DesignMaps:
 def design_maps(models: Responses | ModelSet, study: Study) -> DesignMaps:
     """Per-design results on the ``grid_n × grid_n`` grid of (H, G) over the design bounds.
 
-    One :func:`per_height` per H level (the G levels only scale it).
+    :func:`per_heights` on the H levels, all at once (the G levels only scale them).
     """
     n = study.optimise.grid_n
     H = np.linspace(*study.design.H, n)
     G = np.linspace(*study.design.G, n)
-    R = as_responses(models)
-    return DesignMaps(H, G, tuple(per_height(R, h, study) for h in H))
+    return DesignMaps(H, G, per_heights(models, H, study))

@@ -202,20 +202,18 @@ def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, s
     M_z = space.M_z[grade]
     rx, rz, sx, sz = (np.array([getattr(space.options[k], a) for k in option])
                       for a in ("range_x", "range_z", "noise_x", "noise_z"))
-    out = {k: np.empty(H.size) for k in ("sigma_r", "sigma_z", "G_range", "F_saturation")}
-    for s in np.unique(standoff):
-        m = standoff == s
-        grid = sensor_grid(models, study, H[m], t_m[m], theta_m[m], space.standoffs[s])
-        out["G_range"][m] = G_range = grid.G_range(M_z[m], rx[m], rz[m], space.F_z)
-        for i in np.flatnonzero(m & free):  # the best G of each design
-            r = np.flatnonzero(np.flatnonzero(m) == i)
-            one = SensorGrid(*(getattr(grid, f)[r] for f in ("T", "TH", "f_r", "f_z", "b_x",
-                                                              "b_z", "j")))
-            low = np.maximum(np.maximum(G_force[i:i + 1], G_range[r]), space.G_bounds[0])
-            _, G[i:i + 1] = _Noise(one, (sx[i], sz[i])).least(M_z[i], low,
-                                                              space.G_bounds[1], space.F_z)
-        out["sigma_r"][m], out["sigma_z"][m] = grid.sigma(G[m], M_z[m], sx[m], sz[m], space.F_z)
-        out["F_saturation"][m] = grid.F_saturation(G[m], M_z[m], rx[m], rz[m])
+    # every design in one grid, each with its chip at its own standoff
+    grid = sensor_grid(models, study, H, t_m, theta_m, space.standoffs[standoff])
+    G_range = grid.G_range(M_z, rx, rz, space.F_z)
+    if free.any():  # the best G of each design
+        i = np.flatnonzero(free)
+        low = np.maximum(np.maximum(G_force[i], G_range[i]), space.G_bounds[0])
+        _, G[i] = _Noise(grid.take(i), (sx[i], sz[i])).least(M_z[i], low, space.G_bounds[1],
+                                                             space.F_z)
+    out = dict(zip(("sigma_r", "sigma_z"), grid.sigma(G, M_z, sx, sz, space.F_z),
+                   strict=True))
+    out["G_range"] = G_range
+    out["F_saturation"] = grid.F_saturation(G, M_z, rx, rz)
     out["G"], out["G_force"] = G, G_force
     return out
 
@@ -241,7 +239,7 @@ class _Noise:
     """Per height of a grid and one chip noise: the grid's points sorted by their normal force
     per unit G, and the worst per-unit √(σ_r² + σ_z²) among the first i of them."""
 
-    def __init__(self, grid: SensorGrid, noise: tuple[float, float]):
+    def __init__(self, grid: SensorGrid, noise: tuple):
         n = grid.f_z.shape[0]
         f = grid.f_z.reshape(n, -1)
         S = grid.unit_noise(*noise)
@@ -257,15 +255,17 @@ class _Noise:
     def least(self, M_z: float, G_low: np.ndarray, G_high: float, F_z: float
               ) -> tuple[np.ndarray, np.ndarray]:
         """Per height: the least √(σ_r² + σ_z²) [N] over G ∈ [G_low, G_high] and its G
-        (exact on the grid; see the module notes); inf where G_low > G_high."""
+        (exact on the grid; see the module notes); inf where G_low > G_high. ``M_z`` [A/m]:
+        a scalar or one per height."""
         n = self.f.shape[0]
         rows = np.arange(n)
+        M = np.broadcast_to(np.asarray(M_z, float), (n,))
         with np.errstate(divide="ignore", invalid="ignore"):
             count = (self.f <= (F_z / G_low)[:, None]).sum(axis=1)  # the region at G_low
-            low = np.where(G_low <= G_high, G_low * self.W[rows, count] / M_z, np.inf)
+            low = np.where(G_low <= G_high, G_low * self.W[rows, count] / M, np.inf)
             Gb = F_z * self.breaks * (1.0 + G_STEP)  # just above each breakpoint: the first i
             ok = (Gb >= G_low[:, None]) & (Gb <= G_high)
-            at = np.where(ok, Gb * self.W[:, :-1] / M_z, np.inf)
+            at = np.where(ok, Gb * self.W[:, :-1] / M[:, None], np.inf)
         j = np.argmin(at, axis=1)
         use = at[rows, j] < low
         return np.where(use, at[rows, j], low), np.where(use, Gb[rows, j], G_low)
@@ -277,26 +277,32 @@ def exact_sensor_reduction(models: ModelSet, study: Study, space: SensorSpace
     heights (refined around the best), exact in G; the best-reading design where none is
     feasible. Returns it and the number of discrete combinations compared."""
     H = np.linspace(*space.H_bounds, N_H)
-    best, fallback = None, None
-    for s in range(space.standoffs.size):
-        best, fallback = _reduce_heights(models, study, space, H, s, best, fallback)
+    best, fallback = _reduce_heights(models, study, space, H, np.arange(space.standoffs.size))
     if best is not None:  # refine the height between the grid's neighbours
         step = H[1] - H[0]
         Hf = np.clip(np.linspace(best.H - step, best.H + step, 41), *space.H_bounds)
-        best, fallback = _reduce_heights(models, study, space, Hf, best.s, best, fallback,
-                                         only=(best.g, best.k))
+        best, fallback = _reduce_heights(models, study, space, Hf, np.array([best.s]), best,
+                                         fallback, only=(best.g, best.k))
     pick = best if best is not None else fallback
     values = evaluate_designs(models, study, space, pick.H, pick.G, pick.s, pick.g, pick.k)
     combos = space.standoffs.size * space.M_z.size * len(space.options)
     return _design(space, values, pick.H, pick.s, pick.g, pick.k), combos
 
 
-def _reduce_heights(models, study, space, H, s, best, fallback, only=None):
+def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, only=None):
+    """The best design (and the best-reading one) over the heights ``H``, the standoff
+    levels ``levels`` and every grade and chip option (``only``: one (grade, option)), all
+    heights and levels in one grid. Of equally good designs the first in the order (standoff,
+    option, grade, height) is kept, and a design replaces ``best`` only when strictly better."""
     t_m, theta_m, f_r_min, f_z_max = space.box(H)
-    grid = sensor_grid(models, study, H, t_m, theta_m, space.standoffs[s])
-    G_force = space.G_force(f_r_min, f_z_max)
+    n = H.size
+    rows_s = np.repeat(levels, n)  # rows: standoff level, then height
+    grid = sensor_grid(models, study, np.tile(H, levels.size), np.tile(t_m, levels.size),
+                       np.tile(theta_m, levels.size), space.standoffs[rows_s])
+    G_force = np.tile(space.G_force(f_r_min, f_z_max), levels.size)
     G_hi = space.G_bounds[1]
     ok = np.isfinite(G_force) & (G_force <= G_hi)
+    cands, falls = [], []
     for k, o in enumerate(space.options):
         if only is not None and k != only[1]:
             continue
@@ -307,15 +313,28 @@ def _reduce_heights(models, study, space, H, s, best, fallback, only=None):
             G_range = grid.G_range(M_z, o.range_x, o.range_z, space.F_z)
             G_low = np.maximum(np.maximum(G_force, G_range), space.G_bounds[0])
             value, G = noise.least(M_z, G_low, G_hi, space.F_z)
-            i = int(np.argmin(value))
-            if np.isfinite(value[i]) and (best is None or value[i] < best.sigma):
-                best = _Best(float(value[i]), float(H[i]), float(G[i]), s, g, k)
+            # per standoff level: the first height of the least value
+            v = value.reshape(levels.size, n)
+            i = np.argmin(v, axis=1)
+            for li, s in enumerate(levels):
+                r = li * n + i[li]
+                if np.isfinite(value[r]):
+                    cands.append((float(value[r]), int(s), k, g, float(H[i[li]]), float(G[r])))
             # where none reads the required loads: the design that reads the most, at G_hi
-            F_sat = np.where(ok, grid.F_saturation(np.full(H.size, G_hi), M_z, o.range_x,
-                                                   o.range_z), -np.inf)
-            j = int(np.argmax(F_sat))
-            if ok[j] and (fallback is None or F_sat[j] > fallback.sigma):
-                fallback = _Best(float(F_sat[j]), float(H[j]), G_hi, s, g, k)
+            F_sat = np.where(ok, grid.F_saturation(np.full(ok.size, G_hi), M_z, o.range_x,
+                                                   o.range_z), -np.inf).reshape(levels.size, n)
+            j = np.argmax(F_sat, axis=1)
+            for li, s in enumerate(levels):
+                if ok[li * n + j[li]]:
+                    falls.append((-float(F_sat[li, j[li]]), int(s), k, g, float(H[j[li]])))
+    if cands:
+        v, s, k, g, h, G = min(cands, key=lambda c: c[:4])
+        if best is None or v < best.sigma:
+            best = _Best(v, h, G, s, g, k)
+    if falls:
+        f, s, k, g, h = min(falls, key=lambda c: c[:4])
+        if fallback is None or -f > fallback.sigma:
+            fallback = _Best(-f, h, G_hi, s, g, k)
     return best, fallback
 
 
