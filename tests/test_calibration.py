@@ -304,8 +304,8 @@ def test_cli_refuses_bad_input_in_one_line(tmp_path):
     r = runner.invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--presses", str(bad),
                             "--noise-uT", "1"])
     assert r.exit_code != 0 and "missing column 'F_z_N'" in str(r.exception)
-    r = runner.invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--H", "3"])
-    assert "give both --H and --G" in str(r.exception)
+    r = runner.invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--setting", "GAIN=3"])
+    assert "--setting must be FIELD=V pairs" in str(r.exception)
     r = runner.invoke(app, ["calibrate", "--out", str(tmp_path / "o"), "--H", "3", "--G", "22",
                             "--model-error", "-1"])
     assert "--model-error must be a fraction between 0 and 1" in str(r.exception)

@@ -181,29 +181,31 @@ def test_every_model_kind_is_a_response(models):
 
 def test_the_result_budgets_its_designs(magone):
     """The result's budget is the budget of its design (same rows as the budget package's
-    function on the same models and design)."""
-    from magtact.budget import error_budget
+    function on the same models and design); a noise given replaces the chip's own."""
+    from magtact.budget import error_budget, noise_given
 
     _, result = magone
     b = result.budget(result.original, noise=(1e-6, 1e-6))
     a = result.original
     ref = error_budget(result.models, result.study, a.H, a.G, label="original",
-                       noise=(1e-6, 1e-6), chip=a.chip)
+                       chip=noise_given(a.chip, (1e-6, 1e-6))[0])
+    assert b.noise_source.startswith("given as 1, 1 µT (x, z), in place of")
     assert b.label == "original" and [r.name for r in b.rows] == [r.name for r in ref.rows]
     np.testing.assert_allclose([r.worst for r in b.rows], [r.worst for r in ref.rows],
                                rtol=1e-12)
 
 
 def test_the_result_carries_the_chosen_designs_sensor_map(magone):
-    """``result.sensor`` maps the chosen design's field readings to forces and back; the
-    calibration uses the chip at the chosen design's setting."""
+    """``magtact.force_map(result)`` maps the chosen design's field readings to forces and
+    back; the calibration uses the chip at the chosen design's setting."""
     _, result = magone
     F = np.array([[0.1, 0.0, 2.0], [0.0, -0.05, 1.0], [0.0, 0.0, 0.5]])
-    B, flags = result.sensor.field(F)
+    smap = magtact.force_map(result)
+    B, flags = smap.field(F)
     assert not flags.any()
-    back = result.sensor.force(B)
+    back = smap.force(B)
     np.testing.assert_allclose(back.F, F, atol=1e-9 * np.abs(F).max())
-    assert (result.sensor.H, result.sensor.G) == (result.chosen.H, result.chosen.G)
+    assert (smap.H, smap.G) == (result.chosen.H, result.chosen.G)
 
 
 def test_result_write_keeps_the_users_files_and_replaces_its_own(tmp_path, magone):

@@ -136,7 +136,8 @@ def test_simulate_shows_its_progress_in_a_terminal_only(monkeypatch, tmp_path, i
 
 
 @pytest.mark.parametrize("is_terminal", [True, False])
-def test_calibrate_shows_its_progress_in_a_terminal_only(monkeypatch, tmp_path, is_terminal):
+def test_calibrate_shows_its_progress_in_a_terminal_only(monkeypatch, tmp_path, is_terminal,
+                                                         magone_design):
     import time
 
     def calibrate(*args, **kwargs):
@@ -144,9 +145,10 @@ def test_calibrate_shows_its_progress_in_a_terminal_only(monkeypatch, tmp_path, 
         raise Stop("stopped while calibrating")
 
     monkeypatch.setattr("magtact.calibration.calibrate", calibrate)
+    monkeypatch.setattr("magtact.design", lambda *args, **kwargs: magone_design)
     shown = terminal(monkeypatch, "_calibrate", is_terminal)
     r = CliRunner().invoke(app, ["calibrate", "--H", "3", "--G", "22", "--out",
                                  str(tmp_path / "o")])
     assert isinstance(r.exception, Stop), r.output
     assert ("calibrating: the map" in shown.getvalue()) is is_terminal
-    assert "calibrating the given design: H = 3 mm" in shown.getvalue()
+    assert "the chosen sensor with the options given: H 3 mm" in shown.getvalue()

@@ -31,12 +31,14 @@ from ._front import (
     calibrate,
     design,
     error_budget,
+    force_map,
     load,
     models_for,
     solve,
     write_results,
     write_results_into,
 )
+from ._sensor import Sensor
 from .study import Study
 
 try:
@@ -55,6 +57,6 @@ def run(study: Study | str | None = None, out: str = "results", **options):
     return run_study(study, out, **options)
 
 
-__all__ = ["MagtactError", "Result", "Study", "__version__", "calibrate", "design",
-           "error_budget", "load", "models_for", "run", "solve", "write_results",
+__all__ = ["MagtactError", "Result", "Sensor", "Study", "__version__", "calibrate", "design",
+           "error_budget", "force_map", "load", "models_for", "run", "solve", "write_results",
            "write_results_into"]

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ._errors import MagtactError
+from ._sensor import Sensor
 from .study import Study, checked_si, from_si, load_study
 
 if TYPE_CHECKING:
@@ -129,6 +130,9 @@ class Result:
     dataset: object = None
     #: The sensor problem's answer (the whole sensor; None for the publication's problem).
     sensor_design: SensorOptimisation | None = None
+    #: The chosen sensor: its body, magnet and chip (:class:`magtact.Sensor`), the one
+    #: :func:`calibrate` and :func:`error_budget` act on by default.
+    sensor: Sensor | None = None
 
     @property
     def constraints(self) -> ForceConstraints:
@@ -260,19 +264,24 @@ class Result:
         """Same as ``magtact.error_budget(self, answer, ...)`` (:func:`error_budget`)."""
         return error_budget(self, answer, dataset=dataset, seeds=seeds, noise=noise)
 
-    @cached_property
-    def sensor(self) -> SensorMap:
-        """The chosen design's field-to-force map (docs/method.md §13): ``sensor.force(B)``
-        for readings B (..., 3) [T], ``sensor.field(F)`` the forward map."""
-        from .calibration import sensor_map
+    def evaluate_sensor(self, sensor: Sensor, label: str = "sensor") -> DesignAnswer:
+        """The designer's answer for a whole sensor (:class:`magtact.Sensor`, e.g.
+        ``result.sensor.changed(grade="N42")``): its H and G with its magnet, chip setting,
+        standoff and silicone, with this result's models.
 
-        geometry = {k: self.variables[k] for k in self.study.geometric_variables}
-        models, study = ((self.models.at(**geometry), self.study.at(**geometry)) if geometry
-                         else (self.models, self.study))
-        a = self.chosen
-        if not geometry:
-            models, study = self.of(a)
-        return sensor_map(models, study, a.H, a.G, a.design.M_z, design=a.design)
+        Raises
+        ------
+        MagtactError
+            For a sensor whose body radius, magnet size or chip are not the study's (those
+            need models of their own), or a design outside the data's domain.
+        """
+        from .doe import check_design
+
+        names = self.study.geometric_variables
+        geometry = {k: getattr(sensor, k) for k in names}
+        study = sensor.into(self.study, free=names)
+        check_design(self.study, sensor.H, self.dataset, **geometry)
+        return _answer(self.models, study, {"H": sensor.H, "G": sensor.G} | geometry, label)
 
     def calibrate(self, answer: DesignAnswer | None = None, *, presses=None,
                   noise: tuple[float, float] | None = None, **options) -> Calibration:
@@ -340,14 +349,16 @@ def error_budget(result: Result, answer: DesignAnswer | None = None, *, dataset=
     ----------
     result : Result
         The answer of a study (:func:`design`, :func:`solve`).
-    answer : DesignAnswer, optional
-        ``result.chosen`` (default), ``result.original`` or one of ``result.evaluate``.
+    answer : DesignAnswer or Sensor, optional
+        ``result.chosen`` (default), ``result.original``, one of ``result.evaluate``, or a
+        sensor (``result.sensor.changed(grade="N42")``, :meth:`Result.evaluate_sensor`).
     dataset : xarray.Dataset, optional
         The models' DOE data set, for the mesh's error (its ``err_F_*``).
     seeds : dict, optional
         A seed study (``magtact reproduce``'s ``publication.json``) for the seed spread.
     noise : (σ_x, σ_z) [T], optional
-        Field noise where the chip has none (the chip at the design's setting otherwise).
+        Field noise in place of the chip's own figure (the chip at the design's setting
+        otherwise); the budget's ``noise_source`` says so.
 
     Returns
     -------
@@ -371,12 +382,17 @@ def error_budget(result: Result, answer: DesignAnswer | None = None, *, dataset=
     >>> result = magtact.design()                                   # doctest: +SKIP
     >>> print(magtact.error_budget(result, result.original))        # doctest: +SKIP
     """
-    from .budget import error_budget as budget_of
+    from dataclasses import replace
 
-    a = result.chosen if answer is None else answer
+    from .budget import error_budget as budget_of
+    from .budget import noise_given
+
+    a = _answer_of(result, answer)
     models, study = result.of(a)
-    return budget_of(models, study, a.H, a.G, a.design.M_z, label=a.label, design=a.design,
-                     noise=noise, dataset=dataset, seeds=seeds, chip=a.chip)
+    chip, said = (a.chip, None) if noise is None else noise_given(a.chip, noise)
+    b = budget_of(models, study, a.H, a.G, a.design.M_z, label=a.label, design=a.design,
+                  dataset=dataset, seeds=seeds, chip=chip)
+    return b if said is None else replace(b, noise_source=said)
 
 
 def calibrate(result: Result, answer: DesignAnswer | None = None, *, presses=None,
@@ -388,12 +404,13 @@ def calibrate(result: Result, answer: DesignAnswer | None = None, *, presses=Non
     ----------
     result : Result
         The answer of a study with one geometry.
-    answer : DesignAnswer, optional
-        ``result.chosen`` (default), ``result.original`` or one of ``result.evaluate``.
+    answer : DesignAnswer or Sensor, optional
+        ``result.chosen`` (default), ``result.original``, one of ``result.evaluate``, or a
+        sensor (``result.sensor.changed(grade="N42")``, :meth:`Result.evaluate_sensor`).
     presses : Presses, optional
         A built unit's measured (B, F) (:func:`magtact.calibration.read_presses`).
     noise : (σ_x, σ_z) [T], optional
-        Field noise where the chip has none.
+        Field noise in place of the chip's own figure.
     **options
         As :func:`magtact.calibration.calibrate`: ``fit``, ``degrees``, ``table_sizes``,
         ``model_error``, ``force_source`` (``"auto"`` fits a unit to the FE forces of the
@@ -426,7 +443,7 @@ def calibrate(result: Result, answer: DesignAnswer | None = None, *, presses=Non
     if result.study.geometric_variables:
         raise MagtactError("a calibration belongs to one geometry: fix the geometric "
                            "design variables (study.at(...)) with models fitted to it")
-    a = result.chosen if answer is None else answer
+    a = _answer_of(result, answer)
     models, study = result.of(a)
     return calibration_of(models, study, a.H, a.G, a.design.M_z, noise=noise,
                           presses=presses, chip=a.chip, dataset=result.dataset, **options)
@@ -538,6 +555,38 @@ def write_results_into(result: Result, out: str | Path, *, figures: bool = True,
     return files
 
 
+def _answer_of(result: Result, answer: DesignAnswer | Sensor | None) -> DesignAnswer:
+    """The answer a function over a result acts on: the chosen design's (None), the answer
+    given, or that of a sensor given (:meth:`Result.evaluate_sensor`)."""
+    if answer is None:
+        return result.chosen
+    if isinstance(answer, Sensor):
+        return result.evaluate_sensor(answer)
+    return answer
+
+
+def force_map(result: Result, answer: DesignAnswer | Sensor | None = None) -> SensorMap:
+    """The field-to-force map of a design of a result (docs/method.md §13): ``.force(B)``
+    for readings B (..., 3) [T], ``.field(F)`` the forward map.
+
+    Parameters
+    ----------
+    result : Result
+    answer : DesignAnswer or Sensor, optional
+        ``result.chosen`` (default), another answer, or a sensor.
+    """
+    from .calibration import sensor_map
+
+    a = _answer_of(result, answer)
+    geometry = {k: v for k, v in result.variables.items()
+                if k in result.study.geometric_variables}
+    if geometry and answer is None:
+        models, study = result.models.at(**geometry), result.study.at(**geometry)
+    else:
+        models, study = result.of(a)
+    return sensor_map(models, study, a.H, a.G, a.design.M_z, design=a.design)
+
+
 def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str
             ) -> DesignAnswer:
     """The designer's answer for a design given by its variables [SI] (at its geometry; in
@@ -556,25 +605,11 @@ def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str
 
 def _with_parts(study: Study, grade: str | None, standoff_mm: float | None) -> Study:
     """``study`` with the magnet of ``grade`` and the chip at ``standoff_mm``."""
-    from dataclasses import replace
+    from ._sensor import with_parts
 
-    from .parts import grade as catalogue_grade
-    from .study import MU0
-
-    magnet, hall = study.magnet, study.hall
-    if grade is not None:
-        if not isinstance(grade, str):
-            raise MagtactError(f"grade: expected a catalogue name such as 'N42', got "
-                               f"{type(grade).__name__}")
-        try:
-            M_z = catalogue_grade(grade).M_z(MU0)[0]
-        except KeyError as exc:
-            raise MagtactError(f"grade: {exc.args[0]}") from None
-        magnet = replace(magnet, grade=grade, M_z=M_z)
-    if standoff_mm is not None:
-        hall = replace(hall, standoff=checked_si(standoff_mm, "mm", "standoff_mm",
-                                                 bounds=(0.0, 20e-3)))
-    return replace(study, magnet=magnet, hall=hall)
+    standoff = (None if standoff_mm is None
+                else checked_si(standoff_mm, "mm", "standoff_mm", bounds=(0.0, 20e-3)))
+    return with_parts(study, grade=grade, standoff=standoff)
 
 
 def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None = None, *,
@@ -633,8 +668,10 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
         d = opt.choice.design
         values = {"H": d.H, "G": d.G} | ({} if d.M_z is None else {"M_z": d.M_z})
     original = {"H": study.design.H_original, "G": study.design.G_original} | own
-    return Result(study, models, models_source, opt, _answer(models, study, values, "chosen"),
-                  _answer(models, study, original, "original"), values, dataset)
+    chosen = _answer(models, study, values, "chosen")
+    return Result(study, models, models_source, opt, chosen,
+                  _answer(models, study, original, "original"), values, dataset,
+                  sensor=Sensor.of(chosen))
 
 
 def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_source: str,
@@ -664,7 +701,7 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
                                        "G": study.design.G_original}, "original")
     values = {"H": c.H, "G": c.G, "M_z": c.M_z, "standoff": c.standoff}
     return Result(study, models, models_source, opt, chosen, original, values, dataset,
-                  sensor)
+                  sensor, Sensor.of(chosen))
 
 
 def _root_found_saturation(models: ModelSet, study: Study, sensor, F_chosen: float):

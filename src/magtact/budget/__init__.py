@@ -16,6 +16,7 @@ from ._budget import (
     budget_card_rows,
     budget_json,
     error_budget,
+    noise_given,
     write_budget_outputs,
     write_budgets,
 )
@@ -24,6 +25,6 @@ from ._fabrication import linearised, monte_carlo, percentiles, responses, unit_
 __all__ = [
     "Budget", "BudgetFile", "BudgetRow", "budget_card_rows", "budget_json", "crosstalk",
     "error_budget", "linearised", "magnets_field", "monte_carlo", "neighbour_changes",
-    "neighbour_offsets", "percentiles", "responses", "smallest_pitch", "unit_context",
-    "worst_false_force", "write_budget_outputs", "write_budgets",
+    "neighbour_offsets", "noise_given", "percentiles", "responses", "smallest_pitch",
+    "unit_context", "worst_false_force", "write_budget_outputs", "write_budgets",
 ]

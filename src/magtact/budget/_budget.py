@@ -16,6 +16,7 @@ import numpy as np
 
 from .._errors import MagtactError
 from .._files import json_dict, json_list, json_number, json_text
+from .._sensor import with_parts
 from ..designer import HallChip, hall_chip, resolution
 from ..doe import check_design
 from ..magnetics import hall_field
@@ -247,6 +248,18 @@ def _rows(name, group, at_rest, worst, assumptions) -> list[BudgetRow]:
             for c, a, w in zip(COMPONENTS, *tidy, strict=True)]
 
 
+def noise_given(chip: HallChip, noise: tuple[float, float]) -> tuple[HallChip, str]:
+    """The chip with the field noise ``noise`` = (σ_x, σ_z) [T] in place of its own, and the
+    sentence that says so (the budget's ``noise_source``)."""
+    given = ", ".join(f"{from_si(v, 'uT'):.3g}" for v in noise)
+    own = (("that of the setting magtact picks per design" if chip.picked else "none")
+           if chip.noise is None
+           else ", ".join(f"{from_si(v, 'uT'):.3g}" for v in chip.noise) + f" µT at {chip.setting}")
+    said = (f"given as {given} µT (x, z), in place of the chip's own figure "
+            f"({chip.name}: {own})")
+    return replace(chip, noise_x=float(noise[0]), noise_z=float(noise[1])), said
+
+
 def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
                  *, label: str = "design", design: DesignResult | None = None,
                  noise: tuple[float, float] | None = None, dataset=None,
@@ -313,7 +326,7 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     if design is None:
         design = per_design(models, H, G, study, M_z)
     scale = design.field_scale
-    s_M = study if M_z is None else replace(study, magnet=replace(study.magnet, M_z=float(M_z)))
+    s_M = study if M_z is None else with_parts(study, M_z=M_z)  # the design's magnet
     rows: list[BudgetRow] = []
     not_modelled = ["the elastomer's mechanical coupling between taxels (only their fields "
                     "are superposed)",

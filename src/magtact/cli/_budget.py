@@ -16,7 +16,7 @@ from rich.table import Table
 from .._errors import MagtactError
 from ..study import checked_si, from_si, kpa, mm
 from ._app import StudyArg, app, console, get_study, outputs
-from ._optimise import ModelsOpt, study_models
+from ._optimise import ModelsOpt
 
 if TYPE_CHECKING:
     from ..budget import Budget
@@ -90,11 +90,124 @@ def _seeds(path: Path | None) -> dict | None:
     return {**data, "spread": spread}
 
 
+#: ``--H``, ``--G``, ``--grade``, ``--standoff-mm``, ``--setting``, ``--silicone``: the sensor a
+#: command acts on, each changing only what it names in the chosen sensor.
+HOpt = Annotated[float | None, typer.Option(
+    "--H", help="Body height H [mm]; default: the chosen sensor's.")]
+GOpt = Annotated[float | None, typer.Option(
+    "--G", help="Shear modulus G [kPa]; default: the chosen sensor's.")]
+GradeOpt = Annotated[str | None, typer.Option(
+    "--grade", help="Magnet grade (N35 ... N52; sets M_z); default: the chosen sensor's.")]
+StandoffOpt = Annotated[float | None, typer.Option(
+    "--standoff-mm", help="The chip's distance below the body [mm]; default: the chosen "
+                          "sensor's.")]
+SettingOpt = Annotated[str | None, typer.Option(
+    "--setting", metavar="FIELD=V,...",
+    help="The chip's setting, e.g. GAIN_SEL=5,RES=2 (fields GAIN_SEL, RES, OSR, DIG_FILT; "
+         "those not named keep the chosen sensor's); default: the chosen sensor's.")]
+SiliconeOpt = Annotated[str | None, typer.Option(
+    "--silicone", help="The silicone's catalogue name (e.g. 'Dragon Skin 10'; G stays as "
+                       "given); default: the chosen sensor's.")]
+
+
+def parse_setting(text: str) -> dict[str, int]:
+    """``--setting FIELD=V,...`` → the fields named and their values.
+
+    Raises
+    ------
+    MagtactError
+        For a text that is not ``FIELD=V`` pairs of integers, an unknown or repeated field.
+    """
+    from .._sensor import SETTING_FIELDS
+
+    values = {}
+    for item in str(text).split(","):
+        key, eq, value = item.partition("=")
+        name = key.strip().lower()
+        if not eq or name not in SETTING_FIELDS:
+            raise MagtactError(f"--setting must be FIELD=V pairs separated by commas, the fields "
+                               f"{', '.join(f.upper() for f in SETTING_FIELDS)} (e.g. "
+                               f"GAIN_SEL=5,RES=2), got {text!r}")
+        if name in values:
+            raise MagtactError(f"--setting names {name.upper()} twice")
+        try:
+            values[name] = int(value)
+        except ValueError:
+            raise MagtactError(f"--setting: {name.upper()} must be an integer, got "
+                               f"{value.strip()!r}") from None
+    return values
+
+
+def check_sensor_options(study, *, H=None, G=None, standoff=None, setting=None) -> None:
+    """Refuse, before any work, a value out of its physical range, a height outside the
+    data's domain, a ``--setting`` that is not ``FIELD=V`` pairs (the message names the
+    option)."""
+    from ..doe import check_design
+
+    if H is not None:
+        check_design(study, checked_si(H, "mm", "--H"))
+    if G is not None:
+        checked_si(G, "kPa", "--G")
+    if standoff is not None:
+        checked_si(standoff, "mm", "--standoff-mm", bounds=(0.0, 20e-3))
+    if setting is not None:
+        parse_setting(setting)
+
+
+def chosen_or_given(result, *, H=None, G=None, grade=None, standoff=None, setting=None,
+                    silicone=None):
+    """The sensor a command acts on: the result's chosen sensor with what the options name
+    changed (user units: mm, kPa; ``setting``: ``FIELD=V,...``), and whether any was given.
+
+    Raises
+    ------
+    MagtactError
+        For a value out of its physical range, a grade or silicone not in the catalogue, a
+        setting the chip does not have (the message names the option).
+    """
+    from ..parts import SettingError, chip_table
+
+    sensor = result.sensor
+    if sensor is None:
+        raise MagtactError("the result holds no chosen sensor")
+    chip = None
+    if setting is not None:
+        if sensor.setting is None:
+            raise MagtactError(f"--setting: the {sensor.chip} has no settings to choose")
+        chip = replace(sensor.setting, **parse_setting(setting))
+        try:  # a setting the chip has and permits
+            chip_table(sensor.chip).check(chip)
+        except SettingError as exc:
+            raise MagtactError(f"--setting: {exc.reason}") from None
+    given = {"H": None if H is None else checked_si(H, "mm", "--H"),
+             "G": None if G is None else checked_si(G, "kPa", "--G"),
+             "standoff": None if standoff is None else checked_si(
+                 standoff, "mm", "--standoff-mm", bounds=(0.0, 20e-3)),
+             "setting": chip}
+    try:
+        changed = sensor.changed(grade=grade, silicone=silicone, **given)
+        changed.into(result.study)  # a silicone the catalogue holds
+    except MagtactError as exc:
+        option = "--grade" if str(exc).startswith("grade") else "--silicone"
+        raise MagtactError(f"{option}: {str(exc).partition(': ')[2]}") from None
+    return changed, changed != sensor
+
+
+def print_sensor_line(sensor, given: bool) -> None:
+    """The sensor a command acts on, first in its output."""
+    what = "the chosen sensor with the options given" if given else "the chosen sensor"
+    console.print(f"{what}: {escape(sensor.words())}", highlight=False)
+
+
 @app.command("budget")
 def budget_command(
-    H: Annotated[float, typer.Option("--H", help="Base height H [mm].")],
-    G: Annotated[float, typer.Option("--G", help="Shear modulus G [kPa].")],
     study: StudyArg = None,
+    H: HOpt = None,
+    G: GOpt = None,
+    grade: GradeOpt = None,
+    standoff: StandoffOpt = None,
+    setting: SettingOpt = None,
+    silicone: SiliconeOpt = None,
     noise: Annotated[str | None, typer.Option(
         "--noise-uT", metavar="S|X,Z",
         help="RMS field noise [µT] of the chip, one value for both axes or X,Z; it replaces "
@@ -106,28 +219,29 @@ def budget_command(
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Also write OUT/budget.json and the figure.")] = None,
 ) -> None:
-    """The error budget of design (H, G): every false force besides the load, in mN."""
-    from ..budget import budget_card_rows, error_budget, write_budgets
-    from ..designer import answer
+    """The error budget of the chosen sensor (magtact.error_budget), or of it with the parts
+    the options name changed: every false force besides the load, in mN."""
+    from .. import design, error_budget
+    from ..budget import budget_card_rows, write_budgets
     from ..report import budget_figures
 
     s = get_study(study)
-    H_si = checked_si(H, "mm", "--H")
-    G_si = checked_si(G, "kPa", "--G")
     sigma = None if noise is None else parse_noise(noise)
     seed_data = _seeds(seeds)
+    check_sensor_options(s, H=H, G=G, standoff=standoff, setting=setting)
     written = outputs("budget", out, "budget.json") if out is not None else None
     with written or contextlib.nullcontext() as o:
-        m, _ = study_models(s, models)
-        dataset = _dataset(s) if models is None else None
-        a = answer(m, s, H_si, G_si)  # the chip at this design's setting
-        chip, said = noise_override(a.chip, sigma)
-        b = error_budget(m, s, H_si, G_si, label="design", design=a.design, noise=sigma,
-                         dataset=dataset, seeds=seed_data, chip=chip)
-        if said is not None:
-            b = replace(b, noise_source=said)
+        with console.status("choosing the sensor"):
+            result = design(s, models=models, log=lambda m: console.print(m, highlight=False))
+        sensor, given = chosen_or_given(result, H=H, G=G, grade=grade, standoff=standoff,
+                                        setting=setting, silicone=silicone)
+        print_sensor_line(sensor, given)
+        if sigma is not None:
+            noise_override(sigma)
+        b = error_budget(result, sensor if given else None, noise=sigma,
+                         dataset=result.dataset, seeds=seed_data)
         if o is not None:
-            write_budgets([b], s, o.folder, figures=budget_figures)
+            write_budgets([b], result.study, o.folder, figures=budget_figures)
     print_budget(b)
     for name, text in budget_card_rows([b]):
         console.print(f"{escape(name)}: {escape(text)}", highlight=False)
@@ -135,29 +249,11 @@ def budget_command(
         console.print(f"written to {o.out}", highlight=False)
 
 
-def noise_override(chip, sigma):
-    """The chip with the noise of ``--noise-uT`` (σ_x, σ_z) [T] in place of its own, and the
-    sentence that says so (None, and the chip unchanged, without ``--noise-uT``)."""
-    if sigma is None:
-        return chip, None
+def noise_override(sigma) -> None:
+    """Say that ``--noise-uT`` (σ_x, σ_z) [T] replaces the chip's own figure."""
     given = ", ".join(f"{from_si(v, 'uT'):.3g}" for v in sigma)
-    own = (("that of the setting magtact picks per design" if chip.picked else "none")
-           if chip.noise is None
-           else ", ".join(f"{from_si(v, 'uT'):.3g}" for v in chip.noise) + f" µT at {chip.setting}")
-    said = (f"given as --noise-uT {given} µT (x, z), in place of the chip's own figure "
-            f"({chip.name}: {own})")
-    console.print(f"noise: {escape(said)}", highlight=False)
-    return replace(chip, noise_x=float(sigma[0]), noise_z=float(sigma[1])), said
-
-
-def _dataset(study):
-    """The bundled data set where it describes the study (its mesh error), else None."""
-    from ..doe import bundled_for
-
-    try:
-        return bundled_for(study)
-    except MagtactError:
-        return None
+    console.print(f"noise: given as --noise-uT {given} µT (x, z), in place of the chip's own "
+                  "figure at the sensor's setting", highlight=False)
 
 
 def print_budget(b: Budget, stdout: Console | None = None) -> None:

@@ -9,9 +9,21 @@ from typing import Annotated
 import typer
 
 from .._errors import MagtactError
-from ..study import checked_si, from_si
+from ..study import from_si
 from ._app import OutOpt, StudyArg, app, console, get_study, outputs
-from ._budget import noise_override, parse_noise
+from ._budget import (
+    GOpt,
+    GradeOpt,
+    HOpt,
+    SettingOpt,
+    SiliconeOpt,
+    StandoffOpt,
+    check_sensor_options,
+    chosen_or_given,
+    noise_override,
+    parse_noise,
+    print_sensor_line,
+)
 from ._optimise import ModelsOpt
 
 
@@ -49,10 +61,12 @@ def fit_names(text: str, presses: bool) -> tuple[str, ...]:
 def calibrate_command(
     out: OutOpt,
     study: StudyArg = None,
-    H: Annotated[float | None, typer.Option(
-        "--H", help="Body height H [mm]; default: the study's chosen design.")] = None,
-    G: Annotated[float | None, typer.Option(
-        "--G", help="Shear modulus G [kPa]; default: the study's chosen design.")] = None,
+    H: HOpt = None,
+    G: GOpt = None,
+    grade: GradeOpt = None,
+    standoff: StandoffOpt = None,
+    setting: SettingOpt = None,
+    silicone: SiliconeOpt = None,
     noise: Annotated[str | None, typer.Option(
         "--noise-uT", metavar="S|X,Z",
         help="RMS field noise [µT] of the Hall chip, one value for both axes or X,Z, for the "
@@ -76,15 +90,14 @@ def calibrate_command(
                                "design's H, else models).")] = "auto",
     models: ModelsOpt = None,
 ) -> None:
-    """The field-to-force map of a design for firmware: force.h (C99), force_map.json,
+    """The field-to-force map of the chosen sensor (magtact.calibrate), or of it with the
+    parts the options name changed, for firmware: force.h (C99), force_map.json,
     force_table.csv, calibration.json and calibration.png in OUT."""
-    from .. import models_for
-    from ..calibration import DEFAULT_FIT, calibrate, read_presses, write_calibration_outputs
+    from .. import calibrate, design
+    from ..calibration import DEFAULT_FIT, read_presses, write_calibration_outputs
     from ..report import calibration_figures
 
     s = get_study(study)
-    if (H is None) != (G is None):
-        raise MagtactError("give both --H and --G, or neither (the chosen design)")
     if force_source not in ("auto", "fe", "models"):
         raise MagtactError(f"--force-source must be auto, fe or models, got {force_source!r}")
     if model_error is not None and not 0 <= model_error <= 1:
@@ -94,37 +107,26 @@ def calibrate_command(
         raise MagtactError("--model-error cannot take effect without --presses: it weights the "
                            "unit fit to a built unit's presses; give --presses CSV, or leave "
                            "--model-error out")
-    given = None if H is None else (checked_si(H, "mm", "--H"), checked_si(G, "kPa", "--G"))
+    check_sensor_options(s, H=H, G=G, standoff=standoff, setting=setting)
     sigma = None if noise is None else parse_noise(noise)
     units = None if fit is None else fit_names(fit, presses is not None)
     data = None if presses is None else read_presses(presses)
     # the folder is checked (writable, nothing of the user's in the way) before the work
     with outputs("calibrate", out, "force.h", "force_map.json", "force_table.csv",
                  "calibration.json") as o:
-        ms, _, dataset = models_for(s, models=models,
-                                    log=lambda m: console.print(m, highlight=False))
-        if H is None:
-            from .. import solve
-
-            with console.status("optimising"):
-                a = solve(ms, s).chosen
-            label = "the chosen design"
-        else:
-            from ..designer import answer
-
-            a = answer(ms, s, *given)
-            label = "the given design"
-        H_si, G_si, M_z = a.H, a.G, a.design.M_z
-        console.print(f"calibrating {label}: H = {from_si(H_si, 'mm'):.4g} mm, "
-                      f"G = {from_si(G_si, 'kPa'):.4g} kPa", highlight=False)
+        with console.status("choosing the sensor"):
+            result = design(s, models=models, log=lambda m: console.print(m, highlight=False))
+        sensor, given = chosen_or_given(result, H=H, G=G, grade=grade, standoff=standoff,
+                                        setting=setting, silicone=silicone)
+        print_sensor_line(sensor, given)
         eps = None if model_error is None else (model_error, model_error)
-        noise_override(a.chip, sigma)  # says, when given, what --noise-uT replaces
+        if sigma is not None:  # says what --noise-uT replaces
+            noise_override(sigma)
         with console.status("calibrating: the map, its round trip and the firmware "
                             "candidates"):  # shown in a terminal only
-            cal = calibrate(ms, s, H_si, G_si, M_z, noise=sigma, presses=data,
+            cal = calibrate(result, sensor if given else None, noise=sigma, presses=data,
                             fit=DEFAULT_FIT if units is None else units, model_error=eps,
-                            chip=a.chip,  # the chip at this design's setting
-                            force_source=force_source, dataset=dataset)
+                            force_source=force_source)
         write_calibration_outputs(cal, o.folder, figures=calibration_figures)
     a = cal.firmware.chosen
     console.print(
