@@ -91,6 +91,59 @@ def assert_shear_line_holds_on_the_chip(result, n=(201, 41)):
         assert f"{a.verdict.shear_read:.3g} N" in line.answer, line.answer
 
 
+#: The MLX90393's offset band over temperature, 1000 LSB at GAIN_SEL 7, RES 0 (datasheet rev.
+#: 011, Table 9 OFFSTHD; Table 17: 0.150 µT/LSB xy, 0.242 µT/LSB z) [T].
+MLX_OFFSET = (150e-6, 242e-6)
+
+
+def assert_worst_corner_reads(result, n_t=401):
+    """At the worst corner of the chosen sensor's tolerances (the robust verdict's), the chip
+    reads the required normal force on every DOE path: the unit's field from magpylib (its
+    remanence at its temperature, magnet size, body height and standoff, read with its gain
+    and offset), its normal force from the bundled DOE's FE forces (linear in t, and in H
+    between the two nearest levels; times its G over G and over 1 + the FE bias)."""
+    from magtact.doe import bundled_for
+    from magtact.parts import grade
+
+    magpy = pytest.importorskip("magpylib")
+    a = result.chosen
+    study, d = a.study, a.design
+    req = study.requirements
+    w = a.robust["normal"]
+    assert w.met, w.text
+    c = w.corner
+    m, b = study.magnet, study.body
+    alpha = grade(a.parts.grade).alpha
+    M = m.M_z * c["B_r"] * (1 + alpha * (c["temperature"] - 20.0))
+    H = d.H + c["H"]
+    standoff = max(study.hall.standoff + c["standoff"], 0.0)
+    gain, off = 1 + c["chip_sensitivity"], c["chip_offset"] * np.array(MLX_OFFSET)
+    ds = bundled_for(study)
+    Hs = ds["H"].values
+    k = int(np.clip(np.searchsorted(Hs, H) - 1, 0, Hs.size - 2))
+    wH = (H - Hs[k]) / (Hs[k + 1] - Hs[k])
+    G_ref = float(ds["G"].values[-1])
+    F_z_doe = ds["F_z"].sel(G=G_ref).values  # (t, θ, H)
+    scale = d.G * (1 + c["G"]) / (1 + c["fe_bias"]) / G_ref
+    t = np.linspace(0.0, 1.0, n_t)
+    checked = 0
+    for j, theta in enumerate(ds["theta"].values):
+        if theta > d.theta_m * (1 + 1e-9):
+            continue
+        F = scale * ((1 - wH) * np.interp(t, ds["t"].values, F_z_doe[:, j, k])
+                     + wH * np.interp(t, ds["t"].values, F_z_doe[:, j, k + 1]))
+        tt = t[(F <= req.F_z) & (t <= d.t_m)]
+        u_z = tt * (study.loading.dz_sat + m.H_m - H - b.H_g)
+        pos = np.stack([-u_z * np.tan(theta), 0 * tt, H + b.H_g - m.H_m + u_z + standoff], -1)
+        magnet = magpy.magnet.Cylinder(dimension=(2 * (m.R_m + c["R_m"]), m.H_m + c["H_m"]),
+                                       polarization=(0, 0, MU0 * M), position=pos)
+        B = np.atleast_2d(magnet.getB((0.0, 0.0, 0.0)))
+        assert np.all(np.abs(gain * B[:, 0] + off[0]) <= a.chip.range_x)
+        assert np.all(np.abs(gain * B[:, 2] + off[1]) <= a.chip.range_z), (theta, tt.max())
+        checked += 1
+    assert checked >= 3
+
+
 def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_card(result):
     B = assert_reads_required_loads(result)
     a = result.chosen
@@ -103,6 +156,7 @@ def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_c
     # the shear requirement at the loads where it occurs within the normal range: this body
     # carries 0.25 N of shear stably only beyond 5 N normal, and the verdict says so
     assert_shear_line_holds_on_the_chip(result)
+    assert_worst_corner_reads(result)
     # the original MagOne design fails the range requirement, and the card says so
     o = result.original.verdict
     assert not o["normal"].met and o["normal"].margin < 0
@@ -127,6 +181,7 @@ def test_a_light_specification_gets_its_rate_and_range(result):
     assert a.design.F_z_max >= 2.0 and a.verdict["normal"].margin > 0
     assert_reads_required_loads(r)
     assert_shear_line_holds_on_the_chip(r)
+    assert_worst_corner_reads(r)
     # a lighter specification buys a lower noise than the 5 N one
     assert r.sensor_design.choice.sigma < result.sensor_design.choice.sigma
 

@@ -691,17 +691,60 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
     sensor = optimise_sensor(models, study, opt.reduction.table, constraints)
     c = sensor.choice
     chosen = _answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen")
+    sensor, chosen = _for_every_unit(models, study, opt.reduction.table, constraints, sensor,
+                                     chosen)
+    c = sensor.choice
     sensor = _root_found_saturation(models, study, sensor, chosen.verdict.F_saturation)
-    from .chip import exact_field_models
-    from .tolerance import robust_verdict
-
-    chosen = replace(chosen, robust=robust_verdict(exact_field_models(models, chosen.study),
-                                                   chosen))
     original = _answer(models, study, {"H": study.design.H_original,
                                        "G": study.design.G_original}, "original")
     values = {"H": c.H, "G": c.G, "M_z": c.M_z, "standoff": c.standoff}
     return Result(study, models, models_source, opt, chosen, original, values, dataset,
                   sensor, Sensor.of(chosen))
+
+
+#: Solves of the sensor problem at the worst corner at most (each calibrates the worst
+#: corner's factors on the sensor the one before chose).
+WORST_CORNER_SOLVES = 2
+
+
+def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, chosen):
+    """The sensor problem solved for the worst corner of the chosen sensor's tolerance box
+    (``[tolerances] design_for = "worst"``, docs/method.md §16), and the chosen answer with
+    its robust verdict.
+
+    Where the nominal choice's worst corner does not read the required normal force, the
+    problem is solved again with the chip's constraint at that corner
+    (:func:`magtact.tolerance.worst_factors`: the forces' factor of the softest body and the
+    FE bias, the reading's factor that folds the field's tolerances into one scale, both
+    calibrated on the sensor chosen before) and the force constraints for the softest body;
+    the factors are calibrated again on the new choice while its worst corner does not read
+    the force, at most :data:`WORST_CORNER_SOLVES` times.
+    """
+    from dataclasses import replace
+
+    from .chip import exact_field_models
+    from .optimise import optimise_sensor
+    from .tolerance import robust_verdict, worst_factors
+
+    def robust(a):
+        return replace(a, robust=robust_verdict(exact_field_models(models, a.study), a))
+
+    chosen = robust(chosen)
+    if study.tolerances.design_for != "worst":
+        return sensor, chosen
+    k = 1.0 - constraints.tolerance  # the required forces
+    for _ in range(WORST_CORNER_SOLVES):
+        if chosen.robust["normal"].met:
+            break
+        w = worst_factors(exact_field_models(models, chosen.study), chosen)
+        force = min(w.force, k)
+        at_worst = replace(constraints, F_r_c=constraints.F_r_c * k / force,
+                           F_z_c=constraints.F_z_c * k / force, tolerance=1.0 - force)
+        sensor = optimise_sensor(models, study, table, at_worst, field_factor=w.field,
+                                 read_factor=1.0 / force)
+        c = sensor.choice
+        chosen = robust(_answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen"))
+    return sensor, chosen
 
 
 def _root_found_saturation(models: ModelSet, study: Study, sensor, F_chosen: float):

@@ -55,7 +55,9 @@ WARN_GAP = 0.05
 class SensorSpace:
     """The choices of a sensor design: grades (names and M_z [A/m]), standoff levels [m], chip
     options, the H and G bounds, the per-height table of the stable region and extrema, the
-    force constraints and the required normal force F_z [N]."""
+    force constraints and the required normal force F_z [N]; the chip's constraint reads the
+    field times ``field_factor`` up to the normal force F_z × ``read_factor`` (a worst corner
+    of the parts' tolerances, :func:`magtact.tolerance.worst_factors`; 1: the nominal parts)."""
 
     grades: tuple[str, ...]
     M_z: np.ndarray
@@ -66,6 +68,8 @@ class SensorSpace:
     table: HeightTable
     constraints: ForceConstraints
     F_z: float
+    field_factor: float = 1.0
+    read_factor: float = 1.0
 
     def box(self, H) -> tuple[np.ndarray, ...]:
         """(t_m, θ_m, f_r,min, f_z,max) at heights H [m], interpolated in the table."""
@@ -81,7 +85,8 @@ class SensorSpace:
 
 
 def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = None,
-                 constraints: ForceConstraints | None = None) -> SensorSpace:
+                 constraints: ForceConstraints | None = None, field_factor: float = 1.0,
+                 read_factor: float = 1.0) -> SensorSpace:
     """The choices of ``study``'s sensor problem (``table``: a sweep over the H range, computed
     when not given; ``constraints``: the force constraints, default the study's, whose normal
     force is also the one the chip must read)."""
@@ -104,7 +109,7 @@ def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = Non
         constraints = force_constraints(models, study)
     F_z = constraints.F_z_c * (1.0 - constraints.tolerance)  # the force, not its tolerant bound
     return SensorSpace(grades, M_z, standoffs, tuple(chip_options(study)), d.H, d.G,
-                       table.take(order), constraints, F_z)
+                       table.take(order), constraints, F_z, field_factor, read_factor)
 
 
 @dataclass(frozen=True)
@@ -204,7 +209,7 @@ def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, s
                       for a in ("range_x", "range_z", "noise_x", "noise_z"))
     # every design in one grid, each with its chip at its own standoff
     grid = sensor_grid(models, study, H, t_m, theta_m, space.standoffs[standoff])
-    G_range = grid.G_range(M_z, rx, rz, space.F_z)
+    G_range = grid.G_range(M_z * space.field_factor, rx, rz, space.F_z * space.read_factor)
     if free.any():  # the best G of each design
         i = np.flatnonzero(free)
         low = np.maximum(np.maximum(G_force[i], G_range[i]), space.G_bounds[0])
@@ -310,7 +315,8 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
         for g, M_z in enumerate(space.M_z):
             if only is not None and g != only[0]:
                 continue
-            G_range = grid.G_range(M_z, o.range_x, o.range_z, space.F_z)
+            G_range = grid.G_range(M_z * space.field_factor, o.range_x, o.range_z,
+                                   space.F_z * space.read_factor)
             G_low = np.maximum(np.maximum(G_force, G_range), space.G_bounds[0])
             value, G = noise.least(M_z, G_low, G_hi, space.F_z)
             # per standoff level: the first height of the least value
@@ -478,9 +484,11 @@ class SensorOptimisation:
 
 
 def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = None,
-                    constraints: ForceConstraints | None = None) -> SensorOptimisation:
+                    constraints: ForceConstraints | None = None, field_factor: float = 1.0,
+                    read_factor: float = 1.0) -> SensorOptimisation:
     """The sensor problem of ``study`` (see the module notes): the exact reduction and
-    NSGA-II, the decision and their gap.
+    NSGA-II, the decision and their gap; ``field_factor`` and ``read_factor``: the chip's
+    constraint at a worst corner (:class:`SensorSpace`).
 
     Raises
     ------
@@ -488,7 +496,7 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
         If NSGA-II's choice lies more than ``WARN_GAP`` above the exact reduction's.
     """
     t0 = time.perf_counter()
-    space = sensor_space(models, study, table, constraints)
+    space = sensor_space(models, study, table, constraints, field_factor, read_factor)
     red, combos = exact_sensor_reduction(models, study, space)
     pareto = sensor_nsga2(models, study, space) if red.feasible else None
     choice, gap = red, float("nan")

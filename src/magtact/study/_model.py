@@ -508,6 +508,9 @@ class Tolerances:
     robust_replicates: int = setting(8, integer=True, minimum=2, maximum=1024,
                                      doc="independently scrambled Sobol sets of the yield; "
                                          "their spread gives its confidence interval")
+    design_for: str = setting("worst", choices=("worst", "nominal"),
+                              doc="the sensor problem's chip constraint and forces at the worst "
+                                  "corner of this box ('worst') or at the nominal parts")
 
 
 def holdout_limit(n_theta: int, n_H: int) -> int:

@@ -14,9 +14,17 @@ from ._box import (
     corners,
     tolerance_box,
 )
-from ._robust import RobustRequirement, RobustVerdict, robust_verdict, sobol_units
+from ._robust import (
+    RobustRequirement,
+    RobustVerdict,
+    WorstFactors,
+    robust_verdict,
+    sobol_units,
+    worst_factors,
+)
 from ._units import DesignContext, design_context, unit_figures
 
 __all__ = ["FIELD_SCALE", "INPUTS", "WORDS", "DesignContext", "RobustRequirement",
-           "RobustVerdict", "Tolerance", "ToleranceBox", "corners", "design_context",
-           "robust_verdict", "sobol_units", "tolerance_box", "unit_figures"]
+           "RobustVerdict", "Tolerance", "ToleranceBox", "WorstFactors", "corners",
+           "design_context", "robust_verdict", "sobol_units", "tolerance_box", "unit_figures",
+           "worst_factors"]

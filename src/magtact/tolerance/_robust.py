@@ -287,4 +287,51 @@ def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None
                          tol.robust_replicates, box, s_nom, s_worst, bounds)
 
 
-__all__ = ["RobustRequirement", "RobustVerdict", "robust_verdict", "sobol_units"]
+
+
+@dataclass(frozen=True)
+class WorstFactors:
+    """The worst corner of a design's box as two factors the optimiser's chip constraint can
+    take (:func:`worst_factors`): the chip's reading over the nominal one (≥ 1) and the forces
+    over the nominal ones (≤ 1)."""
+
+    field: float
+    force: float
+
+
+def worst_factors(models: ModelSet, answer, box: ToleranceBox | None = None
+                  ) -> WorstFactors:
+    """The worst corner of ``answer``'s box for reading the required normal force, as factors.
+
+    The forces' factor is exact: every force ∝ G, so the softest body with the FE forces at
+    their bias gives (1 + G_low) / (1 + bias). The field's factor is the magnetisation scale
+    at which the nominal unit, its forces times that factor, saturates at the worst corner's
+    saturation force (brentq): it folds the remanence, temperature, sensitivity, offset,
+    standoff, body height and magnet size into one scale, exact for this design and close
+    for its neighbours (the robust verdict of the design the optimiser returns says whether
+    it holds).
+    """
+    from scipy.optimize import brentq
+
+    box = tolerance_box(answer.study) if box is None else box
+    ctx = design_context(models, answer, box)
+    g, b = box.inputs[box.index("G")], box.inputs[box.index("fe_bias")]
+    force = (1.0 + g.low) / (1.0 + b.high)
+    F_worst = float(unit_figures(ctx, box, corners(box))["F_sat"].min())
+    i = box.index("B_r")
+
+    def excess(k):
+        x = box.nominal.copy()
+        x[i] = k
+        return float(unit_figures(ctx, box, x[None, :])["F_sat"][0]) * force - F_worst
+
+    if not np.isfinite(F_worst) or excess(1.0) <= 0:
+        return WorstFactors(1.0, force)
+    hi = 1.5
+    while excess(hi) > 0 and hi < 64:
+        hi *= 2
+    return WorstFactors(float(brentq(excess, 1.0, hi, xtol=1e-6)), force)
+
+
+__all__ = ["RobustRequirement", "RobustVerdict", "WorstFactors", "robust_verdict",
+           "sobol_units", "worst_factors"]
