@@ -241,6 +241,14 @@ class Result:
         values = {"H": checked_si(H_mm, "mm", "H_mm"), "G": checked_si(G_kPa, "kPa", "G_kPa")}
         if M_z_A_per_m is not None:
             values["M_z"] = checked_si(M_z_A_per_m, "A_per_m", "M_z_A_per_m")
+            # the study file's rule: a grade sets M_z, and an M_z also given must agree
+            from .study._rules import check_parts
+
+            part = grade if grade is not None or self.study.M_z_variable else \
+                self.study.magnet.grade
+            if part is not None:
+                check_parts(part, "custom", {"M_z": values["M_z"]},
+                            {"M_z": "M_z_A_per_m", "grade": "grade"})
         own = self.study.geometry()
         for key, v in geometry_mm.items():
             name = key.removesuffix("_mm")

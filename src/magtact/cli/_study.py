@@ -17,13 +17,20 @@ def study_command(
     study: StudyArg = None,
     write: Annotated[Path | None, typer.Option("--write", help="Also write the full study here.")]
     = None,
+    recompute: Annotated[bool, typer.Option(
+        "--recompute", help="Check the study as 'magtact run --recompute' takes it (its own FE "
+                            "DOE): without it, a study no bundled data set describes is "
+                            "refused, as 'magtact run' refuses it.")] = False,
 ) -> None:
-    """Validate STUDY (every rule a command applies to it) and print every setting (mm, kPa,
-    N), defaults filled in."""
+    """Validate STUDY (every rule a command applies to it, and what 'magtact run' checks: the
+    bundled data describe it unless --recompute) and print every setting (mm, kPa, N),
+    defaults filled in."""
     from ..study import check_study
 
     s = get_study(study)
     check_study(s, None if study is None else str(study))
+    if not recompute:
+        _check_data(s)
     text = s.to_toml()
     if write is not None and write.is_dir():
         raise MagtactError(f"--write {write}: Is a directory")
@@ -36,6 +43,18 @@ def study_command(
     typer.echo(text)
     if write is not None and not same:
         write_text(write, text)
+
+
+def _check_data(s) -> None:
+    """Refuse, as ``magtact run`` does before its DOE stage, a study that no data set bundled
+    with magtact describes (:func:`magtact.doe.bundled_for`), saying so and what to run."""
+    from ..doe import bundled_for
+
+    try:
+        bundled_for(s, advice="check it with --recompute, and run it with magtact run "
+                              "--recompute (its own FE DOE)")
+    except MagtactError as exc:
+        raise MagtactError(f"magtact run would refuse this study: {exc}") from None
 
 
 def _holds(path: Path, data: bytes) -> bool:

@@ -297,8 +297,9 @@ def differences(ds, study) -> list[str]:
                 continue  # a geometric dimension of the data: checked against its range below
             a, b = getattr(mine, f.name), getattr(theirs, f.name)
             if a != b:
-                out.append(f"[{name}] {_key(f)} = {_user(a, f)} (the data set's: "
-                           f"{_user(b, f)})")
+                digits = next((d for d in range(6, 17) if _user(a, f, d) != _user(b, f, d)), 17)
+                out.append(f"[{name}] {_key(f)} = {_user(a, f, digits)} (the data set's: "
+                           f"{_user(b, f, digits)})")
     H = (float(ds["H"].values.min()), float(ds["H"].values.max()))
     if not _inside(study.design.H, H):
         out.append(f"[design] H_mm = {_mm_range(study.design.H)} reaches outside the data's "
@@ -333,13 +334,14 @@ def _mm_range(rng) -> str:
     return f"[{from_si(rng[0], 'mm'):.6g}, {from_si(rng[1], 'mm'):.6g}]"
 
 
-def _user(value, f):
+def _user(value, f, digits: int = 6):
+    """``value`` of the setting ``f`` in its user unit, to ``digits`` significant figures."""
     unit = f.metadata.get("unit", "")
     if not unit or isinstance(value, (str, bool)):
         return repr(value)
     if isinstance(value, tuple):
-        return "[" + ", ".join(f"{from_si(v, unit):.6g}" for v in value) + "]"
-    return f"{from_si(value, unit):.6g}"
+        return "[" + ", ".join(f"{from_si(v, unit):.{digits}g}" for v in value) + "]"
+    return f"{from_si(value, unit):.{digits}g}"
 
 
 def rescaled_for(ds, study) -> xr.Dataset:

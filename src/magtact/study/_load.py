@@ -13,8 +13,8 @@ from pathlib import Path
 from .._files import UnreadableFile, file_problem, read_text_capped
 from ._errors import StudyError
 from ._model import GEOMETRY, SECTIONS, Study, key_of
-from ._rules import blamed, check_physical, check_unit, unit_hint, written_keys
-from ._units import LABEL, MU0, bounds_text, from_si, to_si
+from ._rules import blamed, check_parts, check_physical, check_unit, unit_hint, written_keys
+from ._units import LABEL, bounds_text, from_si, to_si
 
 PRESETS = {"magone": "magone.toml", "magone-publication": "magone_publication.toml",
            "magone-printed": "magone_printed.toml"}
@@ -130,26 +130,12 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
 
 def _apply_parts(s: Study, given: dict, source) -> Study:
     """The magnet's grade sets M_z = B_r / μ0 (nominal B_r), its size R_m and H_m; a value the
-    file also gives must agree (docs/method.md §10)."""
-    from ..parts import grade, size
-
-    mg, values = s.magnet, {}
-    if mg.grade != "custom":
-        values["M_z"] = grade(mg.grade).M_z(MU0)[0]
-    if mg.size != "custom":
-        sz = size(mg.size)
-        values |= {"R_m": sz.R_m, "H_m": sz.H_m}
-    for name, value in values.items():
-        f = next(f for f in fields(mg) if f.name == name)
-        key = key_of(f)
-        if key in given and not math.isclose(getattr(mg, name), value, rel_tol=1e-9):
-            what = "grade" if name == "M_z" else "size"
-            unit = f.metadata["unit"]
-            raise StudyError(f"magnet.{key}", f"{from_si(getattr(mg, name), unit):g} conflicts "
-                                              f"with magnet.{what} = {getattr(mg, what)!r} "
-                                              f"({from_si(value, unit):.6g} "
-                                              f"{LABEL.get(unit, unit)}); give one of the two",
-                             source)
+    file also gives must agree (docs/method.md §10; :func:`magtact.study._rules.check_parts`)."""
+    mg = s.magnet
+    keys = {f.name: f"magnet.{key_of(f)}" for f in fields(mg)}
+    own = {name: getattr(mg, name) for name in ("M_z", "R_m", "H_m")
+           if keys[name].split(".", 1)[1] in given}
+    values = check_parts(mg.grade, mg.size, own, keys, source)
     return replace(s, magnet=replace(mg, **values)) if values else s
 
 
@@ -194,7 +180,7 @@ def _check_hall(s: Study, source) -> None:
 def _unknown(key: str, allowed, what: str) -> str:
     close = difflib.get_close_matches(key, list(allowed), n=1)
     hint = f"; did you mean {close[0]!r}?" if close else ""
-    return f"unknown {what}{hint} Expected one of: {', '.join(allowed)}"
+    return f"unknown {what}{hint} (expected one of: {', '.join(allowed)})"
 
 
 def _section(name: str, default, given: dict, complete: bool, source):

@@ -4,9 +4,11 @@ its work (:func:`check_study`, also run by ``magtact study``)."""
 
 from __future__ import annotations
 
+import math
+
 from ._errors import StudyError
 from ._model import Study, holdout_limit
-from ._units import MU0, PLAUSIBLE_KEYS, from_si, unit_mistake
+from ._units import LABEL, MU0, PLAUSIBLE_KEYS, from_si, unit_mistake
 
 #: Room temperature [°C] a study's temperature change ``[environment] delta_T_K`` starts from
 #: (an assumption: the catalogue of ``parts/data/magnets.toml`` states no reference
@@ -54,6 +56,53 @@ def blamed(exc: StudyError, written: set[str], source) -> StudyError:
         return exc
     return StudyError(own, f"with {exc.key} from the base study (the file does not set it): "
                            f"[{exc.key}] {exc.reason}", source)
+
+
+def check_parts(grade_name: str, size_name: str, given: dict[str, float],
+                keys: dict[str, str], source=None) -> dict[str, float]:
+    """The magnet's values its grade and size set, a value also given checked against them:
+    the one rule of the study file (``[magnet] grade``, ``size`` with ``M_z_A_per_m``,
+    ``R_m_mm``, ``H_m_mm``) and of :meth:`magtact.Result.evaluate` (``grade`` with
+    ``M_z_A_per_m``).
+
+    Parameters
+    ----------
+    grade_name, size_name : str
+        Catalogue names, or ``"custom"`` (sets nothing).
+    given : dict
+        Values the caller also gives (``M_z``, ``R_m``, ``H_m`` → SI).
+    keys : dict
+        How the caller names ``M_z``, ``R_m``, ``H_m``, ``grade`` and ``size`` in a message.
+
+    Returns
+    -------
+    dict
+        ``M_z`` = B_r / μ0 (the grade's nominal B_r) and ``R_m``, ``H_m`` (the size), SI.
+
+    Raises
+    ------
+    StudyError
+        Naming the given value that conflicts (beyond a relative 1e-9) and the part that sets
+        it: "give one of the two".
+    """
+    from ..parts import grade, size
+
+    values = {}
+    if grade_name != "custom":
+        values["M_z"] = grade(grade_name).M_z(MU0)[0]
+    if size_name != "custom":
+        sz = size(size_name)
+        values |= {"R_m": sz.R_m, "H_m": sz.H_m}
+    units = {"M_z": "A_per_m", "R_m": "mm", "H_m": "mm"}
+    for name, value in values.items():
+        if name in given and not math.isclose(given[name], value, rel_tol=1e-9):
+            what = "grade" if name == "M_z" else "size"
+            unit = units[name]
+            part = grade_name if what == "grade" else size_name
+            raise StudyError(keys[name], f"{from_si(given[name], unit):g} conflicts with "
+                                         f"{keys[what]} = {part!r} ({from_si(value, unit):.6g} "
+                                         f"{LABEL.get(unit, unit)}); give one of the two", source)
+    return values
 
 
 def check_unit(full: str, name: str, unit: str, value, si, source) -> None:
@@ -204,12 +253,47 @@ def check_holdout(s: Study, n_theta: int | None = None, n_H: int | None = None,
                          source or f"study {s.name!r}")
 
 
+#: Largest required force a body can be asked to carry, in G_max π R² (the stiffest modulus
+#: of the design range times the body's base area): a neo-Hookean body compressed to half its
+#: height carries 3.5 G π R² (σ = G (λ − λ⁻²) at λ = 0.5), beyond the stable region of any
+#: design; ten is far above every design the study can reach (the MagOne study's largest
+#: reachable F_z is 3.6 G_max π R²).
+MAX_LOAD_FACTOR = 10.0
+
+
+def check_requirements(s: Study, source: str | None = None) -> None:
+    """The required forces (``[requirements] F_z_N``, ``F_r_N``) against what a body of the
+    study can carry at all: at most :data:`MAX_LOAD_FACTOR` × G_max π R² (G_max the upper
+    bound of ``[design] G_kPa``, R the body's radius or its largest design value); a value
+    that is plausible in mN says so.
+
+    Raises
+    ------
+    StudyError
+        Naming the requirement, the limit and the likely unit.
+    """
+    R = s.geometric_variables.get("R", (s.body.R, s.body.R))[1]
+    G_max = s.design.G[1]
+    limit = MAX_LOAD_FACTOR * G_max * math.pi * R ** 2
+    r = s.requirements
+    for key, value in (("requirements.F_z_N", r.F_z), ("requirements.F_r_N", r.F_r)):
+        if value > limit:
+            hint = "; did you give mN?" if value * 1e-3 <= limit else ""
+            raise StudyError(key, f"= {value:g} N is more than a body of radius "
+                                  f"{from_si(R, 'mm'):g} mm can carry at the stiffest G of the "
+                                  f"design range ({from_si(G_max, 'kPa'):g} kPa): at most about "
+                                  f"{MAX_LOAD_FACTOR:g} G π R² = {limit:.3g} N (half its height "
+                                  f"in compression carries 3.5 G π R²){hint}", source)
+
+
 def check_study(s: Study, source: str | None = None) -> None:
     """Every rule a command applies to a study before its work, in one place: ``magtact
     study`` and ``magtact run`` call it, so a study the check accepts is one the commands
     accept.
 
     * held-out paths within what the study's DOE allows (:func:`check_holdout`);
+    * the required forces within what a body of the study can carry
+      (:func:`check_requirements`);
     * the field's FE mesh settings among themselves (:func:`check_field_mesh`) and the near
       zone around the magnet against the Hall point's reach (:func:`check_near_zone`), when the
       field is solved by FE (``[magnetics] solver = "fe"``).
@@ -220,6 +304,7 @@ def check_study(s: Study, source: str | None = None) -> None:
         Naming the key to change.
     """
     check_holdout(s, source=source)
+    check_requirements(s, source or f"study {s.name!r}")
     if s.magnetics.solver == "fe":
         check_field_mesh(s, source or f"study {s.name!r}")
         check_near_zone(s, source or f"study {s.name!r}")

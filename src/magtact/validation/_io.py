@@ -275,6 +275,9 @@ def read_table_lines(path: Path, what: str, hint: str) -> tuple[list[str], dict,
                 raise DataError(f"{path}: line {i + 1}: metadata must read 'key = value', "
                                 f"got {body!r}")
             key, value = (s.strip() for s in body.split(sep, 1))
+            if key.lower() in meta:  # two values of one setting: neither is taken
+                raise DataError(f"{path}: line {i + 1}: {key} is given twice (also on line "
+                                f"{meta_line[key.lower()]}); keep one")
             meta[key.lower()] = value
             meta_line[key.lower()] = i + 1
         i += 1
