@@ -25,7 +25,9 @@ H, G, NOISE = 3e-3, 22.57e3, 1e-6
 #: Rounding of an all-float32 build (MAGTACT_ACC float) relative to the force range, as the
 #: header states.
 FLOAT_ROUNDING = 2e-4
-FLAGS = ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+#: MAGTACT_ALLOW_FLOAT: the float builds are measured here, also where the header refuses them
+#: (their stated error exceeds the target σ_F).
+FLAGS = ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-DMAGTACT_ALLOW_FLOAT"]
 OK, OUTSIDE, NO_FIELD = (C_RETURN[k] for k in ("MAGTACT_FORCE_OK", "MAGTACT_FORCE_OUTSIDE",
                                                "MAGTACT_FORCE_NO_FIELD"))
 
@@ -41,7 +43,13 @@ int main(void)
     while (scanf("%15s %lf %lf %lf", word, &x, &y, &z) == 4) {
         int rc;
         if (strcmp(word, "tare") == 0)
-            rc = magtact_force_tare((MAGTACT_REAL)x, (MAGTACT_REAL)y, (MAGTACT_REAL)z, off);
+        {
+            MAGTACT_REAL b[1][3];
+            b[0][0] = (MAGTACT_REAL)x;
+            b[0][1] = (MAGTACT_REAL)y;
+            b[0][2] = (MAGTACT_REAL)z;
+            rc = magtact_force_tare(b, 1, off);
+        }
         else
             rc = magtact_force((MAGTACT_REAL)x, (MAGTACT_REAL)y, (MAGTACT_REAL)z, off, o);
         if (strcmp(word, "tare") == 0)

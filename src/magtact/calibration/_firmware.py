@@ -507,6 +507,17 @@ def rest_field(smap: SensorMap) -> np.ndarray:
 
 def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = None,
              noise: tuple[float, float] | None = None) -> str:
+    """The C99 header ``force.h`` (:func:`c_source`) with its largest error against
+    ``force_table.csv`` measured in each build of :data:`BUILDS` (:func:`measure_builds`)
+    stated at its top; a float build whose error exceeds the target σ_F (or that could not be
+    measured) is refused at compile time.
+    """
+    builds = measure_builds(c_source(a, smap, choice, noise), smap, a)
+    return c_source(a, smap, choice, noise, builds)
+
+
+def c_source(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = None,
+             noise: tuple[float, float] | None = None, builds: dict | None = None) -> str:
     """The C99 header ``force.h``: ``magtact_force`` and ``magtact_force_tare``, both
     ``static inline`` (a file that includes the header and calls neither compiles without a
     warning; every file that calls them gets its own copy), with no dependency beyond
@@ -518,16 +529,22 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
     measurement) elsewhere and 2 (``MAGTACT_FORCE_NO_FIELD``, ``out`` zero) for B_z at most
     :data:`NO_FIELD_FRACTION` of B_z at rest (B = 0, B_z < 0 included) or a reading that is not
     finite. ``offset`` (or NULL) is subtracted from the
-    reading first; ``magtact_force_tare`` sets it from a reading at rest.
+    reading first; ``magtact_force_tare`` sets it from the mean of n readings at rest.
     """
     d = smap.describe()
     rest = rest_field(smap)
     band = (0.0, 0.0) if noise is None else tuple(BAND_SIGMAS * float(v) for v in noise)
+    double = (builds or {}).get(BUILDS[0][0])
+    missed = (choice is not None and choice.reached and double is not None
+              and not _within(double, choice))
     target = ("" if choice is None else
               " *   target sigma_F (the design's resolution): "
               f"F_r {from_si(choice.target_r, 'mN'):.4g} mN, "
               f"F_z {from_si(choice.target_z, 'mN'):.4g} mN; "
-              f"{'reached' if choice.reached else 'NOT reached'} ({choice.rule})\n")
+              f"{'reached' if choice.reached and not missed else 'NOT reached'} "
+              f"({choice.rule}"
+              + ("; held out within it, but not against force_table.csv in double" if missed
+                 else "") + ")\n")
     band_text = (" *   no band around the rest field (the chip's noise was not given)\n"
                  if noise is None else
                  f" *   valid band around the rest field: {BAND_SIGMAS:g} x the chip's RMS "
@@ -552,8 +569,9 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
         + band_text +
         f" *   approximation: {a.kind}{kind}\n"
         + _unit_line(smap) +
-        f" *   largest error over the region (held out): F_r {from_si(a.err_r, 'mN'):.4g} mN, "
-        f"F_z {from_si(a.err_z, 'mN'):.4g} mN\n" + target +
+        f" *   largest error over the region (held out, NumPy in double): F_r "
+        f"{from_si(a.err_r, 'mN'):.4g} mN, F_z {from_si(a.err_z, 'mN'):.4g} mN\n"
+        + _builds_text(builds, choice) + target +
         f" *   size: {a.bytes} bytes of float32 numbers (about twice in double), "
         f"{a.multiplies} multiplications per call\n"
         " *\n"
@@ -561,28 +579,31 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
         " * inline; a file that calls neither compiles without warnings) and link with -lm\n"
         " * (sqrt, cbrt, fabs of <math.h>), e.g. cc -std=c99 main.c -lm\n"
         " *   MAGTACT_REAL offset[3] = {0, 0, 0};\n"
-        " *   magtact_force_tare(bx0, by0, bz0, offset);   once, from a reading with no load\n"
+        " *   MAGTACT_REAL rest[16][3];  16 readings (bx, by, bz) taken with no load\n"
+        " *   magtact_force_tare(rest, 16, offset);  once: their mean is the rest reading\n"
         " *   rc = magtact_force(bx, by, bz, offset, out);  offset may be NULL (no tare)\n"
+        " * A tare from one reading carries the chip's whole noise into every later force and\n"
+        " * moves rest readings out of the valid band; the mean of n has 1/sqrt(n) of it.\n"
         " * magtact_force returns MAGTACT_FORCE_OK (0) inside the region or within the band\n"
         " * around the rest field, MAGTACT_FORCE_OUTSIDE (1, out = 0) elsewhere,\n"
         " * MAGTACT_FORCE_NO_FIELD (2, out = 0) for bz <= MAGTACT_BZ_MIN (half the field at rest,\n"
         " * after the offset) or a reading that is not a finite number (no magnet above the\n"
         " * chip, the chip upside down, a bad read).\n"
         " * Numbers are stored and returned as MAGTACT_REAL (double by default; define it as\n"
-        " * float before including for float32 tables, whose rounding is a few 1e-6 of the\n"
-        " * force range at degree 12); the sums are computed in MAGTACT_ACC (double by\n"
-        " * default, also with float tables: float sums add up to about 2e-4 of the force\n"
-        " * range, more than the noise near rest; define it as float where double arithmetic\n"
-        " * is too slow). */\n"
+        " * float before including for float32 tables); the sums are computed in MAGTACT_ACC\n"
+        " * (double by default, also with float tables; define it as float where double\n"
+        " * arithmetic is too slow). The error of each build is stated above; a float build\n"
+        " * whose error exceeds the target sigma_F does not compile (typedef below). */\n"
         "#ifndef MAGTACT_FORCE_H\n#define MAGTACT_FORCE_H\n#include <math.h>\n"
-        "#include <stddef.h>\n"
+        "#include <stddef.h>\n#include <stdint.h>\n#include <string.h>\n"
         "#ifndef MAGTACT_REAL\n#define MAGTACT_REAL double\n#endif\n"
         "#ifndef MAGTACT_ACC\n#define MAGTACT_ACC double\n#endif\n"
         + "".join(f"#define {k} {v}\n" for k, v in C_RETURN.items())
         + f"#define MAGTACT_REST_X ({rest[0]:.17g})\n#define MAGTACT_REST_Y ({rest[1]:.17g})\n"
         f"#define MAGTACT_REST_Z ({rest[2]:.17g})\n"
         f"#define MAGTACT_BZ_MIN ({NO_FIELD_FRACTION * max(rest[2], 0.0):.17g})\n"
-        f"#define MAGTACT_BAND_XY ({band[0]:.17g})\n#define MAGTACT_BAND_Z ({band[1]:.17g})\n\n")
+        f"#define MAGTACT_BAND_XY ({band[0]:.17g})\n#define MAGTACT_BAND_Z ({band[1]:.17g})\n\n"
+        + _float_guards(builds, choice) + _C_FINITE)
     helpers, block = _c_features(a) if a.kind == "features" else ("", _c_planar(a))
     func = (
         "/* The force of a reading (see the top of this file). */\n"
@@ -590,9 +611,13 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
         "                                const MAGTACT_REAL *offset, MAGTACT_REAL out[3])\n{\n"
         "    int inside = 0;\n"
         "    out[0] = 0;\n    out[1] = 0;\n    out[2] = 0;\n"
+        "    if (!magtact_force_finite(bx) || !magtact_force_finite(by)\n"
+        "        || !magtact_force_finite(bz))\n"
+        "        return MAGTACT_FORCE_NO_FIELD;\n"
         "    if (offset != NULL) {\n"
         "        bx -= offset[0];\n        by -= offset[1];\n        bz -= offset[2];\n    }\n"
-        "    if (!isfinite(bx) || !isfinite(by) || !isfinite(bz) || !(bz > MAGTACT_BZ_MIN))\n"
+        "    if (!magtact_force_finite(bx) || !magtact_force_finite(by)\n"
+        "        || !magtact_force_finite(bz) || !(bz > MAGTACT_BZ_MIN))\n"
         "        return MAGTACT_FORCE_NO_FIELD;\n"
         + block +
         "    if (!inside && fabs((double)bx - MAGTACT_REST_X) <= MAGTACT_BAND_XY\n"
@@ -603,18 +628,171 @@ def c_header(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
         "        out[0] = 0;\n        out[1] = 0;\n        out[2] = 0;\n"
         "        return MAGTACT_FORCE_OUTSIDE;\n    }\n"
         "    return MAGTACT_FORCE_OK;\n}\n\n"
-        "/* The offset (the reading at rest minus the design's rest field) that magtact_force\n"
-        " * subtracts: call with a reading taken with no load. Returns MAGTACT_FORCE_NO_FIELD\n"
-        " * (offset unchanged) for a reading magtact_force would refuse. */\n"
-        "static inline int magtact_force_tare(MAGTACT_REAL bx, MAGTACT_REAL by, MAGTACT_REAL bz,\n"
+        "/* The offset that magtact_force subtracts: the mean of n readings b[0..n-1] taken\n"
+        " * with no load, minus the design's rest field (n = 16 leaves a quarter of the chip's\n"
+        " * noise in the offset). Returns MAGTACT_FORCE_NO_FIELD (offset unchanged) for n < 1\n"
+        " * or if any reading is one magtact_force would refuse (not a finite number, or\n"
+        " * bz <= MAGTACT_BZ_MIN). */\n"
+        "static inline int magtact_force_tare(MAGTACT_REAL (*b)[3], int n,\n"
         "                                     MAGTACT_REAL offset[3])\n{\n"
-        "    if (!isfinite(bx) || !isfinite(by) || !isfinite(bz) || !(bz > MAGTACT_BZ_MIN))\n"
-        "        return MAGTACT_FORCE_NO_FIELD;\n"
-        "    offset[0] = (MAGTACT_REAL)(bx - MAGTACT_REST_X);\n"
-        "    offset[1] = (MAGTACT_REAL)(by - MAGTACT_REST_Y);\n"
-        "    offset[2] = (MAGTACT_REAL)(bz - MAGTACT_REST_Z);\n"
+        "    double sx = 0, sy = 0, sz = 0;\n    int k;\n"
+        "    if (b == NULL || offset == NULL || n < 1)\n        return MAGTACT_FORCE_NO_FIELD;\n"
+        "    for (k = 0; k < n; k++) {\n"
+        "        if (!magtact_force_finite(b[k][0]) || !magtact_force_finite(b[k][1])\n"
+        "            || !magtact_force_finite(b[k][2]) || !(b[k][2] > MAGTACT_BZ_MIN))\n"
+        "            return MAGTACT_FORCE_NO_FIELD;\n"
+        "        sx += b[k][0];\n        sy += b[k][1];\n        sz += b[k][2];\n    }\n"
+        "    offset[0] = (MAGTACT_REAL)(sx / n - MAGTACT_REST_X);\n"
+        "    offset[1] = (MAGTACT_REAL)(sy / n - MAGTACT_REST_Y);\n"
+        "    offset[2] = (MAGTACT_REAL)(sz / n - MAGTACT_REST_Z);\n"
         "    return MAGTACT_FORCE_OK;\n}\n\n#endif\n")
     return head + helpers + func
+
+
+#: Whether a value is a finite number, from its bits (exponent not all ones): holds under
+#: -ffast-math and -ffinite-math-only, where isfinite(x) and x != x may be folded to constants.
+_C_FINITE = (
+    "/* 1 if x is a finite number, from its bits (holds under -ffast-math) */\n"
+    "static inline int magtact_force_finite(MAGTACT_REAL x)\n{\n"
+    "    if (sizeof(MAGTACT_REAL) == sizeof(uint32_t)) {\n"
+    "        uint32_t u;\n        memcpy(&u, &x, sizeof u);\n"
+    "        return (u & 0x7f800000u) != 0x7f800000u;\n    } else {\n"
+    "        uint64_t u;\n        double d = (double)x;\n        memcpy(&u, &d, sizeof u);\n"
+    "        return (u & 0x7ff0000000000000ull) != 0x7ff0000000000000ull;\n    }\n}\n\n")
+
+#: The builds of ``force.h`` whose error is measured: (name, MAGTACT_REAL, MAGTACT_ACC).
+BUILDS = (("double", "double", "double"), ("float tables, double sums", "float", "double"),
+          ("float", "float", "float"))
+#: C compilers tried, in order, to measure the builds.
+COMPILERS = ("cc", "gcc", "clang")
+
+_C_DRIVER = """#include <stdio.h>
+#include "force.h"
+int main(void)
+{
+    double x, y, z;
+    MAGTACT_REAL o[3];
+    while (scanf("%lf %lf %lf", &x, &y, &z) == 3) {
+        int rc = magtact_force((MAGTACT_REAL)x, (MAGTACT_REAL)y, (MAGTACT_REAL)z, NULL, o);
+        printf("%d %.17g %.17g %.17g\\n", rc, (double)o[0], (double)o[1], (double)o[2]);
+    }
+    return 0;
+}
+"""
+
+
+def table_readings(smap: SensorMap, n: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """The readings B (k, 3) [T] (b_r along x) and forces (F_r, F_z) (k, 2) [N] of the points of
+    ``force_table.csv`` inside the region, as the file holds them (its digits)."""
+    rows = [r for r in _table_rows(smap, n) if r[4] == 1]
+    B = np.array([[to_si(float(r[0]), "mT"), 0.0, to_si(float(r[1]), "mT")] for r in rows])
+    F = np.array([[float(r[2]), float(r[3])] for r in rows])
+    return B.reshape(-1, 3), F.reshape(-1, 2)
+
+
+def _compiler() -> str | None:
+    import shutil
+
+    return next((c for c in COMPILERS if shutil.which(c)), None)
+
+
+def run_header(header: str, B: np.ndarray, real: str = "double", acc: str = "double",
+               flags: tuple[str, ...] = ()) -> tuple[np.ndarray, np.ndarray] | None:
+    """(rc (k,), out (k, 3)) of ``magtact_force`` of the C header ``header`` compiled with
+    MAGTACT_REAL = ``real``, MAGTACT_ACC = ``acc`` and ``flags`` on readings B (k, 3) [T];
+    None where no C compiler is found."""
+    import subprocess
+    import tempfile
+
+    cc = _compiler()
+    if cc is None:
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        (folder / "force.h").write_text(header, encoding="utf-8")
+        (folder / "m.c").write_text(_C_DRIVER, encoding="utf-8")
+        subprocess.run([cc, "-std=c99", "-O2", *flags, f"-DMAGTACT_REAL={real}",
+                        f"-DMAGTACT_ACC={acc}", "-o", str(folder / "m"), str(folder / "m.c"),
+                        "-lm"], check=True, capture_output=True, timeout=120)
+        text = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in np.asarray(B, float).tolist())
+        out = subprocess.run([str(folder / "m")], input=text, capture_output=True, text=True,
+                             check=True, timeout=120).stdout.split()
+    values = np.array(out, dtype=float).reshape(-1, 4)
+    return values[:, 0].astype(int), values[:, 1:]
+
+
+def measure_builds(header: str, smap: SensorMap, a: Approximation) -> dict:
+    """The largest error of each build of :data:`BUILDS` against the points of
+    ``force_table.csv`` inside the region: name → {``err_r``, ``err_z`` [N], ``points``,
+    ``outside`` (points the build reads as outside the region), ``how``}; a float build is None
+    where no C compiler is found (the double build is then NumPy's evaluation of the map)."""
+    B, F = table_readings(smap)
+    out = {}
+    for name, real, acc in BUILDS:
+        got = run_header(header, B, real, acc)
+        if got is None and real != "double":
+            out[name] = None
+            continue
+        if got is None:
+            approx, inside = a.evaluate(B)
+            rc, how = np.where(inside, 0, 1), "NumPy, no C compiler found"
+        else:
+            (rc, approx), how = got, f"compiled with {_compiler()} -O2"
+        ok = rc == 0
+        err_r = float(np.abs(approx[ok, 0] - F[ok, 0]).max()) if ok.any() else float("nan")
+        err_z = float(np.abs(approx[ok, 2] - F[ok, 1]).max()) if ok.any() else float("nan")
+        out[name] = {"err_r": err_r, "err_z": err_z, "points": int(len(B)),
+                     "outside": int((~ok).sum()), "how": how}
+    return out
+
+
+def _within(m: dict | None, choice: FirmwareChoice | None) -> bool:
+    return choice is None or (m is not None and m["err_r"] <= choice.target_r
+                              and m["err_z"] <= choice.target_z)
+
+
+def _builds_text(builds: dict | None, choice: FirmwareChoice | None) -> str:
+    if not builds:
+        return ""
+    lines = [" *   largest error against force_table.csv (its points inside the region), per "
+             "build:\n"]
+    for name, real, acc in BUILDS:
+        m = builds.get(name)
+        what = f"MAGTACT_REAL {real}, MAGTACT_ACC {acc}"
+        if m is None:
+            lines.append(f" *     {name} ({what}): not measured (no C compiler at generation); "
+                         "refused below\n")
+            continue
+        refused = ("" if _within(m, choice) else "; above the target sigma_F"
+                   + ("" if real == "double" else ": refused below"))
+        lines.append(f" *     {name} ({what}): F_r {from_si(m['err_r'], 'mN'):.4g} mN, F_z "
+                     f"{from_si(m['err_z'], 'mN'):.4g} mN over {m['points'] - m['outside']} of "
+                     f"{m['points']} points ({m['outside']} read as outside; {m['how']})"
+                     f"{refused}\n")
+    return "".join(lines)
+
+
+def _float_guards(builds: dict | None, choice: FirmwareChoice | None) -> str:
+    """Compile-time refusals (C99: an array of negative size) of the float builds whose error
+    exceeds the target σ_F or was not measured."""
+    if not builds:
+        return ""
+    out = ""
+    tables, sums = BUILDS[1][0], BUILDS[2][0]
+    if not _within(builds.get(tables), choice):
+        out += ("/* float tables exceed the target sigma_F (see the top): build with double */\n"
+                "typedef char magtact_force_float_tables_exceed_sigma_F"
+                "[sizeof(MAGTACT_REAL) >= sizeof(double) ? 1 : -1];\n")
+    if not _within(builds.get(sums), choice):
+        out += ("/* float sums exceed the target sigma_F (see the top): keep MAGTACT_ACC "
+                "double */\n"
+                "typedef char magtact_force_float_sums_exceed_sigma_F"
+                "[sizeof(MAGTACT_ACC) >= sizeof(double) || sizeof(MAGTACT_REAL) >= "
+                "sizeof(double) ? 1 : -1];\n")
+    if not out:
+        return ""
+    return ("/* Define MAGTACT_ALLOW_FLOAT to build in float regardless (its error is stated at\n"
+            " * the top). */\n#ifndef MAGTACT_ALLOW_FLOAT\n" + out + "#endif\n\n")
 
 
 def _c_planar(a: Approximation) -> str:
@@ -751,22 +929,32 @@ def _c_features(a: Approximation) -> tuple[str, str]:
     return helper, block
 
 
-def write_table_csv(smap: SensorMap, path: Path, n: int = 64) -> Path:
-    """The exact map on an n × n grid of (b_r, b_z) over the region's bounding box: columns
-    ``B_r_mT, B_z_mT, F_r_N, F_z_N, inside`` (forces empty outside the region)."""
+def _table_rows(smap: SensorMap, n: int = 64) -> list[list]:
+    """The rows of ``force_table.csv`` (:func:`write_table_csv`) as written: text cells, the
+    last the ``inside`` flag (int)."""
     polygon = region_polygon(smap)
     R, Z = np.meshgrid(np.linspace(0.0, polygon[:, 0].max(), n),
                        np.linspace(polygon[:, 1].min(), polygon[:, 1].max(), n), indexing="ij")
     r = smap.force(np.stack([R, np.zeros_like(R), Z], axis=-1))
+    rows = []
+    for k in np.ndindex(R.shape):
+        ok = r.flag[k] == OK
+        # fields to 12 digits: at 6, the rounding of B alone moves the force by ~Γ × 1e-6 B,
+        # tens of µN, more than a map's error at a small noise
+        rows.append([f"{from_si(R[k], 'mT'):.12g}", f"{from_si(Z[k], 'mT'):.12g}",
+                     f"{r.F[k][0]:.9g}" if ok else "", f"{r.F[k][2]:.9g}" if ok else "",
+                     int(ok)])
+    return rows
+
+
+def write_table_csv(smap: SensorMap, path: Path, n: int = 64) -> Path:
+    """The exact map on an n × n grid of (b_r, b_z) over the region's bounding box: columns
+    ``B_r_mT, B_z_mT, F_r_N, F_z_N, inside`` (forces empty outside the region)."""
     path = Path(path)
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["B_r_mT", "B_z_mT", "F_r_N", "F_z_N", "inside"])
-        for k in np.ndindex(R.shape):
-            ok = r.flag[k] == OK
-            w.writerow([f"{from_si(R[k], 'mT'):.6g}", f"{from_si(Z[k], 'mT'):.6g}",
-                        f"{r.F[k][0]:.9g}" if ok else "", f"{r.F[k][2]:.9g}" if ok else "",
-                        int(ok)])
+        w.writerows(_table_rows(smap, n))
     return path
 
 

@@ -110,7 +110,8 @@ class Calibration:
             "files": {"c_header": "force.h", "json": "force_map.json",
                       "csv_table": "force_table.csv"},
             "usage": ("C: #include \"force.h\" (link with -lm); MAGTACT_REAL F[3], off[3]; "
-                      "magtact_force_tare(bx0, by0, bz0, off) once at rest; "
+                      "magtact_force_tare(rest, n, off) once, from n readings rest[n][3] at rest "
+                      "(e.g. 16); "
                       "int rc = magtact_force(bx, by, bz, off, F) (0 valid, 1 outside the "
                       "region, 2 no field); bx, by, bz in T, F in N. Python: "
                       "magtact.calibration.load_approximation(json.load(open('force_map.json'))['approximation']).evaluate(B)"),
