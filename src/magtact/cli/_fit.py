@@ -19,7 +19,8 @@ def fit(
     out: OutOpt = Path("fit"),
     data: DataOpt = None,
     generations: Annotated[int | None, typer.Option(
-        help="Override [metamodel] generations.", min=1)] = None,
+        help="GP generations of the fit; default: the study's [metamodel] generations.",
+        min=1, max=10_000)] = None,
     H_mm: Annotated[float | None, typer.Option(
         "--H", help="Body height H [mm] of the figures; default: the original design.")] = None,
     G_kpa: Annotated[float | None, typer.Option(

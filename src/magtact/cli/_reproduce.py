@@ -26,8 +26,8 @@ def reproduce_command(
     data: DataOpt = None,
     generations: Annotated[int, typer.Option(
         "--generations", min=1, max=10_000,
-        help="GP generations of every force fit (the design fit's budget is [metamodel] "
-             "generations, 100 for magone).")] = SEED_GENERATIONS,
+        help="GP generations of the fit, for every force fit of the seed study (the design "
+             "fit's is [metamodel] generations, 100 for magone).")] = SEED_GENERATIONS,
     definition: Annotated[list[str] | None, typer.Option(
         "--definition", metavar="[jacobian|published]",
         help="Sensitivity definition to include: jacobian or published (repeat for "

@@ -69,10 +69,10 @@ def validate_command(
              "shipped SYNTHETIC example.")] = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created if needed).",
                                       callback=check_out)] = Path("validation"),
-    H: Annotated[float | None, typer.Option("--H", help="Body height H of the tested design "
-                                            "[mm]; default: the data's metadata.")] = None,
-    G: Annotated[float | None, typer.Option("--G", help="Shear modulus G of the tested design "
-                                            "[kPa]; default: the data's metadata.")] = None,
+    H: Annotated[float | None, typer.Option("--H", help="Body height H [mm] of the tested "
+                                            "design; default: the data's metadata.")] = None,
+    G: Annotated[float | None, typer.Option("--G", help="Shear modulus G [kPa] of the tested "
+                                            "design; default: the data's metadata.")] = None,
     models: Annotated[Path | None, typer.Option(
         "--models", help="Folder of metamodel files (B_r.json, B_z.json, f_r.json, f_z.json; "
                          "magtact fit); default: simulate the design directly (one structural "

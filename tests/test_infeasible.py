@@ -1,0 +1,77 @@
+"""A specification no design meets is an answer: each requirement with the best figure a design
+of the study's ranges reaches, the requirement that binds, and the smallest change of one
+requirement that makes it feasible, checked here by solving again with that change."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import magtact
+from magtact.designer import InfeasibleSpecification
+
+#: A ⌀3 × 1 mm N52 magnet asked for 3 N normal, 0.5 N shear at 200 Hz (the bundled data hold
+#: the 3 × 1 mm magnet; no body of H 3–7 mm, G 10–50 kPa carries 0.5 N of shear).
+TINY = """
+name = "tiny magnet"
+[magnet]
+size = "3x1"
+grade = "N52"
+[requirements]
+F_z_N = 3.0
+F_r_N = 0.5
+rate_Hz = 200.0
+"""
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    path = tmp_path_factory.mktemp("study") / "tiny.toml"
+    path.write_text(TINY, encoding="utf-8")
+    study = magtact.load(path)
+    models, source, dataset = magtact.models_for(study)
+    with pytest.raises(InfeasibleSpecification) as caught:
+        magtact.solve(models, study, models_source=source, dataset=dataset)
+    return path, study, models, source, dataset, caught.value
+
+
+def test_the_answer_names_what_binds_and_the_best_figures(tiny):
+    _, study, *_, exc = tiny
+    answer = exc.answer
+    assert not answer.met and answer.binding == "shear"
+    shear = next(r for r in answer.requirements if r.key == "shear")
+    normal = next(r for r in answer.requirements if r.key == "normal")
+    assert shear.met is False and shear.margin < 0
+    # the best shear reached: that of the optimiser's message (its best reachable F_r,min)
+    best = float(str(exc).split("F_r,min = ")[1].split(" N")[0])
+    assert -best == pytest.approx(shear.margin + 0.5, rel=2e-3)
+    assert normal.met is False and math.isnan(normal.margin)  # not reached with 0.5 N shear
+    text = str(answer)
+    assert "binds" in text and "requirements.F_r_N = " in text
+    assert "no design meets the requirements" in answer._repr_html_()
+
+
+def test_the_relaxation_makes_the_specification_feasible(tiny):
+    path, study, models, _, _, exc = tiny
+    relax = exc.answer.relaxation
+    assert relax.key == "shear" and relax.relaxed < relax.required
+    assert relax.setting == "requirements.F_r_N"
+
+    def study_with(F_r: float):  # the study file with the one change a user makes
+        changed = path.with_name(f"relaxed_{F_r:.6g}.toml")
+        changed.write_text(TINY.replace("F_r_N = 0.5", f"F_r_N = {F_r!r}"), encoding="utf-8")
+        return magtact.load(changed)
+
+    from magtact.optimise import InfeasibleError, force_constraints, optimise
+
+    def reduced(study):  # the optimisation over (H, G) that found the specification infeasible
+        return optimise(models, study, force_constraints(models, study))
+
+    relaxed = study_with(relax.relaxed)
+    d = reduced(relaxed).choice.design
+    k = 1.0 - force_constraints(models, relaxed).tolerance  # every unit: the softest body
+    assert -k * d.F_r_min >= relax.relaxed * (1 - 1e-6) and k * d.F_z_max >= 3.0 * (1 - 1e-6)
+    # and it is the smallest change (to 3 significant figures): 1 % beyond it is not met
+    with pytest.raises(InfeasibleError):
+        reduced(study_with(relax.relaxed * 1.01))
