@@ -84,6 +84,16 @@ def load_json(path: Path, check: Callable[[object], str | None] | None = None):
     return data
 
 
+def load_record(path: Path, record, what: str):
+    """``record.from_json`` of the JSON file ``path`` (the type that writes it), or None; a
+    file that is JSON but not such a record is noted as not being ``what``."""
+    data = load_json(path)
+    out = record.from_json(data)
+    if data is not None and out is None:
+        note(path, f"is not {what}")
+    return out
+
+
 def load_captions(path: Path) -> dict[str, str]:
     """``captions.json`` of a stage folder: file stem → caption (text only; empty where the
     file is missing or damaged)."""

@@ -26,9 +26,9 @@ from .._runfolder import MANIFEST, RunManifest, StageRecord
 from ..study import from_si
 from ._card import read_card
 from ._explorer import explorer_section
-from ._fragments import collecting, damaged_section, load_captions, read_text
 from ._fragments import escape as _e
 from ._fragments import figure as _figure
+from ._fragments import collecting, damaged_section, load_captions, load_record, read_text
 from ._fragments import load_json as _load_json
 from ._labels import label, round_text, sig, value_text
 from ._markdown import mathml, render_markdown
@@ -169,20 +169,7 @@ def report_document(folder: Path, *, shown: Path | None = None,
     doc = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
            f"<title>magtact report — {_e(study_name)}</title><style>{CSS}</style></head>"
            "<body>\n" + "\n".join(p for p in parts if p) + "\n</body></html>\n")
-    return _live_links(doc)
-
-
-def _live_links(doc: str) -> str:
-    """``doc`` with the navigation's links to sections it does not hold left out (a run that
-    stopped early, or found no design, has no explorer or design card)."""
-    ids = set(re.findall(r'\sid="([^"]+)"', doc))
-
-    def nav(m: re.Match) -> str:
-        links = [a for a in m.group(2).split(" · ")
-                 if (h := re.search(r'href="#([^"]+)"', a)) is None or h.group(1) in ids]
-        return m.group(1) + " · ".join(links) + m.group(3)
-
-    return re.sub(r'(<nav class="toc">)(.*?)(</nav>)', nav, doc, count=1, flags=re.S)
+    return doc
 
 
 def _document_parts(folder: Path, shown: Path | None, evidence, interrupted
@@ -190,7 +177,7 @@ def _document_parts(folder: Path, shown: Path | None, evidence, interrupted
     """The sections of :func:`report_document` (the first two: the title and the intro) and
     the study's name."""
     shown = folder if shown is None else Path(shown)
-    manifest = RunManifest.from_json(_load_json(folder / MANIFEST))  # a forged one: none
+    manifest = load_record(folder / MANIFEST, RunManifest, "a run record (run.json)")
     stages = {} if manifest is None else {s.key: s for s in manifest.stages}
     study_name = "unknown study" if manifest is None else manifest.study
     run_id = None if manifest is None else manifest.run_id
@@ -360,7 +347,7 @@ def _budget_section(folder: Path, run_id: str | None) -> str:
     """The error budget (``budget/budget.json`` and its figures), or nothing without one."""
     from ..budget import BudgetFile
 
-    doc = BudgetFile.from_json(_load_json(folder / "budget.json"))
+    doc = load_record(folder / "budget.json", BudgetFile, "an error budget (budget.json)")
     if doc is None:
         return ('<h2 id="budget">Error budget</h2><div class="missing">No error budget in this '
                 "folder (<code>budget/budget.json</code>: the stage did not run, or failed; "
@@ -469,7 +456,8 @@ def _chosen(folder: Path | None) -> str:
     ``geometry.json`` over geometric design variables)."""
     from ..optimise import ChosenFile, geometry_choice_json
 
-    data = ChosenFile.from_json(_load_json(folder / "chosen.json")) if folder else None
+    data = (load_record(folder / "chosen.json", ChosenFile, "a chosen design (chosen.json)")
+            if folder else None)
     geo = geometry_choice_json(_load_json(folder / "geometry.json")) if folder else None
     if geo is not None and data is None:
         data, source = ChosenFile.from_json(geo), "geometry.json"
@@ -559,6 +547,12 @@ def _stage(folder: Path, key: str, title: str, what: str, info: StageRecord | No
                    "with noise, drift and sensor-to-sensor scatter; not a measurement.</div>")
     captions = load_captions(folder / "captions.json")
     files = sorted(p for p in folder.iterdir() if p.is_file() and not p.name.startswith("."))
+    from .._files import file_problem
+    from ._fragments import note
+
+    for p in sorted(folder.iterdir()):  # a FIFO, a device, a link loop: named, never opened
+        if not p.name.startswith(".") and not p.is_file() and not p.is_dir():
+            note(p, f"is {file_problem(p)}")
     summaries = [p for p in files if p.suffix == ".json" and p.name not in SKIP_JSON]
     for p in summaries:  # a stage's summary (a JSON with a title) comes first
         if isinstance(_load_json(p), dict) and "title" in _load_json(p):
@@ -581,12 +575,6 @@ def _stage(folder: Path, key: str, title: str, what: str, info: StageRecord | No
                 out.append(f"<details><summary>{_e(p.name)}</summary><pre>{_e(text)}</pre>"
                            "</details>")
     for p in summaries:  # other JSON files (model files, ...): collapsed
-    from .._files import file_problem
-    from ._fragments import note
-
-    for p in sorted(folder.iterdir()):  # a FIFO, a device, a link loop: named, never opened
-        if not p.name.startswith(".") and not p.is_file() and not p.is_dir():
-            note(p, f"is {file_problem(p)}")
         if not (isinstance(_load_json(p), dict) and "title" in _load_json(p)):
             out.append(f"<details><summary>{_e(p.name)}</summary>{_json_summary(p)}</details>")
     others = [p.name for p in files if p.suffix not in (".png", ".csv", ".txt", ".tex", ".md",
@@ -689,9 +677,16 @@ def _settings(path: Path) -> str:
                 "folder.</div>")
     import tomllib
 
+    text = read_text(path, "toml")
+    if text is None:
+        return ('<h2 id="settings">Study settings</h2><div class="missing">study.toml '
+                "unreadable (see the files left out of this report).</div>")
     try:
         data = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, RecursionError) as exc:
+        from ._fragments import note
+
+        note(path, "is not TOML" if isinstance(exc, RecursionError) else f"is not TOML: {exc}")
         return (f'<h2 id="settings">Study settings</h2><div class="missing">study.toml '
                 f"unreadable ({_e(exc)}).</div>")
     schema = _schema()
@@ -708,10 +703,6 @@ def _settings(path: Path) -> str:
                        for k, v in items if not isinstance(v, dict))
         head = "" if section is None else f"<h3>{_e(section)}</h3>"
         out.append(f'{head}<table class="settings"><tr><th class="l">setting</th>'
-    text = read_text(path, "toml")
-    if text is None:
-        return ('<h2 id="settings">Study settings</h2><div class="missing">study.toml '
-                "unreadable (see the files left out of this report).</div>")
                    f'<th class="l">value</th><th class="l">what it is</th></tr>{rows}</table>')
     return "\n".join(out)
 
@@ -787,6 +778,11 @@ def _versions(manifest: RunManifest | None) -> str:
 
 # ---- pieces --------------------------------------------------------------------------------
 def _csv_table(path: Path, caption: str | None) -> str:
+    import io
+
+    text = read_text(path, "table")
+    if text is None:
+        return f"<p>{_e(path.name)}: left out (see the files left out of this report)</p>"
     try:
         rows = [r for r in csv.reader(io.StringIO(text, newline="")) if r
                 and not r[0].startswith("#")]
@@ -806,11 +802,6 @@ def _csv_table(path: Path, caption: str | None) -> str:
                         for r in body[:MAX_ROWS])
     table = ("<div style=\"overflow-x:auto\"><table><tr>"
              + "".join(f"<th>{_e(label(h))}</th>" for h in head) + "</tr>" + html_rows
-    import io
-
-    text = read_text(path, "table")
-    if text is None:
-        return f"<p>{_e(path.name)}: left out (see the files left out of this report)</p>"
              + "</table></div>")
     if len(body) <= MAX_ROWS:
         return f"<h3>{_e(title)}</h3><p><small>{_e(path.name)}</small></p>{table}"

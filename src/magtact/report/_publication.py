@@ -62,7 +62,6 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
     """HTML of the section (``folder`` = ``<run>/publication``; absent: how to make it)."""
     from ._fragments import escape as _e
     from ._fragments import figure as _figure
-    from ._fragments import load_json as _load_json
 
     head = ('<h2 id="publication">magtact and the publication</h2>'
             "<p>de Boer et al. (Sensors 2017) optimise the MagOne sensor with a sensitivity "
@@ -74,7 +73,10 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
             + (f"This run used the <b>{_e(run_definition)}</b> definition. "
                if run_definition else "") + "</p>")
     head += saturation_argument()
-    doc = PublicationFile.from_json(_load_json(folder / "publication.json"))
+    from ._fragments import load_record
+
+    doc = load_record(folder / "publication.json", PublicationFile,
+                      "a seed study (publication.json)")
     if not doc:
         return (head + '<div class="missing">No seed study in this folder: run '
                 "<code>magtact reproduce --out FOLDER</code> (about ten minutes on two cores) "
