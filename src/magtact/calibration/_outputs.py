@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from .._errors import MagtactError
 from .._files import json_dict, json_list, json_number, json_text
@@ -352,6 +353,19 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
     source = force_source_for(force_source, dataset, H, presses is not None)
     if source == "fe":  # what the data lack is said before the design's work
         fe_forces(dataset, H, study)
+    # the candidates' least squares are small (N_TRAIN rows, at most a few hundred columns):
+    # one BLAS thread does each in milliseconds, where threads that wait for a shared core
+    # take a hundred times longer
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _calibrate(models, study, H, G, M_z, chip, noise_source, source, presses, fit,
+                          degrees, table_sizes, model_error, dataset)
+
+
+def _calibrate(models, study, H, G, M_z, chip, noise_source, source, presses, fit, degrees,
+               table_sizes, model_error, dataset) -> Calibration:
+    from ..designer import resolution
+    from ..optimise import per_design
+
     design = per_design(models, H, G, study, M_z)
     smap = sensor_map(models, study, H, G, M_z, design=design, force_source=source,
                       dataset=dataset)
