@@ -345,9 +345,6 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
         Without a known noise, for a design without stable region, presses that do not
         identify the parameters of ``fit``, or the FE source without FE paths at H.
     """
-    from ..designer import resolution
-    from ..optimise import per_design
-
     check_design(study, H, dataset)  # before any work: outside it the models extrapolate
     chip, noise_source = _chip(study, noise, chip)
     source = force_source_for(force_source, dataset, H, presses is not None)
