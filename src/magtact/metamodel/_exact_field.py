@@ -76,6 +76,25 @@ def _both_components(r, Z, R_m, H_m, M_z) -> tuple[np.ndarray, np.ndarray]:
     return value
 
 
+#: The last evaluation of the field with its z-derivatives (see ``_LAST``).
+_LAST_JET: list = [((), None)]
+
+
+def _jet_components(r, Z, R_m, H_m, M_z) -> tuple[np.ndarray, ...]:
+    """(B_ρ, B_z, ∂B_ρ/∂z, ∂B_z/∂z) at (r, Z); the last evaluation is kept, as in
+    ``_both_components``."""
+    from ..magnetics import cylinder_field_dz
+
+    args = (r, Z, R_m, H_m, M_z)
+    key, value = _LAST_JET[0]
+    if len(key) == 5 and all(np.shape(a) == np.shape(b) and np.array_equal(a, b)
+                             for a, b in zip(args, key, strict=True)):
+        return value
+    value = (*_both_components(*args), *cylinder_field_dz(*args))
+    _LAST_JET[0] = (args, value)
+    return value
+
+
 class ExactField:
     """B_r or B_z [T] of the exact cylinder-magnet field, as a function of (t, θ, H).
 
@@ -176,27 +195,19 @@ class ExactField:
                 for i in range(order + 1) for j in range(order + 1 - i)}
 
     def _first_derivatives(self, X, Z, magnet):
-        """Value and first derivatives in (X, Z) from one stencil along Z.
-
-        Outside the magnet's surfaces the field is curl- and divergence-free: with
-        ρ = |X|, ∂B_z/∂ρ = ∂B_ρ/∂z and ∂B_ρ/∂ρ = −B_ρ/ρ − ∂B_z/∂z (on the axis, where
-        B_ρ/ρ → ∂B_ρ/∂ρ, ∂B_ρ/∂ρ = −½ ∂B_z/∂z). The derivatives along Z of both components
-        therefore give the derivatives along X as well: seven points per field point.
-        """
-        R_m, H_m, M_z = magnet
-        o = _OFFSETS * STEP
+        """Value and first derivatives in (X, Z), exact: the field and its z-derivatives
+        (:func:`magtact.magnetics.cylinder_field_dz`) at each point; with ρ = |X| the
+        derivatives along ρ follow from the field being curl- and divergence-free,
+        ∂B_z/∂ρ = ∂B_ρ/∂z and ∂B_ρ/∂ρ = −B_ρ/ρ − ∂B_z/∂z (on the axis, where B_ρ/ρ → ∂B_ρ/∂ρ,
+        ∂B_ρ/∂ρ = −½ ∂B_z/∂z)."""
         rho = np.abs(X)
-        b_rho, b_z = _both_components(np.broadcast_to(rho[..., None], rho.shape + (7,)),
-                                      Z[..., None] + o, np.asarray(R_m)[..., None],
-                                      np.asarray(H_m)[..., None], M_z)
-        w = self._W[1] / STEP
-        d_rho, d_z = b_rho @ w, b_z @ w  # ∂B_ρ/∂Z, ∂B_z/∂Z
+        b_rho, b_z, d_rho, d_z = _jet_components(rho, Z, *magnet)
         sign = np.sign(X)
         with np.errstate(invalid="ignore", divide="ignore"):
-            over = np.where(rho > 0, b_rho[..., 3] / np.where(rho > 0, rho, 1.0), -0.5 * d_z)
+            over = np.where(rho > 0, b_rho / np.where(rho > 0, rho, 1.0), -0.5 * d_z)
         if self.name == "B_r":  # B_r = sign(X) B_ρ(|X|): ∂B_r/∂X = ∂B_ρ/∂ρ
-            return {(0, 0): sign * b_rho[..., 3], (1, 0): -over - d_z, (0, 1): sign * d_rho}
-        return {(0, 0): b_z[..., 3], (1, 0): sign * d_rho, (0, 1): d_z}
+            return {(0, 0): sign * b_rho, (1, 0): -over - d_z, (0, 1): sign * d_rho}
+        return {(0, 0): b_z, (1, 0): sign * d_rho, (0, 1): d_z}
 
     def value(self, t, theta, H, **geometry) -> np.ndarray:
         """Field component [T] at (t, θ, H) (broadcast); ``geometry``: values [m] of the

@@ -313,8 +313,15 @@ def _extrema(R: Responses, H: np.ndarray, geo: dict, study: Study,
                                           grid=(o.start_t, o.start_theta), starts=starts, **kw)
             return batch_optimum(fun, jac, hess, lo, hi, grid=(o.start_t, o.start_theta), **kw)
         runs = [batch_optimum(fun, jac, hess, lo, hi, grid=(6, 4), **kw)] if coarse_start else []
-        runs += [batch_optimum(fun, jac, hess, lo, hi, grid=(6, 4), start=s, **kw)
-                 for s in warm_starts]
+        first = batch_optimum(fun, jac, hess, lo, hi, grid=(6, 4), start=warm_starts[0], **kw)
+        runs.append(first)
+        width = np.where(hi - lo > 0, hi - lo, 1.0)
+        for s in warm_starts[1:]:
+            # a start beside the first one ends in the same optimum: only the others run
+            far = np.flatnonzero(np.max(np.abs(s - warm_starts[0]) / width, axis=1) > SAME_START)
+            runs.append(_rows_run(first, far, lambda r, far=far, s=s: batch_optimum(
+                *(_on_rows(f, far) for f in (fun, jac, hess)), lo[far], hi[far],
+                grid=(6, 4), start=s[far], **kw)))
         return _best(runs, maximise)
 
     lo = np.zeros((n, 2))
@@ -330,6 +337,33 @@ def _extrema(R: Responses, H: np.ndarray, geo: dict, study: Study,
     res = [solve(name, lo, box, True, s)
            for name, s in zip(MAXIMISED, warm_starts[1:], strict=True)]
     return fr, res
+
+
+#: Distance between two warm starts, relative to the box, below which they count as one.
+SAME_START = 1e-3
+
+
+def _on_rows(f, rows: np.ndarray):
+    """``f`` of the problems ``rows`` (a sub-problem's row k is the problem ``rows[k]``)."""
+    return lambda r, t, th: f(rows[np.asarray(r)], t, th)
+
+
+def _rows_run(base: BatchOptimum, rows: np.ndarray, solve) -> BatchOptimum:
+    """``base`` with the rows ``rows`` replaced by ``solve()``'s results (solved only where
+    there are any)."""
+    if rows.size == 0:
+        return base
+    sub = solve(rows)
+    out = {}
+    for f in fields(BatchOptimum):
+        a, b = getattr(base, f.name), getattr(sub, f.name)
+        if a is None or b is None:
+            out[f.name] = None
+            continue
+        a = a.copy()
+        a[rows] = b
+        out[f.name] = a
+    return BatchOptimum(**out)
 
 
 def _best(runs: list[BatchOptimum], maximise: bool) -> BatchOptimum:

@@ -11,7 +11,7 @@ Problem (published study, Eq. 19)::
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -375,9 +375,25 @@ class DesignProblem:
         self.hi = np.array([float(b[1]) for b in bounds.values()])
         self.scale = (abs(constraints.F_r_c) or 1.0, abs(constraints.F_z_c) or 1.0)
         self.chip_range = bool(study.constraints.chip_range)
+        self._known: dict[float, int] = {}  # height -> its row in self._solved
+        self._solved: HeightTable | None = None
         self._chip_on_sweep = (chip_margin(study, warm.H, warm.t_m, warm.theta_m)
                                if self.chip_range and warm is not None and not self.geometric
                                else None)
+
+    def _heights(self, H: np.ndarray) -> HeightTable:
+        """The per-height extrema at ``H``, warm-started from the sweep; each height is solved
+        once (the extrema do not depend on G, and offspring often keep a parent's H)."""
+        new = np.unique(H[[h not in self._known for h in H.tolist()]])
+        if new.size:
+            tab = heights_batch(self.R, new, self.study, warm=self.warm, coarse_start=False,
+                                maxiter=self.maxiter)
+            start = 0 if self._solved is None else self._solved.H.size
+            self._solved = tab if self._solved is None else HeightTable(
+                *(np.concatenate([getattr(self._solved, f.name), getattr(tab, f.name)])
+                  for f in fields(HeightTable)[:-1]))
+            self._known.update(zip(new.tolist(), range(start, start + new.size), strict=True))
+        return self._solved.take(np.array([self._known[h] for h in H.tolist()], dtype=int))
 
     def values(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """Scaled variables ``x`` (n, n_var) → SI values by name (M_z always present)."""
@@ -392,8 +408,7 @@ class DesignProblem:
         H, G, M = cols["H"], cols["G"], cols["M_z"]
         geo = {k: cols[k] for k in self.geometric}
         if self.warm is not None and not geo:
-            tab = heights_batch(self.R, H, self.study, warm=self.warm, coarse_start=False,
-                                maxiter=self.maxiter)
+            tab = self._heights(H)
         else:
             tab = heights_batch(self.R, H, self.study, geometry=geo or None,
                                 maxiter=self.maxiter)
