@@ -27,6 +27,11 @@ rows) and unit fits (random readings, 10,000 presses of a real unit), options th
 effect and the one form of ``--noise-uT``, the temperature change against the remanence
 coefficient, quoted CSV cells, numbers of other types, unit mistakes in study keys, the study
 check against the commands' rules, and any reading through the compiled ``force.h``.
+Results folders forged or damaged (:func:`_forged_results`: deep JSON, huge arrays, FIFOs,
+devices, sparse files, symbolic link loops, wrong types, generated JSON in place of each record)
+through ``magtact report``, and press files in each sign convention (:func:`_press_sign`)
+through the unit fit, each family in a fresh worker whose peak resident memory must stay below
+1 GB.
 
 Writes the counts per reader to ``bench/results/hostile.json``, with the peak resident memory
 of the worker and of the processes it started (no process may exceed 2 GB); all but ``clean``
@@ -131,7 +136,12 @@ def safety_cases(n: int) -> dict[str, list]:
 #: time limit is this multiple of ``--timeout``.
 SLOW = {"killed_runs": 6, "concurrent_runs": 6, "user_files": 3, "file_modes": 3,
         "command_user_files": 3, "command_in_use": 6, "command_in_run": 3, "press_fits": 18,
-        "option_effect": 6, "press_files": 3, "firmware_readings": 3}
+        "option_effect": 6, "press_files": 3, "firmware_readings": 3, "forged_results": 3,
+        "press_sign": 3}
+#: Kinds run in a fresh worker, so that its peak resident memory is theirs alone.
+FRESH = ("forged_results", "press_sign")
+#: The most resident memory a process of a FRESH kind may reach [MB].
+FRESH_RSS_LIMIT_MB = 1024
 KILL_POINTS = ["stage:field", "stage:doe", "stage:optimise", "swap", "move:1", "move:4",
                "move:9", "move:18"]
 PATH_KINDS = ("loop", "fifo", "folder", "broken-link")
@@ -696,7 +706,35 @@ def designer_cases(n: int) -> dict[str, list]:
             st.one_of(st.floats(), st.floats(-0.1, 0.1),
                       st.sampled_from([0.0, -0.0, 1e-300, 1e300])),
             min_size=3, max_size=3)), small, 27),
+        "forged_results": [(damage, target) for damage in FORGERIES for target in FORGED_FILES
+                           if (damage, target) not in UNFIT]
+                          + [("json", c) for c in generate(st.tuples(st.sampled_from(
+                              ["optimise/card.json", "optimise/explorer.json", "run.json",
+                               "budget/budget.json", "optimise/chosen.json"]), json_doc),
+                              small, 28)],
+        "press_sign": generate(st.tuples(st.floats(0.5, 2.0), st.floats(0.8, 1.2),
+                                         st.floats(-2e-4, 2e-4), st.sampled_from(FLIPS),
+                                         st.integers(0, 2**16)), small, 30),
     }
+
+
+#: Damage planted in a results folder (:func:`_forged_results`), and the files it is planted in.
+FORGERIES = ("deep", "huge_array", "fifo", "device", "sparse", "loop", "wrong_type", "not_png",
+             "dev_zero")
+FORGED_FILES = ("optimise/card.json", "optimise/explorer.json", "run.json",
+                "budget/budget.json", "publication/publication.json", "doe/captions.json",
+                "optimise/chosen.json", "study.toml", "doe/notes.md", "optimise/pareto_set.png",
+                "doe/table.csv", ".magtact-staging-0/run.json")
+#: Files of text (notes, a table): brackets or JSON in them are text, not damage.
+TEXT_FILES = ("doe/notes.md", "doe/table.csv")
+#: Records read field by field (a value of the wrong type is left out, the rest shown): an
+#: object of wrong types is one of them with nothing in it.
+LENIENT = ("run.json", "optimise/chosen.json", "publication/publication.json")
+#: Pairs whose damage does not apply to the file (a PNG check of a JSON file).
+UNFIT = {(d, t) for d in ("not_png",) for t in FORGED_FILES if not t.endswith(".png")}
+#: Sign conventions of press files (:func:`_press_sign`): the map's (F_z > 0 in compression),
+#: the load's (−F), only F_z flipped, the field flipped (magnet upside down).
+FLIPS = ("none", "load", "z", "field")
 
 
 #: The study keys of the unit-mistake check and the unit of each (section.setting -> unit).
@@ -960,7 +998,7 @@ def _study_check(tmp: Path, case) -> tuple[str, str]:
     reach = np.hypot(np.maximum(np.abs(x) - m.R_m, 0), np.maximum(np.abs(z) - m.H_m / 2, 0))
     bad = (holdout > holdout_limit(n_theta, n_H) or far_r * m.R_m <= m.R_m + f.near
            or far_z * m.H_m <= m.H_m / 2 + f.near or reach.max() > f.near)
-    code, text = _main(["study", str(path)])
+    code, text = _main(["study", str(path), "--recompute"])  # the rules, not the data's coverage
     try:
         check_study(s)
         checked = True
@@ -1017,6 +1055,111 @@ def _firmware_readings(tmp: Path, case) -> tuple[str, str]:
     return ("accepted" if rc == "0" else "clean"), run.stdout.strip()
 
 
+def _forged_results(tmp: Path, case) -> tuple[str, str]:
+    """A results folder with one file damaged or forged (:data:`FORGERIES`), or a generated
+    JSON document in place of one of the report's records: the report names the damaged file
+    on one line and renders the rest; no traceback, no hang, memory bounded."""
+    import os
+    import re
+
+    import test_report_reads as tr
+    from magtact.report import build_report
+
+    folder = tr.folder_with(tmp)
+    (folder / "run.json").write_text(json.dumps({"study": "S", "stages": []}))
+    (folder / "budget").mkdir()
+    (folder / "publication").mkdir()
+    (folder / "study.toml").write_text('name = "S"\n')
+    damage, target = case
+    if damage == "json":
+        target, doc = target
+    path = folder / target
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.exists():
+        path.unlink()
+    if damage == "deep":
+        path.write_text("[" * 200_000 + "]" * 200_000)
+    elif damage == "huge_array":
+        with path.open("w") as fh:
+            fh.write('{"H_mm": [' + "1.0," * 3_000_000 + '1.0], "rows": []}')
+    elif damage == "fifo":
+        os.mkfifo(path)
+    elif damage in ("device", "dev_zero"):
+        path.symlink_to("/dev/zero" if damage == "dev_zero" else "/dev/urandom")
+    elif damage == "sparse":
+        with path.open("wb") as fh:
+            fh.truncate(2 << 30)
+    elif damage == "loop":
+        path.symlink_to(path.name)
+    elif damage == "wrong_type":
+        path.write_text(json.dumps({"header": 3, "rows": {"a": 1}, "stages": "x", "grid": 7,
+                                    "format": "magtact-explorer/1", "H_mm": "3"}))
+    elif damage == "not_png":
+        path.write_bytes(b"GIF89a" + b"\0" * 4096)
+    else:
+        path.write_text(json.dumps(doc))
+    damaged: dict[str, str] = {}
+    text = build_report(folder, damaged=damaged).read_text(encoding="utf-8")
+    assert "Run summary" in text and "Study settings" in text, "the rest of the report is missing"
+    if damage == "json":
+        return ("clean" if target in damaged else "accepted"), str(damaged)[:200]
+    staged = target.startswith(".magtact-staging")
+    if staged:  # an interrupted run's manifest: the report is built, the run named as unknown
+        assert "Interrupted run" in text, "the staging folder is not named"
+        return "clean", ""
+    if target in TEXT_FILES and damage in ("deep", "wrong_type"):  # text that is text
+        assert target not in damaged, damaged
+        return "accepted", ""
+    if target in LENIENT and damage == "wrong_type" and target not in damaged:
+        return "accepted", ""  # read field by field: what has its type is shown
+    assert target in damaged, f"{target} ({damage}) not named: {damaged}"
+    note = damaged[target]
+    assert re.fullmatch(r"[^\n]{3,300}", note), note
+    return "clean", f"{target}: {note}"[:200]
+
+
+def _press_sign(tmp: Path, case) -> tuple[str, str]:
+    """Presses of a unit (random stiffness, remanence and chip offset) in the map's sign
+    convention, in the load's (−F), with only F_z flipped, or with the field flipped: the first
+    fitted to its unit, the others refused on one line, never fitted to a negative scale."""
+    import numpy as np
+
+    from magtact._errors import MagtactError
+    from magtact.calibration import Presses, UnitParameters, calibrate_unit
+
+    g, b, dx, flip, seed = case
+    smap = _design_map()
+    truth = UnitParameters(g, b, (dx, 0.0, 0.0))
+    rng = np.random.default_rng(seed)
+    th = smap.theta_m
+    loads = np.array([[t, th * k / 4, rng.uniform(-np.pi, np.pi)]
+                      for t, k in [(0.0, 0), (0.3, 0), (0.7, 0), (1.0, 0), (0.5, 4), (0.9, 3),
+                                   (0.6, 2), (1.0, 4)]])
+    from dataclasses import replace
+
+    B, F = replace(smap, field_source="exact").with_unit(truth).at_load(*loads.T)
+    if flip == "load":
+        F = -F
+    elif flip == "z":
+        F = F * np.array([1.0, 1.0, -1.0])
+    elif flip == "field":
+        B = -B
+    try:
+        cal = calibrate_unit(smap, Presses(B, F))
+    except MagtactError as exc:
+        # a unit in the map's convention may lack presses to identify a parameter, never be
+        # called one in the load's sign
+        assert flip != "none" or "negative scale" not in str(exc), (case, str(exc))
+        if flip == "load":
+            return _refusal(exc, "F_z must be positive in compression")
+        return _refusal(exc, "presses")
+    u = cal.unit
+    assert u.G_scale > 0 and u.B_scale > 0, (case, u)
+    assert flip == "none", f"{flip} accepted: {u}"
+    assert abs(u.G_scale - g) <= 1e-2 * g and abs(u.B_scale - b) <= 1e-2 * b, (case, u)
+    return "accepted", ""
+
+
 SAFETY = {"user_files": _user_files, "killed_runs": _killed_runs,
           "concurrent_runs": _concurrent_runs, "ordered_settings": _ordered_settings,
           "holdout_paths": _holdout, "csv_numbers": _csv_numbers, "shared_range": _shared_range,
@@ -1028,7 +1171,8 @@ SAFETY = {"user_files": _user_files, "killed_runs": _killed_runs,
           "press_files": _press_files, "press_fits": _press_fits, "option_effect": _option_effect,
           "physical_pairs": _physical_pairs, "csv_quotes": _csv_quotes,
           "number_types": _number_types, "unit_mistakes": _unit_mistakes,
-          "study_check": _study_check, "firmware_readings": _firmware_readings}
+          "study_check": _study_check, "firmware_readings": _firmware_readings,
+          "forged_results": _forged_results, "press_sign": _press_sign}
 
 
 def worker(conn) -> None:
@@ -1095,6 +1239,11 @@ def main() -> None:
     pool.run("expressions", "t", args.timeout)  # imports, so that they do not count as a hang
     results = {}
     for kind, items in generated.items():
+        if kind in FRESH:  # a new worker: its peak memory is this kind's alone
+            pool.proc.kill()
+            pool.proc.join()
+            pool.start()
+            pool.run("expressions", "t", args.timeout * 6)
         counts = dict.fromkeys(("cases", *OUTCOMES, "skipped"), 0)
         examples: dict[str, list[str]] = {o: [] for o in OUTCOMES if o not in ("clean",
                                                                                 "accepted")}
@@ -1117,6 +1266,10 @@ def main() -> None:
                          "peak_rss_worker_MB": round(worker_mb, 1),
                          "peak_rss_children_MB": round(children_mb, 1),
                          "examples": {k: v for k, v in examples.items() if v}}
+        if kind in FRESH:
+            results[kind]["fresh_worker"] = True
+            results[kind]["rss_limit_MB"] = FRESH_RSS_LIMIT_MB
+            results[kind]["below_rss_limit"] = max(worker_mb, children_mb) < FRESH_RSS_LIMIT_MB
         print(kind, {k: v for k, v in results[kind].items() if k != "examples"}, flush=True)
     pool.close()
     total = {o: sum(r[o] for r in results.values()) for o in ("cases", *OUTCOMES)}
@@ -1125,14 +1278,20 @@ def main() -> None:
     total["peak_rss_MB"] = round(peak, 1)
     total["rss_limit_MB"] = RSS_LIMIT_MB
     total["every_process_below_limit"] = peak < RSS_LIMIT_MB
+    fresh = [max(r["peak_rss_worker_MB"], r["peak_rss_children_MB"])
+             for k, r in results.items() if k in FRESH]
+    if fresh:
+        total["forged_and_press_sign_peak_rss_MB"] = round(max(fresh), 1)
+        total["forged_and_press_sign_below_1GB"] = max(fresh) < FRESH_RSS_LIMIT_MB
     report = {
         "benchmark": "hostile inputs through the study, CSV and expression readers; the user's "
                      "files, killed and concurrent runs, ordered settings, numbers, messages, "
                      "exits and file modes; the per-stage commands over the user's files, "
                      "folders in use and finished runs; seed studies, press files and their "
                      "fit, options that cannot take effect, pairs of settings, quoted cells, "
-                     "numbers of other types, unit mistakes, the study check and readings "
-                     "through the firmware header",
+                     "numbers of other types, unit mistakes, the study check, readings "
+                     "through the firmware header; forged results folders through the report "
+                     "and press files in the load's sign convention through the unit fit",
         "cases_per_reader": args.n, "hang_timeout_s": args.timeout,
         "generation_time_s": round(gen_time, 1),
         "wall_time_s": round(time.perf_counter() - start, 1),

@@ -197,10 +197,12 @@ def read_text_capped(path: str | os.PathLike, max_bytes: int) -> str:
 MAX_JSON_DEPTH = 64
 
 #: Largest file of each kind that magtact reads back, its own outputs included [bytes]: JSON
-#: records and summaries, figures (PNG, embedded in the report), text (notes, TXT, TEX, a
-#: stage's stamp), tables (CSV) and the study file of a results folder.
-MAX_BYTES = {"json": 8 << 20, "figure": 8 << 20, "text": 1 << 20, "table": 8 << 20,
-             "stamp": 4096, "toml": 1 << 20}
+#: records and summaries, figures (PNG, embedded in the report), text (TXT, TEX, a stage's
+#: stamp), notes (Markdown, rendered: ten times the metamodels' notes of 12 kB; the renderer's
+#: time grows faster than the text's length on nested brackets), tables (CSV) and the study
+#: file of a results folder.
+MAX_BYTES = {"json": 8 << 20, "figure": 8 << 20, "text": 1 << 20, "notes": 128 << 10,
+             "table": 8 << 20, "stamp": 4096, "toml": 1 << 20}
 
 
 def json_depth(doc) -> int:
@@ -252,8 +254,8 @@ def read_json_capped(path: str | os.PathLike, max_bytes: int,
 def read_result(path: str | os.PathLike, kind: str):
     """A file magtact reads back (its own outputs included) through :func:`read_bytes_capped`,
     capped at :data:`MAX_BYTES` of ``kind``: ``"json"`` → the document (at most
-    :data:`MAX_JSON_DEPTH` deep), ``"figure"`` → bytes, ``"text"``, ``"stamp"``, ``"table"``,
-    ``"toml"`` → text (UTF-8).
+    :data:`MAX_JSON_DEPTH` deep), ``"figure"`` → bytes, ``"text"``, ``"notes"``, ``"stamp"``,
+    ``"table"``, ``"toml"`` → text (UTF-8).
 
     Raises
     ------

@@ -562,7 +562,7 @@ def _stage(folder: Path, key: str, title: str, what: str, info: StageRecord | No
             out.append(_figure(p, captions.get(p.stem)))
     for p in files:
         if p.suffix == ".md":
-            text = read_text(p)
+            text = read_text(p, "notes")
             if text is not None:
                 out.append(render_markdown(text))
     for p in files:
