@@ -15,6 +15,7 @@ for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_name, "1")
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -263,3 +264,30 @@ def magone_design():
     import magtact
 
     return magtact.design()
+
+
+def built_run(tmp_path_factory, name: str, *args: str, status: int = 0,
+              files: dict[str, str] | None = None) -> Path:
+    """The results folder of ``magtact run ARGS --out <folder>``, built once per test session
+    under ``name`` (the workers share the base of their temporary folders: the first builds it
+    under a lock, the others wait and read). ``files`` (name → text) are written beside it
+    first (a study file the run reads); ``status`` is the exit status the run must end with."""
+    import fcntl
+    import subprocess
+    import sys
+
+    base = tmp_path_factory.getbasetemp()
+    shared = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / name
+    shared.mkdir(exist_ok=True)
+    out = shared / "results"
+    with open(shared / "lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (shared / "built").is_file():
+            for file, text in (files or {}).items():
+                (shared / file).write_text(text, encoding="utf-8")
+            done = subprocess.run([sys.executable, "-m", "magtact", "run", *args, "--out",
+                                   str(out)], capture_output=True, text=True, timeout=600,
+                                  cwd=shared)
+            assert done.returncode == status, done.stderr[-3000:]
+            (shared / "built").write_text(done.stdout, encoding="utf-8")
+    return out

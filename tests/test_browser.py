@@ -10,11 +10,8 @@ the visible text has no over-long number, sentinel, raw file key, Markdown or La
 from __future__ import annotations
 
 import json
-import os
 import re
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -43,22 +40,10 @@ PARTS = [["magnet", "N45, 5 × 2 mm"], ["silicone", "Ecoflex 00-30"],
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory) -> Path:
     """A results folder of ``magtact run`` on the built-in study (about 40 s), built once for
-    every test worker of the session (the workers share the base of their temporary folders;
-    the first builds it under a lock, the others wait and read)."""
-    import fcntl
+    the session (:func:`conftest.built_run`)."""
+    from conftest import built_run
 
-    base = tmp_path_factory.getbasetemp()
-    shared = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "browser-report"
-    shared.mkdir(exist_ok=True)
-    out = shared / "results"
-    with open(shared / "lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not (shared / "built").is_file():
-            done = subprocess.run([sys.executable, "-m", "magtact", "run", "--out", str(out)],
-                                  capture_output=True, text=True, timeout=600)
-            assert done.returncode == 0, done.stderr[-3000:]
-            (shared / "built").write_text("ok")
-    return out
+    return built_run(tmp_path_factory, "browser-report")
 
 
 @pytest.fixture(scope="module")

@@ -56,7 +56,7 @@ def test_one_option_name_per_idea_across_the_commands():
     assert {"fit", "budget", "calibrate", "simulate", "validate"} <= users["--G"]
     assert {"optimise", "compare", "budget", "calibrate", "validate"} <= users["--models"]
     assert {"run", "doe", "reproduce"} <= users["--workers"]
-    assert {"run", "fit", "reproduce"} <= users["--data"]
+    assert {"fit", "reproduce"} <= users["--data"]
     assert set(COMMAND.commands) - {"report", "study", "compare"} <= users["--out"]
     # a height in mm and a modulus in kPa, said in the help
     for command, options in visible_options().items():

@@ -663,8 +663,9 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
             opt = optimise(models, study, constraints)
         except InfeasibleError as exc:
             r = study.requirements
-            raise InfeasibleError(f"the requirements cannot be met (requirements.F_z_N = "
-                                  f"{r.F_z:g} N, F_r_N = {r.F_r:g} N): {exc}") from None
+            raise _infeasible(models, study, constraints,
+                              f"the requirements cannot be met (requirements.F_z_N = {r.F_z:g} "
+                              f"N, F_r_N = {r.F_r:g} N): {exc}") from None
         return _sensor_result(models, study, opt, constraints, models_source, dataset)
     if study.geometric_variables:
         opt = optimise_geometry(models, study, constraints)
@@ -672,7 +673,10 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
         if not study.M_z_variable:
             values.pop("M_z", None)
     else:
-        opt = optimise(models, study, constraints)
+        try:
+            opt = optimise(models, study, constraints)
+        except InfeasibleError as exc:
+            raise _infeasible(models, study, constraints, str(exc)) from None
         d = opt.choice.design
         values = {"H": d.H, "G": d.G} | ({} if d.M_z is None else {"M_z": d.M_z})
     original = {"H": study.design.H_original, "G": study.design.G_original} | own
@@ -680,6 +684,18 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
     return Result(study, models, models_source, opt, chosen,
                   _answer(models, study, original, "original"), values, dataset,
                   sensor=Sensor.of(chosen))
+
+
+def _infeasible(models: ModelSet, study: Study, constraints, message: str) -> Exception:
+    """The error of a specification no design meets, carrying the answer (what binds, what to
+    relax: :func:`magtact.designer.infeasibility`) where the force requirements are those that
+    cannot be met together; a plain :class:`InfeasibleError` otherwise (the chip's range)."""
+    from .designer import InfeasibleSpecification, infeasibility
+    from .optimise import InfeasibleError
+
+    if constraints.F_r_c > 0 or constraints.F_z_c <= 0:
+        return InfeasibleError(message)
+    return InfeasibleSpecification(message, infeasibility(models, study, constraints, message))
 
 
 def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_source: str,

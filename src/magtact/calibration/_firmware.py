@@ -464,7 +464,7 @@ def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
     good = [a for a in cands if score(a) <= 1.0]
     if good:
         chosen = min(good, key=lambda a: (a.bytes, score(a)))
-        rule = "the smallest candidate (bytes) within sigma_F, then the most accurate"
+        rule = "the smallest candidate (bytes) within σ_F, then the most accurate"
     else:
         small = [a for a in cands if a.bytes <= budget] or cands
         chosen = min(small, key=score)

@@ -15,7 +15,7 @@ from rich.table import Table
 
 from .._errors import MagtactError
 from ..study import checked_si, from_si, kpa, mm
-from ._app import StudyArg, app, console, get_study, outputs
+from ._app import StudyArg, app, check_out, console, get_study, outputs
 from ._optimise import ModelsOpt
 
 if TYPE_CHECKING:
@@ -213,11 +213,13 @@ def budget_command(
         help="RMS field noise [µT] of the chip, one value for both axes or X,Z; it replaces "
              "the chip's own figure, and the output says so.")] = None,
     seeds: Annotated[Path | None, typer.Option(
-        "--seeds", help="A seed study (publication/publication.json of magtact reproduce) "
+        "--seed-study", help="A seed study (publication/publication.json of magtact reproduce) "
                         "for the seed-spread row.")] = None,
     models: ModelsOpt = None,
     out: Annotated[Path | None, typer.Option(
-        "--out", "-o", help="Also write OUT/budget.json and the figure.")] = None,
+        "--out", "-o", callback=check_out,
+        help="Output folder (created if needed) for budget.json and the figure; default: "
+             "print only.")] = None,
 ) -> None:
     """The error budget of the chosen sensor (magtact.error_budget), or of it with the parts
     the options name changed: every false force besides the load, in mN."""

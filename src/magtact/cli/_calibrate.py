@@ -59,8 +59,8 @@ def fit_names(text: str, presses: bool) -> tuple[str, ...]:
 
 @app.command("calibrate")
 def calibrate_command(
-    out: OutOpt,
     study: StudyArg = None,
+    out: OutOpt = Path("calibration"),
     H: HOpt = None,
     G: GOpt = None,
     grade: GradeOpt = None,

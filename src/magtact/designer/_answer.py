@@ -59,6 +59,19 @@ class Parts:
     inside: tuple[str, ...]
     softer: str | None
     stiffer: str | None
+    #: The magnet's radius and height [m] (None: not known).
+    R_m: float | None = None
+    H_m: float | None = None
+
+    def __str__(self) -> str:
+        from .._display import parts_rows, text_block
+
+        return text_block(*parts_rows(self))
+
+    def _repr_html_(self) -> str:
+        from .._display import html_block, parts_rows
+
+        return html_block(*parts_rows(self))
 
 
 def parts_of(study: Study, G: float, M_z: float | None = None) -> Parts:
@@ -67,7 +80,7 @@ def parts_of(study: Study, G: float, M_z: float | None = None) -> Parts:
     return Parts(study.magnet.grade, study.magnet.size,
                  study.magnet.M_z if M_z is None else float(M_z), study.material.silicone,
                  tuple(x.name for x in inside), None if below is None else below.name,
-                 None if above is None else above.name)
+                 None if above is None else above.name, study.magnet.R_m, study.magnet.H_m)
 
 
 @dataclass(frozen=True)
@@ -132,11 +145,16 @@ class DesignAnswer:
         return 1.0 + self.tolerance
 
     def __str__(self) -> str:
-        d = self.design
-        M = "" if d.M_z is None else f", M_z = {from_si(d.M_z, 'MA_per_m'):.4g} MA/m"
-        return (f"H = {mm(d.H):.3f} mm, G = {from_si(d.G, 'kPa'):.2f} kPa{M}: "
-                f"Γ_r,max = {d.Gamma_r_max:.4g} N/T, Γ_z,max = {d.Gamma_z_max:.4g} N/T, "
-                f"F_r,min = {d.F_r_min:.4g} N, F_z,max = {d.F_z_max:.4g} N")
+        """The design, its verdict with margins, σ_F, ranges and saturation in mN, N, mm and
+        kPa (at most 25 lines)."""
+        from .._display import answer_rows, answer_title, text_block
+
+        return text_block(answer_title(self), answer_rows(self))
+
+    def _repr_html_(self) -> str:
+        from .._display import answer_rows, answer_title, html_block
+
+        return html_block(answer_title(self), answer_rows(self))
 
 
 def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design",

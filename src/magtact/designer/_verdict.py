@@ -98,11 +98,22 @@ class Verdict:
         return [r.to_json() for r in self.requirements]
 
     def __str__(self) -> str:
-        return "\n".join(r.text for r in self.requirements)
+        """Each requirement met or not with its margin, σ_F and saturation (≤ 25 lines)."""
+        from .._display import text_block, verdict_rows
+
+        return text_block(*verdict_rows(self))
+
+    def _repr_html_(self) -> str:
+        from .._display import html_block, verdict_rows
+
+        return html_block(*verdict_rows(self))
 
 
 def _n(x: float) -> str:
-    return f"{x:.3g}"
+    """A number to 3 significant figures, written as short as it reads (5 N, not 5.00 N)."""
+    from .._display import short
+
+    return short(float(x))
 
 
 #: A design chosen on a force constraint's boundary (G where it is just met) meets it to the

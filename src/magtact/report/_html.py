@@ -26,9 +26,9 @@ from .._runfolder import MANIFEST, RunManifest, StageRecord
 from ..study import from_si
 from ._card import read_card
 from ._explorer import explorer_section
+from ._fragments import collecting, damaged_section, load_captions, load_record, read_text
 from ._fragments import escape as _e
 from ._fragments import figure as _figure
-from ._fragments import collecting, damaged_section, load_captions, load_record, read_text
 from ._fragments import load_json as _load_json
 from ._labels import label, round_text, sig, value_text
 from ._markdown import mathml, render_markdown
@@ -89,6 +89,7 @@ li.unmet{border-color:#c0392b!important;background:#fcecea}
 table.parts td,table.parts th{text-align:left}
 .glance{display:grid;grid-template-columns:repeat(auto-fit,minmax(420px,1fr));gap:1em}
 .glance figure img{max-width:100%;max-height:440px}.glance .span{grid-column:1/-1}
+@media print{.glance{grid-template-columns:1fr 1fr}.glance figure img{max-height:300px}}
 .xctl{display:flex;flex-wrap:wrap;gap:.6em;align-items:center;margin:.5em 0}
 .xctl input[type=range]{width:220px}.xctl input[type=number]{width:7em}
 .xgrid{display:grid;grid-template-columns:minmax(0,3fr) minmax(0,2fr);gap:1em}
@@ -169,7 +170,20 @@ def report_document(folder: Path, *, shown: Path | None = None,
     doc = ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
            f"<title>magtact report — {_e(study_name)}</title><style>{CSS}</style></head>"
            "<body>\n" + "\n".join(p for p in parts if p) + "\n</body></html>\n")
-    return doc
+    return _live_links(doc)
+
+
+def _live_links(doc: str) -> str:
+    """``doc`` with the navigation's links to sections it does not hold left out (a run that
+    stopped early, or found no design, has no explorer or design card)."""
+    ids = set(re.findall(r'\sid="([^"]+)"', doc))
+
+    def nav(m: re.Match) -> str:
+        links = [a for a in m.group(2).split(" · ")
+                 if (h := re.search(r'href="#([^"]+)"', a)) is None or h.group(1) in ids]
+        return m.group(1) + " · ".join(links) + m.group(3)
+
+    return re.sub(r'(<nav class="toc">)(.*?)(</nav>)', nav, doc, count=1, flags=re.S)
 
 
 def _document_parts(folder: Path, shown: Path | None, evidence, interrupted
@@ -263,24 +277,39 @@ def _interrupted(run: dict, manifest: RunManifest | None) -> str:
 
 
 def _front(card: dict | None) -> str:
-    """The verdict (one line per requirement, met or not) and the parts list, side by side:
-    the first thing the report shows. Nothing where the card has neither."""
+    """The verdict (one line per requirement, met or not, with its margin) and the parts list,
+    side by side: the first thing the report shows. Where no design meets the requirements,
+    what binds and what to relax take the parts' place. Nothing where the card has neither."""
     if not isinstance(card, dict):
         return ""
+    from .._display import infeasible_rows, requirement_rows
+
     verdict = [v for v in card.get("verdict") or [] if isinstance(v, dict)]
     parts = [p for p in card.get("parts") or [] if isinstance(p, (list, tuple)) and len(p) == 2]
+    infeasible = card.get("infeasible") if isinstance(card.get("infeasible"), dict) else None
     if not verdict and not parts:
         return ""
     items = "".join(
-        f'<li class="{"met" if v.get("met") else "unmet"}">{"✓" if v.get("met") else "✗"} '
-        f"<b>{_inline(v.get('requirement', ''))}</b>: {_inline(v.get('text', ''))}</li>"
-        for v in verdict)
-    rows = "".join(f'<tr><th class="l">{_inline(k)}</th><td class="l">{_inline(v)}</td></tr>'
-                   for k, v in parts)
-    left = (f'<div id="verdict"><h2>Verdict</h2><ul class="verdict-list">{items}</ul></div>'
+        f'<li class="{"met" if v.get("met") else "unmet"}">{_e(label[:1])} '
+        f"<b>{_inline(label[2:])}</b>: {_inline(text)}</li>"
+        for v, (label, text) in zip(verdict, requirement_rows(verdict), strict=True))
+    title = ("Verdict: no design meets the requirements" if infeasible is not None
+             else "Verdict")
+    left = (f'<div id="verdict"><h2>{title}</h2><ul class="verdict-list">{items}</ul></div>'
             if verdict else "")
-    right = (f'<div id="parts"><h2>Parts</h2><table class="parts">{rows}</table></div>'
-             if parts else "")
+    if infeasible is not None:
+        rows = infeasible_rows(infeasible)[1][len(verdict):]
+        table = "".join(f'<tr><th class="l">{_inline(k)}</th><td class="l">{_inline(v)}</td>'
+                        "</tr>" for k, v in rows)
+        right = (f'<div id="parts"><h2>What to relax</h2><table class="parts">{table}</table>'
+                 "<p>No parts: no design in the study's ranges of H and G meets every "
+                 "requirement together. With the one change above, the design at the figure "
+                 "shown meets them.</p></div>")
+    else:
+        rows = "".join(f'<tr><th class="l">{_inline(k)}</th><td class="l">{_inline(v)}</td>'
+                       "</tr>" for k, v in parts)
+        right = (f'<div id="parts"><h2>Parts</h2><table class="parts">{rows}</table></div>'
+                 if parts else "")
     return f'<section class="front">{left}{right}</section>'
 
 
@@ -332,8 +361,8 @@ def _inline(text) -> str:
 
 def _card(card: dict | None) -> str:
     """The design card (written by the optimisation stage), or nothing."""
-    if not card or not isinstance(card.get("rows"), list):
-        return ""
+    if not card or not isinstance(card.get("rows"), list) or card.get("infeasible"):
+        return ""  # no design: the verdict above says what binds
     head = "".join(f'<th class="l">{_e(h)}</th>' for h in card.get("header", []))
     rows = "".join("<tr>" + "".join(f'<td class="l">{_inline(c)}</td>' for c in r) + "</tr>"
                    for r in card["rows"] if isinstance(r, list))
@@ -362,8 +391,9 @@ def _budget_section(folder: Path, run_id: str | None) -> str:
            "metamodels): at rest (t = 0) and worst over the stable region. Rows far above the "
            "resolution are what limits the sensor, not the noise (method, §12). Every number "
            "in <code>budget/budget.json</code>.</p>"]
-    for b in doc.budgets:
+    for k, b in enumerate(doc.budgets):
         label = b.label
+        start = len(out)
         out.append(f"<h3>{_e(label)}: H = {_fmt(_in(b.H, 'mm'))} mm, G = "
                    f"{_fmt(_in(b.G, 'kPa'))} kPa</h3><p>Noise: {_e(b.noise_source)}.</p>")
         rows = "".join(
@@ -381,13 +411,19 @@ def _budget_section(folder: Path, run_id: str | None) -> str:
         slug = re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "design"
         png = folder / f"budget_{slug}.png"
         if png.is_file():
-            out.append(_figure(png, f"Error budget of the {label} design: false force per row "
-                                    "[mN], log scale; dashed: the resolution (1 σ, worst)"))
+            out.append("<details><summary>its figure</summary>"
+                       + _figure(png, f"Error budget of the {label} design: false force per "
+                                      "row [mN], log scale; dashed: the resolution (1 σ, "
+                                      "worst)") + "</details>")
         notes = "".join(f"<li>{_e(r.name)} ({_e(r.component)}): {_e(r.assumptions)}</li>"
                         for r in b.rows if r.component == "F_r")
         missing = "".join(f"<li>{_e(n)}</li>" for n in b.not_modelled)
         out.append(f"<details><summary>assumptions of each row</summary><ul>{notes}</ul>"
-                   f"</details><p>Not modelled:</p><ul>{missing}</ul>")
+                   f"</details><details><summary>not modelled</summary><ul>{missing}</ul>"
+                   "</details>")
+        if k > 0:  # another design's budget (the original): behind a details
+            out[start:] = [f"<details><summary>the {_e(label)} design's budget</summary>"
+                           + "\n".join(out[start:]) + "</details>"]
     for png in sorted(folder.glob("time_*.png")):  # the time rows' figure (method.md §15)
         out.append(_figure(png, "The silicone's relaxation: F_z read against the true F_z over "
                                 "a press and release at the study's press time, and the "
@@ -463,6 +499,10 @@ def _chosen(folder: Path | None) -> str:
         data, source = ChosenFile.from_json(geo), "geometry.json"
     else:
         source = "chosen.json"
+    if data is None and folder is not None and (folder / "card.json").is_file() and isinstance(
+            (read_card(folder) or {}).get("infeasible"), dict):
+        return ('<h2 id="chosen">Chosen design</h2><p>None: no design meets the requirements '
+                '(<a href="#verdict">the verdict</a> says what binds and what to relax).</p>')
     if data is None:
         return ('<h2 id="chosen">Chosen design</h2><div class="missing">No chosen design in '
                 "this folder (the optimisation stage did not produce "
@@ -545,6 +585,7 @@ def _stage(folder: Path, key: str, title: str, what: str, info: StageRecord | No
     if key == "validation" and _is_synthetic(folder):
         out.append('<div class="banner"><b>SYNTHETIC example data</b> — generated from the model '
                    "with noise, drift and sensor-to-sensor scatter; not a measurement.</div>")
+    shown = len(out)  # what follows is the stage's evidence: behind a details (printed closed)
     captions = load_captions(folder / "captions.json")
     files = sorted(p for p in folder.iterdir() if p.is_file() and not p.name.startswith("."))
     from .._files import file_problem
@@ -581,6 +622,9 @@ def _stage(folder: Path, key: str, title: str, what: str, info: StageRecord | No
                                                         ".json", ".svg")]
     if others:
         out.append(f"<p>Other files: {_e(', '.join(others))}.</p>")
+    if len(out) > shown:
+        out[shown:] = ['<details class="evidence"><summary>Figures, tables and files of this '
+                       "stage</summary>" + "\n".join(out[shown:]) + "</details>"]
     return "\n".join(out)
 
 
@@ -696,14 +740,17 @@ def _settings(path: Path) -> str:
     top = [(k, v) for k, v in data.items() if not isinstance(v, dict)]
     sections = [(None, top)] + [(k, list(v.items())) for k, v in data.items()
                                 if isinstance(v, dict)]
+    tables = []
     for section, items in sections:
         if not items:
             continue
         rows = "".join(_setting_row(k, v, schema.get((section, k)))
                        for k, v in items if not isinstance(v, dict))
         head = "" if section is None else f"<h3>{_e(section)}</h3>"
-        out.append(f'{head}<table class="settings"><tr><th class="l">setting</th>'
-                   f'<th class="l">value</th><th class="l">what it is</th></tr>{rows}</table>')
+        tables.append(f'{head}<table class="settings"><tr><th class="l">setting</th>'
+                      f'<th class="l">value</th><th class="l">what it is</th></tr>{rows}</table>')
+    out.append(f"<details><summary>every setting, section by section ({len(tables)} "
+               "tables)</summary>" + "\n".join(tables) + "</details>")
     return "\n".join(out)
 
 
@@ -773,7 +820,8 @@ def _versions(manifest: RunManifest | None) -> str:
         return ""
     rows = "".join(f'<tr><td class="l">{_e(k)}</td><td class="l">{_e(v)}</td></tr>'
                    for k, v in versions.items())
-    return f"<h2>Versions and machine</h2><table>{rows}</table>"
+    return ('<h2 id="versions">Versions and machine</h2><details><summary>Python, the '
+            f"platform and the packages of the run</summary><table>{rows}</table></details>")
 
 
 # ---- pieces --------------------------------------------------------------------------------

@@ -35,8 +35,9 @@ def load_study(source: str | Path | None = None) -> Study:
 
     ``source`` is a TOML file path, a preset name (``"magone"``, ``"magone-printed"``) or
     ``None`` for the built-in MagOne study. A file may say ``base = "magone"`` (the default),
-    ``"magone-printed"`` or ``"none"``: keys it does not give are taken from that base, and with
-    ``"none"`` every key must be given. Raises :class:`StudyError` naming the offending key.
+    another preset, another study file (``base = "mine.toml"``, relative to the file) or
+    ``"none"``: keys it does not give are taken from that base, and with ``"none"`` every key
+    must be given. Raises :class:`StudyError` naming the offending key.
     """
     if source is None:
         source = "magone"
@@ -96,9 +97,11 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
         base, complete = Study(), True
     elif isinstance(base_name, str) and base_name in PRESETS:
         base, complete = load_study(base_name), False
+    elif isinstance(base_name, str) and base_name.lower().endswith(".toml"):
+        base, complete = _base_file(base_name, source), False
     else:
-        raise StudyError("base", f"expected one of {sorted(PRESETS) + ['none']}, got "
-                                 f"{_show(base_name)}", source)
+        raise StudyError("base", f"expected one of {sorted(PRESETS) + ['none']} or a study "
+                                 f"file (.toml), got {_show(base_name)}", source)
     top = {}
     for key in ("name", "description"):
         if key in data:
@@ -126,6 +129,27 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
         raise blamed(exc, written_keys(data), source) from None
     _check_hall(study, source)
     return study
+
+
+#: Study files being read as bases (a file that is its own base, directly or not, is refused).
+_READING: list[Path] = []
+
+
+def _base_file(name: str, source: str | None) -> Study:
+    """The study a file names as its base (``base = "mine.toml"``): a path relative to the
+    file that names it (to the current folder where the study is not a file)."""
+    path = Path(name)
+    if not path.is_absolute() and source and Path(source).suffix.lower() == ".toml":
+        path = Path(source).parent / path
+    key = path.resolve()
+    if key in _READING:
+        chain = " -> ".join(str(p) for p in [*_READING, key])
+        raise StudyError("base", f"the study files name each other as base ({chain})", source)
+    _READING.append(key)
+    try:
+        return load_study(path)
+    finally:
+        _READING.pop()
 
 
 def _apply_parts(s: Study, given: dict, source) -> Study:

@@ -544,6 +544,18 @@ class Study:
     environment: Environment = field(default_factory=Environment)
     tolerances: Tolerances = field(default_factory=Tolerances)
 
+    def __str__(self) -> str:
+        """The sensor, the design ranges and the requirements in a few lines (``to_toml()``:
+        every setting)."""
+        from .._display import study_rows, text_block
+
+        return text_block(*study_rows(self))
+
+    def _repr_html_(self) -> str:
+        from .._display import html_block, study_rows
+
+        return html_block(*study_rows(self))
+
     # ---- design variables --------------------------------------------------------------------
     @property
     def M_z_variable(self) -> bool:

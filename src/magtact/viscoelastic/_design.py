@@ -52,8 +52,8 @@ def relaxation_of(study: Study, G: float) -> tuple[Prony | None, str]:
             f"{m.silicone}: {r.source}"
     why = ("no silicone named" if silicone is None
            else f"no relaxation data for {m.silicone} ({silicone.relaxation_note})")
-    return None, (f"{why}; give material.relaxation_g1, relaxation_tau1_s (and g2, tau2_s) in "
-                  "the study")
+    return None, (f"{why}; give the silicone's relaxation (its two strengths and time "
+                  "constants) in the study's [material] section")
 
 
 def design_forces(models, H: float, theta: float):
