@@ -44,8 +44,10 @@ def bisection_figure(models, a, n_theta=61):
     th = np.linspace(0.0, d.theta_m, n_theta)
     t = np.linspace(0.0, d.t_m, 401)
     over = ratio(t[:, None] + 0 * th, th + 0 * t[:, None]) > 1
-    assert over.any(axis=0).all()  # every path saturates in the stable region
-    i = over.argmax(axis=0)
+    hit = over.any(axis=0)  # the paths on which the chip leaves its range
+    assert hit.any() and not over[0].any()
+    th = th[hit]
+    i = over[:, hit].argmax(axis=0)
     lo, hi = t[i - 1], t[i]
     for _ in range(60):
         mid = 0.5 * (lo + hi)
