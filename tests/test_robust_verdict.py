@@ -137,3 +137,15 @@ def test_the_chosen_sensor_is_designed_for_its_worst_corner(magone_design):
     doc = answer_json(a)["robust_verdict"]
     assert doc["requirements"][0]["requirement"] == "normal"
     assert doc["sigma_F_worst_N"] >= doc["sigma_F_nominal_N"] > 0
+
+
+def test_the_yield_factors_ask_more_of_the_nominal_parts_for_a_higher_yield(chosen):
+    """``[tolerances] yield_target``: the chip must read F_z,req over the (1 − y)-quantile of
+    the units' saturation force relative to the nominal unit's, so that a fraction y of the
+    units reads it; a higher yield asks the nominal parts for more."""
+    from magtact.tolerance import yield_factors
+
+    models, a = chosen
+    half, most = (yield_factors(models, a, y) for y in (0.5, 0.99))
+    assert 1.0 <= half.read <= most.read and most.force <= half.force <= 1.0
+    assert half.field == most.field == 1.0

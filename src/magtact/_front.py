@@ -742,13 +742,14 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     FE bias, the reading's factor that folds the field's tolerances into one scale, both
     calibrated on the sensor chosen before) and the force constraints for the softest body;
     the factors are calibrated again on the new choice while its worst corner does not read
-    the force, at most :data:`WORST_CORNER_SOLVES` times.
+    the force, at most :data:`WORST_CORNER_SOLVES` times. With ``[tolerances] yield_target``
+    the same for that fraction of units (:func:`magtact.tolerance.yield_factors`).
     """
     from dataclasses import replace
 
     from .chip import exact_field_models
     from .optimise import optimise_sensor
-    from .tolerance import robust_verdict, worst_factors
+    from .tolerance import robust_verdict, worst_factors, yield_factors
 
     def robust(a):
         return replace(a, robust=robust_verdict(exact_field_models(models, a.study), a))
@@ -757,15 +758,17 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     if study.tolerances.design_for != "worst":
         return sensor, chosen
     k = 1.0 - constraints.tolerance  # the required forces
+    target = study.tolerances.yield_target
     for _ in range(WORST_CORNER_SOLVES):
         if chosen.robust["normal"].met:
             break
-        w = worst_factors(exact_field_models(models, chosen.study), chosen)
+        m = exact_field_models(models, chosen.study)
+        w = worst_factors(m, chosen) if target <= 0 else yield_factors(m, chosen, target)
         force = min(w.force, k)
         at_worst = replace(constraints, F_r_c=constraints.F_r_c * k / force,
                            F_z_c=constraints.F_z_c * k / force, tolerance=1.0 - force)
         sensor = optimise_sensor(models, study, table, at_worst, field_factor=w.field,
-                                 read_factor=1.0 / force)
+                                 read_factor=w.read)
         c = sensor.choice
         chosen = robust(_answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen"))
     return sensor, chosen

@@ -511,6 +511,10 @@ class Tolerances:
     design_for: str = setting("worst", choices=("worst", "nominal"),
                               doc="the sensor problem's chip constraint and forces at the worst "
                                   "corner of this box ('worst') or at the nominal parts")
+    yield_target: float = setting(0.0, minimum=0.0, bounds=(0.0, 1.0),
+                                  doc="with design_for = 'worst': design for this fraction of "
+                                      "units reading the normal requirement instead of the "
+                                      "worst corner (e.g. 0.99); 0: the worst corner")
 
 
 def holdout_limit(n_theta: int, n_H: int) -> int:

@@ -21,10 +21,11 @@ from ._robust import (
     robust_verdict,
     sobol_units,
     worst_factors,
+    yield_factors,
 )
 from ._units import DesignContext, design_context, unit_figures
 
 __all__ = ["FIELD_SCALE", "INPUTS", "WORDS", "DesignContext", "RobustRequirement",
            "RobustVerdict", "Tolerance", "ToleranceBox", "WorstFactors", "corners",
            "design_context", "robust_verdict", "sobol_units", "tolerance_box", "unit_figures",
-           "worst_factors"]
+           "worst_factors", "yield_factors"]

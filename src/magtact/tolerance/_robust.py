@@ -240,6 +240,7 @@ def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None
     box = tolerance_box(study) if box is None else box
     ctx = design_context(models, answer, box)
     tol, req = study.tolerances, study.requirements
+    target = tol.yield_target
     X_s = sobol_units(box, tol.robust_samples, tol.robust_replicates, tol.seed)
     X_c = corners(box)
     X_0 = box.nominal[None, :]
@@ -275,7 +276,9 @@ def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None
         value, words = _words(k, fig, i_w, req.F_z, req.F_r)
         nominal, _ = _words(k, fig, 0, req.F_z, req.F_r)
         out.append(RobustRequirement(
-            k, statements.get(k, k), bool(m[i_w] >= 0), float(per_set.mean()),
+            k, statements.get(k, k),
+            bool(m[i_w] >= 0) if target <= 0 else bool(per_set.mean() >= target),
+            float(per_set.mean()),
             _interval(per_set, met), float(value), words, float(nominal), float(m[i_w]),
             limited if cost[limited] < 0 else "", cost,
             {n: float(v) for n, v in zip(box.names, np.concatenate([X_0, X_c])[i_w],
@@ -291,12 +294,19 @@ def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None
 
 @dataclass(frozen=True)
 class WorstFactors:
-    """The worst corner of a design's box as two factors the optimiser's chip constraint can
-    take (:func:`worst_factors`): the chip's reading over the nominal one (≥ 1) and the forces
-    over the nominal ones (≤ 1)."""
+    """A design's tolerances as factors the optimiser's constraints can take
+    (:func:`worst_factors`, :func:`yield_factors`): the chip's reading over the nominal one
+    (``field``, ≥ 1), the forces the body must carry over the nominal ones (``force``, ≤ 1) and
+    the normal force the chip must read at the nominal parts over the required one (``read``,
+    ≥ 1)."""
 
     field: float
     force: float
+    read: float = float("nan")
+
+    def __post_init__(self):
+        if math.isnan(self.read):
+            object.__setattr__(self, "read", 1.0 / self.force)
 
 
 def worst_factors(models: ModelSet, answer, box: ToleranceBox | None = None
@@ -333,5 +343,27 @@ def worst_factors(models: ModelSet, answer, box: ToleranceBox | None = None
     return WorstFactors(float(brentq(excess, 1.0, hi, xtol=1e-6)), force)
 
 
+def yield_factors(models: ModelSet, answer, target: float, box: ToleranceBox | None = None
+                  ) -> WorstFactors:
+    """The factors at which a design's units meet the normal requirement with the fraction
+    ``target``: the (1 − target)-quantiles, over the quasi-Monte Carlo's units, of their
+    saturation force and of the normal force they carry, each over the nominal unit's; the
+    chip must then read F_z,req over the first at the nominal parts, the body carry it over
+    the second. Calibrated on this design (its units' spread relative to its nominal unit).
+    """
+    box = tolerance_box(answer.study) if box is None else box
+    ctx = design_context(models, answer, box)
+    tol = answer.study.tolerances
+    X = np.concatenate([box.nominal[None, :],
+                        sobol_units(box, tol.robust_samples, tol.robust_replicates, tol.seed)])
+    fig = unit_figures(ctx, box, X)
+    with np.errstate(invalid="ignore"):
+        sat = np.where(np.isinf(fig["F_sat"]), 1.0, fig["F_sat"] / fig["F_sat"][0])[1:]
+    carry = fig["F_z_max"][1:] / fig["F_z_max"][0]
+    q = 1.0 - target
+    return WorstFactors(1.0, min(1.0, float(np.quantile(carry, q))),
+                        max(1.0, 1.0 / float(np.quantile(sat, q))))
+
+
 __all__ = ["RobustRequirement", "RobustVerdict", "WorstFactors", "robust_verdict",
-           "sobol_units", "worst_factors"]
+           "sobol_units", "worst_factors", "yield_factors"]
