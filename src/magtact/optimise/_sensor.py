@@ -244,18 +244,25 @@ class _Noise:
     """Per height of a grid and one chip noise: the grid's points sorted by their normal force
     per unit G, and the worst per-unit √(σ_r² + σ_z²) among the first i of them."""
 
-    def __init__(self, grid: SensorGrid, noise: tuple):
+    def __init__(self, grid: SensorGrid, noise: tuple, order: np.ndarray | None = None):
         n = grid.f_z.shape[0]
         f = grid.f_z.reshape(n, -1)
-        S = grid.unit_noise(*noise)
-        order = np.argsort(f, axis=1, kind="stable")
+        if order is None:
+            order = self.order(grid)
         self.f = np.take_along_axis(f, order, axis=1)
-        cm = np.maximum.accumulate(np.take_along_axis(S.reshape(n, -1, 2), order[..., None],
-                                                      axis=1), axis=1)
+        S = grid.unit_noise(*noise).reshape(n, -1, 2)
+        cm = np.maximum.accumulate(np.take_along_axis(S, order[..., None], axis=1), axis=1)
         cm = np.concatenate([np.zeros((n, 1, 2)), cm], axis=1)  # cm[:, i]: worst of first i
         self.W = np.hypot(cm[..., 0], cm[..., 1])  # (n, P + 1)
         with np.errstate(divide="ignore"):
             self.breaks = np.where(self.f > 0, 1.0 / np.where(self.f > 0, self.f, 1.0), np.inf)
+
+    @staticmethod
+    def order(grid: SensorGrid) -> np.ndarray:
+        """The grid's points of each height in the order of their normal force (the same for
+        every chip noise)."""
+        n = grid.f_z.shape[0]
+        return np.argsort(grid.f_z.reshape(n, -1), axis=1, kind="stable")
 
     def least(self, M_z: float, G_low: np.ndarray, G_high: float, F_z: float
               ) -> tuple[np.ndarray, np.ndarray]:
@@ -295,10 +302,11 @@ def exact_sensor_reduction(models: ModelSet, study: Study, space: SensorSpace
 
 
 def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, only=None):
-    """The best design (and the best-reading one) over the heights ``H``, the standoff
-    levels ``levels`` and every grade and chip option (``only``: one (grade, option)), all
-    heights and levels in one grid. Of equally good designs the first in the order (standoff,
-    option, grade, height) is kept, and a design replaces ``best`` only when strictly better."""
+    """The best design over the heights ``H``, the standoff levels ``levels`` and every grade
+    and chip option (``only``: one (grade, option)), all heights and levels in one grid; where
+    none is feasible (and no ``best`` is known), the best-reading one. Of equally good designs
+    the first in the order (standoff, option, grade, height) is kept, and a design replaces
+    ``best`` only when strictly better."""
     t_m, theta_m, f_r_min, f_z_max = space.box(H)
     n = H.size
     rows_s = np.repeat(levels, n)  # rows: standoff level, then height
@@ -307,14 +315,13 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
     G_force = np.tile(space.G_force(f_r_min, f_z_max), levels.size)
     G_hi = space.G_bounds[1]
     ok = np.isfinite(G_force) & (G_force <= G_hi)
+    options = [(k, o) for k, o in enumerate(space.options) if only is None or k == only[1]]
+    grades = [(g, M) for g, M in enumerate(space.M_z) if only is None or g == only[0]]
+    order = _Noise.order(grid)
     cands, falls = [], []
-    for k, o in enumerate(space.options):
-        if only is not None and k != only[1]:
-            continue
-        noise = _Noise(grid, (o.noise_x, o.noise_z))
-        for g, M_z in enumerate(space.M_z):
-            if only is not None and g != only[0]:
-                continue
+    for k, o in options:
+        noise = _Noise(grid, (o.noise_x, o.noise_z), order)
+        for g, M_z in grades:
             G_range = grid.G_range(M_z * space.field_factor, o.range_x, o.range_z,
                                    space.F_z * space.read_factor)
             G_low = np.maximum(np.maximum(G_force, G_range), space.G_bounds[0])
@@ -326,13 +333,18 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
                 r = li * n + i[li]
                 if np.isfinite(value[r]):
                     cands.append((float(value[r]), int(s), k, g, float(H[i[li]]), float(G[r])))
-            # where none reads the required loads: the design that reads the most, at G_hi
-            F_sat = np.where(ok, grid.F_saturation(np.full(ok.size, G_hi), M_z, o.range_x,
-                                                   o.range_z), -np.inf).reshape(levels.size, n)
-            j = np.argmax(F_sat, axis=1)
-            for li, s in enumerate(levels):
-                if ok[li * n + j[li]]:
-                    falls.append((-float(F_sat[li, j[li]]), int(s), k, g, float(H[j[li]])))
+    if not cands and best is None:
+        # where none reads the required loads: the design that reads the most, at G_hi
+        for k, o in options:
+            for g, M_z in grades:
+                F_sat = np.where(ok, grid.F_saturation(np.full(ok.size, G_hi), M_z,
+                                                       o.range_x, o.range_z),
+                                 -np.inf).reshape(levels.size, n)
+                j = np.argmax(F_sat, axis=1)
+                for li, s in enumerate(levels):
+                    if ok[li * n + j[li]]:
+                        falls.append((-float(F_sat[li, j[li]]), int(s), k, g,
+                                      float(H[j[li]])))
     if cands:
         v, s, k, g, h, G = min(cands, key=lambda c: c[:4])
         if best is None or v < best.sigma:
