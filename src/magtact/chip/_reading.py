@@ -137,6 +137,28 @@ def sensor_grid(models: ModelSet, study: Study, H, t_m, theta_m,
     per_design = standoff is not None and np.ndim(standoff) > 0
     if per_design:
         standoff = np.broadcast_to(np.asarray(standoff, float), H.shape)
+    key = (id(models), hash(study), tuple(n), H.tobytes(), t_m.tobytes(), theta_m.tobytes(),
+           None if standoff is None else np.asarray(standoff, float).tobytes())
+    for i, (k, m, st, grid) in enumerate(_GRIDS):
+        if k == key and m is models and st == study:
+            _GRIDS.insert(0, _GRIDS.pop(i))
+            return grid
+    grid = _build(models, study, H, t_m, theta_m, standoff, per_design, n)
+    for f in fields(grid):  # shared by every caller: read only
+        getattr(grid, f.name).flags.writeable = False
+    _GRIDS.insert(0, (key, models, study, grid))
+    del _GRIDS[GRIDS_KEPT:]
+    return grid
+
+
+#: Sensor grids kept for reuse (:func:`sensor_grid` of the same models, study and designs
+#: returns the grid already built): the sensor problem solved again for another corner of the
+#: tolerances asks for the same grids.
+GRIDS_KEPT = 4
+_GRIDS: list = []
+
+
+def _build(models, study, H, t_m, theta_m, standoff, per_design, n) -> SensorGrid:
     step = max(1, CHUNK_POINTS // (n[0] * n[1]))
     parts = []
     for a in range(0, H.size, step):  # designs in chunks: the field's work arrays stay small
