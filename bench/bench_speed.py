@@ -126,7 +126,7 @@ def main(argv: list[str] | None = None) -> None:
                         runs[name].append(r)
                         print(f"{row:11s} {name:8s} wall {r['wall_s']:7.1f} s  cpu "
                               f"{r['cpu_s']:7.1f} s  exit {r['exit_status']}", flush=True)
-                rec = {"what": label, "load_average_start": load_start,
+                rec = {"what": label, "repeat": args.repeat, "load_average_start": load_start,
                        "load_average_end": os.getloadavg(), "runs": runs}
                 for k in ("wall_s", "cpu_s"):
                     med = {n: statistics.median(r[k] for r in runs[n]) for n in runs}
