@@ -352,9 +352,14 @@ def infeasible_rows(doc: dict) -> tuple[str, list[tuple[str, str]]]:
     if binding is not None:
         rows.append(("binds", str(binding.get("statement", doc.get("binding")))))
     relax = doc.get("relaxation")
-    rows.append(("relax", str(relax.get("text")) + " makes it feasible"
-                 if isinstance(relax, dict) else "no change of one force requirement alone "
-                 "makes it feasible: widen the design ranges or choose another magnet"))
+    others = [str(v.get("statement", v.get("requirement"))) for v in verdict
+              if v.get("met") is False and v.get("requirement") not in ("normal", "shear")]
+    if isinstance(relax, dict):
+        rows.append(("relax", str(relax.get("text")) + (
+            " and change: " + "; ".join(others) if others else " makes it feasible")))
+    else:
+        rows.append(("relax", "no change of one force requirement alone makes it feasible: "
+                              "widen the design ranges or choose another magnet"))
     return "no design meets the requirements", rows
 
 

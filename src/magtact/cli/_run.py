@@ -31,8 +31,9 @@ def run_command(
                                       callback=check_out)]
     = Path("results"),
     recompute: Annotated[bool, typer.Option(
-        "--recompute", help="Run the full FE design of experiments (cached) instead of using "
-                            "the data set bundled with magtact.")] = False,
+        "--recompute", help="Run the study's own FE DOE (the full FE design of experiments, "
+                            "cached) instead of using the data set bundled with magtact.")]
+    = False,
     refit: Annotated[bool, typer.Option(
         "--refit", help="Fit the metamodels even when the fit shipped with magtact matches the "
                         "data and settings.")] = False,

@@ -66,8 +66,8 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
                 _noise_text)
     row("normal force range (largest F_z in the stable region)",
         lambda a: f"{a.design.F_z_max:.3g} N")
-    row("shear force range (F_r before shear turns unstable)",
-        lambda a: f"{a.design.F_r_min:.3g} N")
+    row("shear force range (|F_r| before shear turns unstable)",
+        lambda a: f"{-a.design.F_r_min:.3g} N")
     row("chip range (x / z) and saturation", _saturation_text)
     if any(a.parts is not None for a in answers):
         named = answers[0].parts.silicone if answers[0].parts is not None else "none"
@@ -84,7 +84,7 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
         d = answers[0].tolerance
         row(f"tolerance of G ± {d:.0%}",
             lambda a: f"forces at G − {d:.0%}: {(1 - d) * a.design.F_z_max:.3g} N normal, "
-                      f"{(1 - d) * a.design.F_r_min:.3g} N shear; Γ and σ_F × {1 + d:.3g} "
+                      f"{-(1 - d) * a.design.F_r_min:.3g} N shear; Γ and σ_F × {1 + d:.3g} "
                       f"at G + {d:.0%}")
     return header, rows
 

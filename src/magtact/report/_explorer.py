@@ -208,7 +208,7 @@ def explorer_section(folder: Path) -> str:
     rows = [("x-sigma-r", "shear resolution σ_Fr, unloaded / worst"),
             ("x-sigma-z", "normal resolution σ_Fz, unloaded / worst"),
             ("x-Fz", "normal force range (largest F_z in the stable region)"),
-            ("x-Fr", "shear force range (F_r before shear turns unstable)"),
+            ("x-Fr", "shear force range (|F_r| before shear turns unstable)"),
             ("x-sat", f"where the {data.get('chip', 'chip')} saturates"),
             ("x-setting", "chip setting"),
             ("x-silicone", "silicones whose G range holds G")]
@@ -323,7 +323,7 @@ function update(){
   put('x-sigma-z', sig(c.sz0 * 1e3) + ' / ' + sig(c.szw * 1e3) + ' mN',
       {zero: c.sz0, worst: c.szw});
   put('x-Fz', sig(c.Fz) + ' N', {value: c.Fz});
-  put('x-Fr', sig(c.Fr) + ' N', {value: c.Fr});
+  put('x-Fr', sig(Math.abs(c.Fr)) + ' N', {value: c.Fr});
   put('x-sat', satText(g, c), {fz: c.satFz, fr: c.satFr});
   put('x-setting', g.setting || 'the study\'s');
   put('x-silicone', silicones(G_kPa));
@@ -359,7 +359,8 @@ function el(name, attrs, text){
 function card(p){
   const rows = [['H', sig(p.H_mm) + ' mm'], ['G', sig(p.G_kPa) + ' kPa'],
                 ['Γ_r,max / Γ_z,max', sig(p.Gamma_r_max) + ' / ' + sig(p.Gamma_z_max) + ' N/T'],
-                ['F_z range', sig(p.F_z_max) + ' N'], ['F_r range', sig(p.F_r_min) + ' N']];
+                ['F_z range', sig(p.F_z_max) + ' N'],
+                ['F_r range', sig(Math.abs(p.F_r_min)) + ' N']];
   if (p.card) {
     const c = cardOf(p.card, p.G_kPa);
     // Γ and the forces above are NSGA-II's; these two are Result.evaluate's at the point
