@@ -1,14 +1,16 @@
 """Bound-constrained optimisation of a smooth function of (t, θ) over a box.
 
-Two methods:
+Three methods:
 
+- :func:`multistart_optimum` (many problems at once, one box per row): the best local optima of
+  a dense grid on each box, each refined by :func:`batch_optimum`; the best result per box.
+  Used for every per-design result (:func:`magtact.optimise.per_heights`).
+- :func:`batch_optimum` (many problems at once): the best point of a regular start grid (or
+  given starts), refined by a vectorised projected Newton method with an active set. Used
+  where thousands of heights are needed (NSGA-II, the exact reduction).
 - :func:`box_optimum` (one problem): a seeded genetic algorithm (pymoo ``GA``) finds the basin,
-  SciPy ``trust-constr`` with the exact gradient and Hessian refines it. The method of
-  docs/method.md §7.1, used for every per-design result.
-- :func:`batch_optimum` (many problems at once, one box per row): the best point of a regular
-  start grid, refined by a vectorised projected Newton method with an active set. Used where
-  thousands of heights are needed (NSGA-II, the exact reduction); checked against
-  :func:`box_optimum` in the tests.
+  SciPy ``trust-constr`` with the exact gradient and Hessian refines it: the independent
+  reference the tests check the other two against.
 
 A box side of zero width (a degenerate box, t_m = 0 or θ_m = 0) fixes that variable; the other is
 optimised alone, or the single point is evaluated.
