@@ -266,6 +266,26 @@ def magone_design():
     return magtact.design()
 
 
+#: A ⌀3 × 1 mm N52 magnet asked for 3 N normal, 0.5 N shear at 200 Hz (the bundled data hold the
+#: 3 × 1 mm magnet; no body of H 3–7 mm, G 10–50 kPa carries 0.5 N of shear): a specification no
+#: design meets.
+TINY_STUDY = """name = "tiny magnet"
+[magnet]
+size = "3x1"
+grade = "N52"
+[requirements]
+F_z_N = 3.0
+F_r_N = 0.5
+rate_Hz = 200.0
+"""
+
+#: The distribution's Chromium the browser tests drive, and the flags of a browser that talks
+#: to nothing but the page.
+CHROMIUM = Path("/usr/bin/chromium")
+BROWSER_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                "--disable-component-update", "--disable-sync"]
+
+
 def built_run(tmp_path_factory, name: str, *args: str, status: int = 0,
               files: dict[str, str] | None = None) -> Path:
     """The results folder of ``magtact run ARGS --out <folder>``, built once per test session

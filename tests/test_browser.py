@@ -16,17 +16,15 @@ from pathlib import Path
 
 import pytest
 
+from conftest import BROWSER_ARGS as ARGS
+from conftest import CHROMIUM
 from magtact._display import sig
 
 playwright = pytest.importorskip("playwright.sync_api")
-CHROMIUM = Path("/usr/bin/chromium")
 if not CHROMIUM.is_file():
     pytest.skip("no /usr/bin/chromium (apt-get install chromium; .ci/run installs it)",
                 allow_module_level=True)
 
-#: Flags of a browser that talks to nothing but the page.
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync"]
 WIDTH, SCREEN = 1400, 1200
 #: The contract of the card's verdict and parts (card.json), as the report's tests forge them.
 VERDICT = [{"requirement": "reads 0–5 N normal without saturating", "met": False,

@@ -11,26 +11,15 @@ from pathlib import Path
 
 import pytest
 
+from conftest import BROWSER_ARGS, CHROMIUM, TINY_STUDY
+
 playwright = pytest.importorskip("playwright.sync_api")
-CHROMIUM = Path("/usr/bin/chromium")
 if not CHROMIUM.is_file():
     pytest.skip("no /usr/bin/chromium (apt-get install chromium; .ci/run installs it)",
                 allow_module_level=True)
 
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync"]
 #: Most A4 pages the printed report may take (details closed: the evidence behind them).
 MAX_PAGES = 12
-#: A ⌀3 × 1 mm N52 magnet asked for 3 N normal, 0.5 N shear at 200 Hz: no design carries it.
-TINY = """name = "tiny magnet"
-[magnet]
-size = "3x1"
-grade = "N52"
-[requirements]
-F_z_N = 3.0
-F_r_N = 0.5
-rate_Hz = 200.0
-"""
 
 
 @pytest.fixture(scope="module")
@@ -46,13 +35,13 @@ def infeasible(tmp_path_factory) -> Path:
     from conftest import built_run
 
     return built_run(tmp_path_factory, "infeasible-report", "tiny.toml", status=3,
-                     files={"tiny.toml": TINY})
+                     files={"tiny.toml": TINY_STUDY})
 
 
 @pytest.fixture(scope="module")
 def browser():
     with playwright.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)
+        b = p.chromium.launch(executable_path=str(CHROMIUM), args=BROWSER_ARGS)
         yield b
         b.close()
 

@@ -9,20 +9,8 @@ import math
 import pytest
 
 import magtact
+from conftest import TINY_STUDY as TINY
 from magtact.designer import InfeasibleSpecification
-
-#: A ⌀3 × 1 mm N52 magnet asked for 3 N normal, 0.5 N shear at 200 Hz (the bundled data hold
-#: the 3 × 1 mm magnet; no body of H 3–7 mm, G 10–50 kPa carries 0.5 N of shear).
-TINY = """
-name = "tiny magnet"
-[magnet]
-size = "3x1"
-grade = "N52"
-[requirements]
-F_z_N = 3.0
-F_r_N = 0.5
-rate_Hz = 200.0
-"""
 
 
 @pytest.fixture(scope="module")

@@ -21,7 +21,7 @@ import numpy as np
 from ..metamodel import ModelSet
 from ..optimise import ForceConstraints, InfeasibleError, sweep
 from ..study import Study, from_si
-from ._verdict import Requirement, _n
+from ._verdict import Requirement, _n, footprint
 
 
 class InfeasibleSpecification(InfeasibleError):
@@ -163,11 +163,7 @@ def infeasibility(models: ModelSet, study: Study, constraints: ForceConstraints,
                                  "not judged: no design carries the required forces",
                                  math.nan, "N"))
     if req.R_max > 0:
-        R = study.body.R
-        items.append(Requirement("footprint", R <= req.R_max,
-                                 f"fits a body radius of {_n(from_si(req.R_max, 'mm'))} mm",
-                                 f"{'yes' if R <= req.R_max else 'no'}, "
-                                 f"{_n(from_si(R, 'mm'))} mm", req.R_max - R, "m"))
+        items.append(footprint(study))
     return Infeasible(tuple(items), binding, relaxation, message, study.name)
 
 

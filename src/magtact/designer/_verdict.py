@@ -186,12 +186,17 @@ def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
                                  "over the required loads)", word, req.resolution - sigma,
                                  "N"))
     if req.R_max > 0:
-        R = study.body.R
-        items.append(Requirement("footprint", R <= req.R_max,
-                                 f"fits a body radius of {_n(from_si(req.R_max, 'mm'))} mm",
-                                 f"{'yes' if R <= req.R_max else 'no'}, "
-                                 f"{_n(from_si(R, 'mm'))} mm", req.R_max - R, "m"))
+        items.append(footprint(study))
     return Verdict(tuple(items), s_r, s_z, F_sat, within, read)
+
+
+def footprint(study: Study) -> Requirement:
+    """The footprint requirement: the body's radius within ``[requirements] R_max_mm``."""
+    R, R_max = study.body.R, study.requirements.R_max
+    return Requirement("footprint", R <= R_max,
+                       f"fits a body radius of {_n(from_si(R_max, 'mm'))} mm",
+                       f"{'yes' if R <= R_max else 'no'}, {_n(from_si(R, 'mm'))} mm",
+                       R_max - R, "m")
 
 
 def shear_envelope(models: ModelSet, study: Study, design: DesignResult, chip: HallChip,
