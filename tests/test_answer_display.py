@@ -199,3 +199,27 @@ def test_the_last_screen_of_magtact_run_holds_the_verdict_with_margins_and_the_p
     assert text.index("[7/7]") < text.index("WARNING: the fit") < text.index(card["verdict"][0][
         "statement"])
     assert "e+0" not in "\n".join(last) and "`" not in "\n".join(last)
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_quiet_leaves_out_the_progress_not_the_answer(magone_design, tmp_path, monkeypatch,
+                                                      quiet):
+    from typer.testing import CliRunner
+
+    import magtact.pipeline as pipeline
+    from magtact.cli import app
+    from magtact.report import read_card
+
+    magone_design.write_into(tmp_path / "optimise", figures=False, budget=False)
+
+    def run_study(study, out, *, log, **options):
+        log("[1/7] Magnetic field ...")
+        return pipeline.RunResult(tmp_path, tmp_path / "report.html", (), 1.0,
+                                  answer=read_card(tmp_path / "optimise"))
+
+    monkeypatch.setattr(pipeline, "run_study", run_study)
+    r = CliRunner().invoke(app, ["run", "--out", str(tmp_path), *(["--quiet"] if quiet else [])])
+    assert r.exit_code == 0, r.output
+    assert ("[1/7]" in r.stderr) is not quiet
+    assert "every requirement met" in r.stdout or "requirements not met" in r.stdout
+    assert "report: " in r.stdout
