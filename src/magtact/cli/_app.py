@@ -129,6 +129,10 @@ def tables() -> Console:
 EXIT_INFEASIBLE = 3
 
 
+#: Rows of the card printed where it judges no requirement (the publication's problem).
+CARD_ROWS = 8
+
+
 def answer_lines(card: dict, tail: list[tuple[str, str]] | None = None
                  ) -> list[tuple[str, str]]:
     """The answer of a design card (``card.json``: its ``verdict``, ``parts`` and, for a
@@ -142,6 +146,9 @@ def answer_lines(card: dict, tail: list[tuple[str, str]] | None = None
     rows = requirement_rows(card.get("verdict"))
     parts = [p for p in card.get("parts") or [] if isinstance(p, (list, tuple)) and len(p) == 2]
     rows += [(str(k), round_text(str(v))) for k, v in parts]
+    if not rows:  # no requirements judged (the publication's problem): the card's first rows
+        rows = [(str(r[0]), round_text(str(r[1]))) for r in (card.get("rows") or [])[:CARD_ROWS]
+                if isinstance(r, (list, tuple)) and len(r) > 1]
     answers = card.get("answers") or [{}]
     first = answers[0] if isinstance(answers[0], dict) else {}
     s_r, s_z = (first.get(f"sigma_F{a}_required_loads_mN") for a in "rz")
@@ -159,6 +166,8 @@ def answer_title(card: dict, study: str) -> str:
 
     if isinstance(card.get("infeasible"), dict):
         return f"{study}: no design meets the requirements"
+    if not card.get("verdict"):
+        return f"{study}, chosen design"
     return f"{study}, chosen design: {verdict_title(card.get('verdict'))}"
 
 
