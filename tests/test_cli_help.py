@@ -22,7 +22,7 @@ def _help(*args: str) -> str:
 
 def test_simulate_help_shows_its_units():
     text = _help("simulate")
-    assert "Base height H [mm]" in text
+    assert "Body height H [mm]" in text
     assert "Shear modulus G [kPa]" in text
     assert "Shear angle θ [rad]" in text
 
