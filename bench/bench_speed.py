@@ -87,6 +87,31 @@ def timed(src: Path, args: list[str], out: Path) -> dict:
             "stderr_tail": proc.stderr[-800:] if proc.returncode else ""}
 
 
+def _record(label: str, repeat: int, load_start, runs: dict) -> dict:
+    """A row's record: its runs, the medians of wall and CPU time and the speed-ups."""
+    rec = {"what": label, "repeat": repeat, "runs_done": len(runs["head"]),
+           "load_average_start": load_start, "load_average_end": os.getloadavg(), "runs": runs}
+    for k in ("wall_s", "cpu_s"):
+        med = {n: statistics.median(r[k] for r in runs[n]) for n in runs}
+        rec[f"median_{k}"] = med
+        rec[f"speed_up_{k.removesuffix('_s')}"] = med["baseline"] / med["head"]
+    rec["all_ok"] = all(r["exit_status"] == 0 for n in runs for r in runs[n])
+    return rec
+
+
+def _write(doc: dict, row: str, rec: dict) -> None:
+    """Write ``doc`` with the row ``row``; rows another call of this script wrote for the same
+    commits (rows timed side by side in two processes) are kept."""
+    doc["rows"][row] = rec
+    now = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
+    if (now.get("baseline"), now.get("head")) == (doc["baseline"], doc["head"]):
+        doc["rows"] = now.get("rows", {}) | {row: rec}
+        doc["command"] = " ; ".join(dict.fromkeys(
+            [*now.get("command", "").split(" ; "), doc["command"]]))
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    RESULTS.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", default="6151215", help="baseline commit")
@@ -126,23 +151,8 @@ def main(argv: list[str] | None = None) -> None:
                         runs[name].append(r)
                         print(f"{row:11s} {name:8s} wall {r['wall_s']:7.1f} s  cpu "
                               f"{r['cpu_s']:7.1f} s  exit {r['exit_status']}", flush=True)
-                rec = {"what": label, "repeat": args.repeat, "load_average_start": load_start,
-                       "load_average_end": os.getloadavg(), "runs": runs}
-                for k in ("wall_s", "cpu_s"):
-                    med = {n: statistics.median(r[k] for r in runs[n]) for n in runs}
-                    rec[f"median_{k}"] = med
-                    rec[f"speed_up_{k.removesuffix('_s')}"] = med["baseline"] / med["head"]
-                rec["all_ok"] = all(r["exit_status"] == 0 for n in runs for r in runs[n])
-                doc["rows"][row] = rec
-                # rows of another call of this script on the same commits (rows timed side
-                # by side in two processes) are kept
-                now = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
-                if (now.get("baseline"), now.get("head")) == (doc["baseline"], doc["head"]):
-                    doc["rows"] = now.get("rows", {}) | {row: rec}
-                    doc["command"] = " ; ".join(dict.fromkeys(
-                        [*now.get("command", "").split(" ; "), doc["command"]]))
-                RESULTS.parent.mkdir(parents=True, exist_ok=True)
-                RESULTS.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+                        if runs["head"]:  # the row so far: an interrupted call keeps its runs
+                            _write(doc, row, _record(label, args.repeat, load_start, runs))
         finally:
             for where, _ in trees.values():
                 subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
