@@ -82,7 +82,6 @@ def test_constraints_from_a_reference_design(tmp_path, model_dir, small_study):
     (["--constraints-from", "3"], "--constraints-from must be 'H_MM,G_KPA'"),
     (["--constraints-from", "3,-1"], "H and G must be positive"),
     (["--Frc", "-1", "--constraints-from", "3,29.4"], "not both"),
-    (["--Fzc", "1000"], "Best reachable"),
 ])
 def test_optimise_user_errors(tmp_path, model_dir, small_study, monkeypatch, capsys, args,
                               message):
@@ -92,6 +91,20 @@ def test_optimise_user_errors(tmp_path, model_dir, small_study, monkeypatch, cap
         main()
     assert exc.value.code == 2
     assert message in " ".join(capsys.readouterr().err.split())
+
+
+def test_an_infeasible_constraint_is_an_answer_with_exit_status_3(tmp_path, model_dir,
+                                                                  small_study, monkeypatch,
+                                                                  capsys):
+    monkeypatch.setattr("sys.argv", ["magtact", "optimise", str(small_study), "--models",
+                                     str(model_dir), "--out", str(tmp_path), "--Fzc", "1000"])
+    with pytest.raises(SystemExit) as exc:
+        main()
+    assert exc.value.code == 3
+    out = " ".join(capsys.readouterr().out.split())
+    assert out.split(": ", 1)[1].startswith("no design meets the requirements ✗"), out
+    assert "binds: reads 0–1000 N normal" in out
+    assert "relax: the normal force constraint F_z,c [N] = " in out and "(from 1000 N)" in out
 
 
 def test_compare_prints_percentages(model_dir):

@@ -138,13 +138,19 @@ def infeasibility(models: ModelSet, study: Study, constraints: ForceConstraints,
         return (f"H {_n(from_si(table.H[i], 'mm'))} mm, G {_n(from_si(G_hi, 'kPa'))} kPa"
                 if i >= 0 else "no height")
 
+    # the setting to change: the study's requirement, or the force constraint given instead
+    req = study.requirements
+    own = math.isclose(F_r, req.F_r, rel_tol=1e-9) and math.isclose(F_z, req.F_z, rel_tol=1e-9)
+    names = (("requirements.F_r_N", "requirements.F_z_N") if own
+             else ("the shear force constraint |F_r,c| [N]",
+                   "the normal force constraint F_z,c [N]"))
     options = []
     if math.isfinite(shear_with) and shear_with > 0:
         options.append(((F_r - shear_with) / F_r, Relaxation(
-            "shear", F_r, _floor_sig(shear_with), "N", "requirements.F_r_N")))
+            "shear", F_r, _floor_sig(shear_with), "N", names[0])))
     if math.isfinite(normal_with) and normal_with > 0:
         options.append(((F_z - normal_with) / F_z, Relaxation(
-            "normal", F_z, _floor_sig(normal_with), "N", "requirements.F_z_N")))
+            "normal", F_z, _floor_sig(normal_with), "N", names[1])))
     relaxation = min(options, key=lambda o: o[0])[1] if options else None
     binding = relaxation.key if relaxation is not None else (
         "shear" if shear_alone < F_r else "normal")
@@ -153,7 +159,6 @@ def infeasibility(models: ModelSet, study: Study, constraints: ForceConstraints,
                     normal_with, at(i_z), normal_alone, f"{_n(F_r)} N shear"),
              _force("shear", f"carries and reads 0–{_n(F_r)} N shear", F_r, shear_with,
                     at(i_r), shear_alone, f"{_n(F_z)} N normal")]
-    req = study.requirements
     if req.rate > 0:
         items.append(_rate(study))
     if req.resolution > 0:
