@@ -116,7 +116,13 @@ def test_calibrate_command_is_the_api_call(magone_design, cli, tmp_path):
     close(_json(tmp_path / "cli/calibration.json"), _json(tmp_path / "api/calibration.json"))
     # the chosen sensor's magnet and standoff, not the study's own magnet
     design = _json(tmp_path / "cli/calibration.json")["design"]
-    assert design["M_z_A_per_m"] == pytest.approx(magone_design.sensor.M_z, rel=1e-12)
+    sensor = magone_design.sensor
+    assert design["M_z_A_per_m"] == pytest.approx(sensor.M_z, rel=1e-12)
+    assert (design["magnet_grade"], design["silicone"], design["chip"]) == (
+        sensor.grade, sensor.silicone, sensor.chip)
+    assert design["standoff_mm"] == pytest.approx(1e3 * sensor.standoff, rel=1e-12)
+    assert design["chip_setting"] == {k: getattr(sensor.setting, k)
+                                      for k in ("gain_sel", "res", "osr", "dig_filt")}
     assert design["M_z_A_per_m"] != pytest.approx(magone_design.study.magnet.M_z, rel=1e-3)
 
 

@@ -406,6 +406,11 @@ class SensorMap:
         return {
             "H_mm": mm(self.H), "G_kPa": from_si(self.G, "kPa"),
             "M_z_A_per_m": self.study.magnet.M_z * self.field_scale,
+            # the parts the field depends on: the sensor this map is for
+            "magnet_grade": self.study.magnet.grade, "silicone": self.study.material.silicone,
+            "standoff_mm": mm(self.study.hall.standoff), "chip": self.study.hall.chip,
+            "chip_setting": {k: getattr(self.study.hall, k)
+                             for k in ("gain_sel", "res", "osr", "dig_filt")},
             "t_m": self.t_m, "theta_m_rad": self.theta_m,
             "F_r_range_N": F_r, "F_z_range_N": F_z, "field_source": self.field_source,
             "force_source": self.force_source,
