@@ -21,7 +21,7 @@ finished run's stage folder. Each case ends in one of:
 ``traceback``         any other exception, or a refusal whose message is not one line;
 ``hang``              no answer within ``--timeout`` seconds (the worker is killed and restarted).
 
-The designer's own inputs (:func:`designer_cases`): seed studies of ``magtact budget --seeds``
+The designer's own inputs (:func:`designer_cases`): seed studies of ``magtact budget --seed-study``
 (devices, a FIFO, a large file, generated JSON), press files (generated cells, 10,001 and 10⁶
 rows) and unit fits (random readings, 10,000 presses of a real unit), options that cannot take
 effect and the one form of ``--noise-uT``, the temperature change against the remanence
@@ -780,7 +780,7 @@ def _seeds_files(tmp: Path, case) -> tuple[str, str]:
         if kind == "link":
             path = tmp / "seeds.json"
             path.symlink_to(value)
-        code, text = _main(["budget", "--H", "3", "--G", "22.57", "--seeds", str(path)])
+        code, text = _main(["budget", "--H", "3", "--G", "22.57", "--seed-study", str(path)])
         if code != 2 or "Traceback" in text:
             return "traceback", text[:200]
         assert "is a device" in text, text[:300]
@@ -796,7 +796,7 @@ def _seeds_files(tmp: Path, case) -> tuple[str, str]:
     try:
         data = _seeds(path)
     except MagtactError as exc:
-        return _refusal(exc, "--seeds")
+        return _refusal(exc, "--seed-study")
     for entry in data["spread"].values():
         for acc in entry.values():
             assert math.isfinite(acc["max"]) and 0 <= acc["max"] <= 1e3, acc

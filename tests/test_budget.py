@@ -356,7 +356,7 @@ def test_budget_command_refuses_a_file_that_is_no_seed_study(tmp_path, monkeypat
 
     bad = tmp_path / "seeds.json"
     bad.write_text('{"seeds": [1, 2]}', encoding="utf-8")
-    monkeypatch.setattr("sys.argv", ["magtact", "budget", "--H", "3", "--G", "29.4", "--seeds",
+    monkeypatch.setattr("sys.argv", ["magtact", "budget", "--H", "3", "--G", "29.4", "--seed-study",
                                      str(bad)])
     with pytest.raises(SystemExit) as exc:
         main()

@@ -1,7 +1,7 @@
 """What a designer types or hands in: each class refused in one line naming the key or option
 and why, on instances of its own.
 
-1. unbounded reads: every file input (``--seeds`` included) through one size-capped reader of
+1. unbounded reads: every file input (``--seed-study`` included) through one size-capped reader of
    regular files;
 2. press files checked like validation tables, and a unit fit whose memory grows linearly with
    the presses;
@@ -50,8 +50,8 @@ def test_seeds_from_a_device_a_fifo_and_a_large_file_are_refused(tmp_path, refus
         fh.truncate(20_000_000)
     link = tmp_path / "random.json"
     link.symlink_to("/dev/urandom")
-    base = ["budget", "--H", "3", "--G", "22.57", "--seeds"]
-    refused([*base, "/dev/urandom"], "--seeds /dev/urandom: is a device")
+    base = ["budget", "--H", "3", "--G", "22.57", "--seed-study"]
+    refused([*base, "/dev/urandom"], "--seed-study /dev/urandom: is a device")
     refused([*base, str(fifo)], "is a FIFO")
     refused([*base, str(link)], "is a device")
     refused([*base, str(big)], "has 20,000,000 bytes; at most 10,000,000 are read")
@@ -59,7 +59,7 @@ def test_seeds_from_a_device_a_fifo_and_a_large_file_are_refused(tmp_path, refus
 
 def test_seeds_that_are_not_a_seed_study_are_refused(tmp_path, refused):
     path = tmp_path / "p.json"
-    base = ["budget", "--H", "3", "--G", "22.57", "--seeds", str(path)]
+    base = ["budget", "--H", "3", "--G", "22.57", "--seed-study", str(path)]
     for text, fragment in [
         ('{"spread": {"jacobian": {"acc_f_r": {"max": NaN}}}}', "NaN is not a JSON number"),
         ('{"spread": {"jacobian": {"acc_f_r": {"max": "0.1"}}}}',
@@ -70,7 +70,7 @@ def test_seeds_that_are_not_a_seed_study_are_refused(tmp_path, refused):
         ('{"spread": 3}', "not a seed study"),
     ]:
         path.write_text(text, encoding="utf-8")
-        refused(base, f"--seeds {path}", fragment)
+        refused(base, f"--seed-study {path}", fragment)
 
 
 def test_study_write_does_not_read_a_large_file_it_would_not_replace(tmp_path, refused,

@@ -46,7 +46,7 @@ ALLOWED: dict[str, tuple[str, set[str]]] = {
                         {"H_star", "G_star", "Gamma_r_orig", "Gamma_r_star", "Gamma_z_orig",
                          "Gamma_z_star", "sigma_Fr_star", "sigma_Fz_star"}),
     "cli/_budget.py": ("checks the held-out accuracy figures of publication.json's spread "
-                       "that --seeds takes (magtact.publication's figure names)",
+                       "that budget --seed-study takes (magtact.publication's figure names)",
                        {"acc_f_r", "acc_f_z"}),
 }
 

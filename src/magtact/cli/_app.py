@@ -243,9 +243,11 @@ StudyArg = Annotated[
 ]
 
 
-def check_out(path: Path) -> Path:
+def check_out(path: Path | None) -> Path | None:
     """Option callback of ``--out``: refuse, before any work, a path that cannot become a
-    folder (it or a parent is a file)."""
+    folder (it or a parent is a file); None (no folder: print only) passes."""
+    if path is None:
+        return None
     for parent in (path, *path.parents):
         if parent.exists() and not parent.is_dir():
             raise typer.BadParameter(f"{parent} exists and is not a folder")

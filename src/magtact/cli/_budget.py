@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 
 #: Range of a Hall chip's RMS field noise that ``--noise-uT`` accepts [T]: 1 nT to 10 mT.
 NOISE_BOUNDS = (1e-9, 1e-2)
-#: Largest seed study read by ``--seeds`` [bytes] (magtact reproduce writes a few kB).
+#: Largest seed study read by ``--seed-study`` [bytes] (magtact reproduce writes a few kB).
 MAX_SEEDS_BYTES = 10_000_000
 
 
@@ -53,7 +53,7 @@ def parse_noise(text: str) -> tuple[float, float]:
 
 
 def _seeds(path: Path | None) -> dict | None:
-    """The seed study of ``--seeds``, read through the size-capped reader and checked: the
+    """The seed study of ``--seed-study``, read through the size-capped reader and checked: the
     ``spread`` of each sensitivity definition, ``acc_f_r`` / ``acc_f_z`` with a finite ``max``
     >= 0 (a relative error) and an optional integer ``n``."""
     from .._files import UnreadableFile, read_json_capped
@@ -63,13 +63,13 @@ def _seeds(path: Path | None) -> dict | None:
     try:
         data = read_json_capped(path, MAX_SEEDS_BYTES)
     except UnreadableFile as exc:
-        raise MagtactError(f"--seeds {path}: {exc}") from None
+        raise MagtactError(f"--seed-study {path}: {exc}") from None
     expected = "expected publication/publication.json of magtact reproduce"
     if not isinstance(data, dict) or not isinstance(data.get("spread"), dict):
-        raise MagtactError(f"--seeds {path}: not a seed study (no 'spread' table; {expected})")
+        raise MagtactError(f"--seed-study {path}: not a seed study (no 'spread' table; {expected})")
     spread = {}
     for definition, entry in data["spread"].items():
-        where = f"--seeds {path}: spread.{definition}"
+        where = f"--seed-study {path}: spread.{definition}"
         if not isinstance(entry, dict):
             raise MagtactError(f"{where} must be a table ({expected})")
         clean = {}
