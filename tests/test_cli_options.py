@@ -28,7 +28,7 @@ IDEAS = {
     "--G": "Shear modulus G [kPa]",
     "--generations": "GP generations of the fit",
     "--noise-uT": "RMS field noise [µT]",
-    "--solver": "",
+    "--solver": "'fe': axisymmetric finite elements; 'exact': closed form",
     "--mesh": "Mesh density",
     "--grade": "Magnet grade",
     "--standoff-mm": "The chip's distance below the body [mm]",
