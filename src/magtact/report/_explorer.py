@@ -91,7 +91,10 @@ def explorer_data(result, n_H: int = N_H, n_G: int = N_G, n_pareto: int = N_PARE
                  "Gamma_r_max": float(p.Gamma_r_max[k]), "Gamma_z_max": float(p.Gamma_z_max[k]),
                  "F_r_min": float(p.F_r_min[k]), "F_z_max": float(p.F_z_max[k])}
         if k in picks:
-            kw = fixed if p.M_z is None else fixed | {"M_z_A_per_m": float(p.M_z[k])}
+            # a point with its own magnetisation: that magnet (a grade would set another M_z)
+            kw = fixed if p.M_z is None else {k_: v for k_, v in fixed.items()
+                                              if k_ not in ("grade", "M_z_A_per_m")} | {
+                "M_z_A_per_m": float(p.M_z[k])}
             a = result.evaluate(H_mm=point["H_mm"], G_kPa=point["G_kPa"], **kw)
             point["card"] = _per_G(a) | {"G_kPa": point["G_kPa"]}
         pareto.append(point)
