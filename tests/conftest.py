@@ -288,6 +288,16 @@ BROWSER_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-backgr
                 "--disable-component-update", "--disable-sync"]
 
 
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium (:data:`CHROMIUM`) driven by Playwright, for a test module."""
+    playwright = pytest.importorskip("playwright.sync_api")
+    with playwright.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=str(CHROMIUM), args=BROWSER_ARGS)
+        yield b
+        b.close()
+
+
 def built_run(tmp_path_factory, name: str, *args: str, status: int = 0,
               files: dict[str, str] | None = None) -> Path:
     """The results folder of ``magtact run ARGS --out <folder>``, built once per test session

@@ -16,7 +16,6 @@ from pathlib import Path
 
 import pytest
 
-from conftest import BROWSER_ARGS as ARGS
 from conftest import CHROMIUM
 from magtact._display import sig
 
@@ -58,14 +57,6 @@ def forged(folder, tmp_path_factory) -> Path:
                          encoding="utf-8")
     build_report(out)
     return out
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with playwright.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)
-        yield b
-        b.close()
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import BROWSER_ARGS, CHROMIUM, TINY_STUDY
+from conftest import CHROMIUM, TINY_STUDY
 
 playwright = pytest.importorskip("playwright.sync_api")
 if not CHROMIUM.is_file():
@@ -36,14 +36,6 @@ def infeasible(tmp_path_factory) -> Path:
 
     return built_run(tmp_path_factory, "infeasible-report", "tiny.toml", status=3,
                      files={"tiny.toml": TINY_STUDY})
-
-
-@pytest.fixture(scope="module")
-def browser():
-    with playwright.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=str(CHROMIUM), args=BROWSER_ARGS)
-        yield b
-        b.close()
 
 
 def page_of(browser, folder: Path):
