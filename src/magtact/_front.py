@@ -242,7 +242,7 @@ class Result:
         if M_z_A_per_m is not None:
             values["M_z"] = checked_si(M_z_A_per_m, "A_per_m", "M_z_A_per_m")
             # the study file's rule: a grade sets M_z, and an M_z also given must agree
-            from .study._rules import check_parts
+            from .study import check_parts
 
             part = grade if grade is not None or self.study.M_z_variable else \
                 self.study.magnet.grade

@@ -36,11 +36,12 @@ from ._model import (
     Tolerances,
     holdout_limit,
 )
-from ._rules import ROOM_C, check_field_mesh, check_holdout, check_study
+from ._rules import ROOM_C, check_field_mesh, check_holdout, check_parts, check_study
 from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
-    "candidate_settings", "check_field_mesh", "check_holdout", "check_study", "holdout_limit",
+    "candidate_settings", "check_field_mesh", "check_holdout", "check_parts", "check_study",
+    "holdout_limit",
     "setting_figures",
     "ARRAY_LAYOUTS", "Array", "Environment", "Tolerances",
     "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
