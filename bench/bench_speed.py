@@ -118,11 +118,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--head", default="HEAD", help="commit to compare with the baseline")
     parser.add_argument("--repeat", type=int, default=3, help="runs per commit and row")
     parser.add_argument("--rows", default=",".join(ROWS), help="comma-separated rows")
+    parser.add_argument("--results", type=Path, default=RESULTS, help="JSON file written")
     args = parser.parse_args(argv)
     rows = [r.strip() for r in args.rows.split(",") if r.strip()]
     unknown = [r for r in rows if r not in ROWS]
     if unknown:
         parser.error(f"unknown rows {unknown}; choose from {list(ROWS)}")
+    global RESULTS
+    RESULTS = args.results
     old = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
     with tempfile.TemporaryDirectory(prefix="magtact-bench-speed-") as tmp:
         tmp = Path(tmp)
