@@ -748,7 +748,7 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     from dataclasses import replace
 
     from .chip import exact_field_models
-    from .optimise import optimise_sensor
+    from .optimise import InfeasibleError, optimise_sensor
     from .tolerance import robust_verdict, worst_factors, yield_factors
 
     def robust(a):
@@ -767,8 +767,14 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
         force = min(w.force, k)
         at_worst = replace(constraints, F_r_c=constraints.F_r_c * k / force,
                            F_z_c=constraints.F_z_c * k / force, tolerance=1.0 - force)
-        sensor = optimise_sensor(models, study, table, at_worst, field_factor=w.field,
-                                 read_factor=w.read)
+        try:
+            worst = optimise_sensor(models, study, table, at_worst, field_factor=w.field,
+                                    read_factor=w.read)
+        except InfeasibleError:
+            # no sensor reads the requirements at the worst corner: the nominal choice stands,
+            # its robust verdict saying for which fraction of units each requirement holds
+            break
+        sensor = worst
         c = sensor.choice
         chosen = robust(_answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen"))
     return sensor, chosen

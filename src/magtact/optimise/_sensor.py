@@ -39,7 +39,7 @@ from ..metamodel import ModelSet
 from ..parts import grade as catalogue_grade
 from ..study import MU0, Study, from_si
 from ._design import HeightTable
-from ._pareto import ForceConstraints, feasible_G, force_constraints, sweep
+from ._pareto import ForceConstraints, InfeasibleError, feasible_G, force_constraints, sweep
 
 #: Step between the standoff levels [m].
 STANDOFF_STEP = 0.1e-3
@@ -296,6 +296,9 @@ def exact_sensor_reduction(models: ModelSet, study: Study, space: SensorSpace
         best, fallback = _reduce_heights(models, study, space, Hf, np.array([best.s]), best,
                                          fallback, only=(best.g, best.k))
     pick = best if best is not None else fallback
+    if pick is None:  # no height reads and carries anything: nothing to report as the best
+        raise InfeasibleError("no design of the sensor space carries the required forces and "
+                              "keeps the chip in range")
     values = evaluate_designs(models, study, space, pick.H, pick.G, pick.s, pick.g, pick.k)
     combos = space.standoffs.size * space.M_z.size * len(space.options)
     return _design(space, values, pick.H, pick.s, pick.g, pick.k), combos
