@@ -1,0 +1,385 @@
+"""The magnet-size design space: its DOE, and surrogates across magnet sizes checked on sizes
+they never saw.
+
+``bench/magtact_sizes.toml``: the MagOne body over H 2-10 mm (4 levels) with magnets of
+diameter 3, 4, 5, 6 mm and height 1, 2, 3 mm (12 sizes), 3 theta levels of structural paths,
+default mesh, G by its exact scaling: 144 paths. It shares the job cache of the broad study
+(``bench/results/broad_cache``, committed), so the four corner sizes are not solved again and an
+interrupted DOE resumes where it stopped.
+
+Steps (each writes its part of ``bench/results/sizes.json``)::
+
+    nohup python bench/bench_sizes.py doe --workers 1 --first 5x2,4x1,4x2 > sizes_doe.log 2>&1 &
+    python bench/bench_sizes.py status       # paths cached of the 144, their solver time
+    python bench/bench_sizes.py surrogate    # models across sizes, held-out sizes measured
+
+``doe --first`` solves the named sizes' paths first (one sub-DOE each, through the same cache),
+then runs ``magtact doe`` on the whole study, which finds them cached.
+
+``surrogate`` fits f_z = F_z / G and f_r = F_r / G over (t, theta, H, R_m, H_m) on every size but
+the held-out ones (the MagOne 5 x 2 mm magnet and a 4 x 3 mm magnet) and measures each model on
+(a) the held-out sizes' paths of this DOE and (b) the bundled MagOne data set (5 x 2 mm, H 3-7 mm
+at 5 levels and 5 theta levels: an independent DOE at other H and theta levels). The error is the
+largest |error| over the points of a size as a fraction of that size's force range. Models:
+
+- ``kriging``: SMT's ordinary kriging (squared-exponential correlation, constant trend) in the
+  features (p, q, H, R_m, H_m) = (t, t tan theta, ...) scaled to [0, 1], with the data mirrored to
+  -theta for f_r (F_r is odd in theta: the mirror makes the model vanish on the axis);
+- ``rbf``: SciPy's thin-plate-spline radial basis interpolation in the same scaled features
+  (the simplest interpolator, a floor any model must beat);
+- ``gp``: magtact's genetic-programming fit (:func:`magtact.metamodel` ``fit_response``) with
+  the same training points and anchoring transforms as a shipped fit, and a reduced budget.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+RESULTS = HERE / "results"
+STUDY = HERE / "magtact_sizes.toml"
+DOE_DIR = RESULTS / "sizes_doe"
+CACHE = RESULTS / "broad_cache"
+OUT = RESULTS / "sizes.json"
+#: Magnet sizes held out of every fit: (radius, height) [m].
+HELD_OUT = ((2.5e-3, 2.0e-3), (2.0e-3, 3.0e-3))
+
+
+def _update(section: str, values: dict) -> None:
+    out = json.loads(OUT.read_text()) if OUT.is_file() else {}
+    out.update({"benchmark": "the magnet-size design space",
+                "study": str(STUDY.relative_to(ROOT)),
+                "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
+                            "python": platform.python_version()}})
+    out[section] = values
+    OUT.write_text(json.dumps(out, indent=1) + "\n")
+
+
+def _label(R_m: float, H_m: float) -> str:
+    return f"{2e3 * R_m:g} x {1e3 * H_m:g} mm"
+
+
+def _doe_file() -> Path:
+    full = DOE_DIR / "doe.nc"
+    return full if full.is_file() else DOE_DIR / "doe_partial.nc"
+
+
+def _cache_paths() -> int:
+    return len(list((CACHE / "path").glob("*.mtc")))
+
+
+def _size(text: str) -> dict[str, float]:
+    """``"5x2"`` (diameter x height [mm]) as the study's geometric variables [m]."""
+    d, h = (float(v) for v in text.lower().split("x"))
+    return {"R_m": d / 2e3, "H_m": h / 1e3}
+
+
+def status() -> dict:
+    """How many of the study's paths the cache holds, per magnet size, and their solver time."""
+    import itertools
+
+    from magtact import study as mstudy
+    from magtact.doe._cache import JobCache
+    from magtact.doe._jobs import plan
+    from magtact.magnetics import hall_field
+    from magtact.mechanics import simulate_path
+
+    study = mstudy.load_study(STUDY)
+    cache = JobCache(CACHE)
+    levels = study.geometry_levels
+    sizes, total, cached, wall = {}, 0, 0, 0.0
+    for values in itertools.product(*levels.values()):
+        geometry = dict(zip(levels, (float(v) for v in values), strict=True))
+        _, jobs = plan(study.at(**geometry), simulate_path, hall_field)
+        entries = [cache.get("path", j.key) for j in jobs]
+        done = [e for e in entries if e is not None]
+        sizes[_label(geometry["R_m"], geometry["H_m"])] = f"{len(done)}/{len(jobs)}"
+        total += len(jobs)
+        cached += len(done)
+        wall += sum(float(e.meta["job_wall_time"]) for e in done)
+    out = {"command": "python bench/bench_sizes.py status", "paths_total": total,
+           "paths_cached": cached, "path_job_wall_time_s_sum": wall,
+           "path_job_wall_time_s_mean": wall / max(cached, 1), "per_size": sizes}
+    _update("status", out)
+    print(json.dumps(out, indent=1))
+    return out
+
+
+def doe(workers: int, first: list[str]) -> None:
+    """Run (or resume) the DOE through the committed job cache and record its cost."""
+    import xarray as xr
+
+    from magtact import study as mstudy
+    from magtact.doe import run_doe
+    from magtact.doe._run import DOEFailed
+
+    before = _cache_paths()
+    study = mstudy.load_study(STUDY)
+    record = json.loads(OUT.read_text()).get("doe_runs", []) if OUT.is_file() else []
+    run = {"started": time.strftime("%Y-%m-%d %H:%M:%S"), "workers": workers,
+           "cache_paths_at_start": before, "sizes": {}}
+    record.append(run)
+    for text in first:
+        start = time.perf_counter()
+        try:
+            ds = run_doe(study.at(**_size(text)), cache=CACHE, workers=workers)
+            failed = 0
+        except DOEFailed as exc:  # stalled paths are retried by the whole run below
+            ds, failed = exc.dataset, len(exc.failures)
+        # what an interrupted run left is found in the cache: cached paths are not solved again
+        run["sizes"][text] = {"paths_cached": int(ds.attrs["run_paths_cached"]),
+                              "paths_computed": int(ds.attrs["run_paths_computed"]),
+                              "paths_failed": failed,
+                              "wall_time_s": time.perf_counter() - start,
+                              "load_average_at_end": os.getloadavg()}
+        _update("doe_runs", record)
+        print(f"{text}: {run['sizes'][text]}", flush=True)
+    cmd = [sys.executable, "-m", "magtact", "doe", str(STUDY), "--out", str(DOE_DIR),
+           "--workers", str(workers), "--cache", str(CACHE)]
+    load = os.getloadavg()
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, cwd=ROOT)
+    wall = time.perf_counter() - start
+    data = _doe_file()
+    if not data.is_file():
+        raise SystemExit(f"magtact doe failed (exit {proc.returncode}) and left no data set")
+    with xr.open_dataset(data) as ds:
+        attrs = dict(ds.attrs)
+    jobs = [j for j in json.loads(attrs["jobs"]) if "job_wall_time" in j]
+    _update("doe", {
+        "command": f"python bench/bench_sizes.py doe --workers {workers}",
+        "workers": workers, "wall_time_s": wall, "load_average_at_start": load,
+        "load_average_at_end": os.getloadavg(),
+        "paths_total": int(attrs["run_paths_total"]),
+        "paths_computed": int(attrs["run_paths_computed"]),
+        "paths_cached": int(attrs["run_paths_cached"]),
+        "cache_paths_before": before, "cache_paths_after": _cache_paths(),
+        "path_job_wall_time_s_sum": sum(j["job_wall_time"] for j in jobs),
+        "failed_jobs": [j for j in attrs.get("failed_jobs", "").splitlines() if j],
+        "complete": int(attrs.get("complete", 0)),
+        "dataset": str(data.relative_to(ROOT)),
+    })
+    print(f"DOE: {wall:.0f} s -> {data}")
+
+
+# ---- the data as points ------------------------------------------------------------------------
+def sizes_table(ds) -> dict[str, np.ndarray]:
+    """Every finite point of the sizes DOE: t, theta, H, R_m, H_m [SI] and f_r, f_z [N/Pa]."""
+    dims = ("t", "theta", "H", "R_m", "H_m")
+    grids = np.meshgrid(*(ds[d].values.astype(float) for d in dims), indexing="ij")
+    out = {d: g.ravel() for d, g in zip(dims, grids, strict=True)}
+    G = ds["G"].values.astype(float)
+    for k in ("r", "z"):
+        F = ds[f"F_{k}"].transpose(*dims, "G").values.astype(float)
+        out[f"f_{k}"] = (F / G).mean(axis=-1).ravel()
+    keep = np.isfinite(out["f_r"]) & np.isfinite(out["f_z"])
+    return {k: v[keep] for k, v in out.items()}
+
+
+def magone_table() -> dict[str, np.ndarray]:
+    """The bundled MagOne data set (5 x 2 mm magnet) as points of the same form."""
+    import xarray as xr
+
+    from magtact.doe import bundled_path
+
+    with xr.open_dataset(bundled_path()) as ds:
+        dims = ("t", "theta", "H")
+        grids = np.meshgrid(*(ds[d].values.astype(float) for d in dims), indexing="ij")
+        out = {d: g.ravel() for d, g in zip(dims, grids, strict=True)}
+        G = ds["G"].values.astype(float)
+        for k in ("r", "z"):
+            F = ds[f"F_{k}"].transpose(*dims, "G").values.astype(float)
+            out[f"f_{k}"] = (F / G).mean(axis=-1).ravel()
+    out["R_m"] = np.full_like(out["t"], 2.5e-3)
+    out["H_m"] = np.full_like(out["t"], 2.0e-3)
+    return out
+
+
+def _features(table: dict) -> np.ndarray:
+    t, th = table["t"], table["theta"]
+    return np.column_stack([t, t * np.tan(th), table["H"], table["R_m"], table["H_m"]])
+
+
+class Scaled:
+    """Scale the feature columns to [0, 1] over the training data's box."""
+
+    def __init__(self, X: np.ndarray):
+        self.lo, self.hi = X.min(axis=0), X.max(axis=0)
+
+    def __call__(self, X: np.ndarray) -> np.ndarray:
+        return (X - self.lo) / np.where(self.hi > self.lo, self.hi - self.lo, 1.0)
+
+
+def _mirror(X: np.ndarray, y: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """f_r is odd in q (θ → −θ): add the mirrored points so an interpolator vanishes on the
+    axis; f_z is even: its mirror adds nothing the (q >= 0) queries use."""
+    if name != "f_r":
+        return X, y
+    Xm = X.copy()
+    Xm[:, 1] = -Xm[:, 1]
+    off = X[:, 1] > 0
+    return np.vstack([X, Xm[off]]), np.concatenate([y, -y[off]])
+
+
+def _unique(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One point per feature vector (every θ gives p = q = 0 at t = 0): an interpolator's
+    system is singular with repeated points."""
+    Xu, inverse = np.unique(X, axis=0, return_inverse=True)
+    return Xu, np.bincount(inverse.ravel(), weights=y) / np.bincount(inverse.ravel())
+
+
+def fit_kriging(X, y, name):
+    from smt.surrogate_models import KRG
+
+    X, y = _unique(*_mirror(X, y, name))
+    scale = Scaled(X)
+    model = KRG(print_global=False, corr="squar_exp", poly="constant", n_start=1, seed=0,
+                nugget=1e-10)
+    model.set_training_values(scale(X), y)
+    model.train()
+    return lambda Z: model.predict_values(scale(Z)).ravel()
+
+
+def fit_rbf(X, y, name):
+    from scipy.interpolate import RBFInterpolator
+
+    X, y = _unique(*_mirror(X, y, name))
+    scale = Scaled(X)
+    rbf = RBFInterpolator(scale(X), y, kernel="thin_plate_spline", degree=1)
+    return lambda Z: rbf(scale(Z))
+
+
+def fit_gp(train: dict, name: str):
+    """magtact's GP fit of one force response over (t, θ, H, R_m, H_m) on ``train``."""
+    import dataclasses
+
+    from magtact import study as mstudy
+    from magtact.metamodel._fit import fit_response
+
+    study = mstudy.load_study(STUDY)
+    settings = dataclasses.replace(study.metamodel, generations=100, population=500,
+                                   max_length=60)
+    table = dict(train)
+    for k in ("B_r", "B_z"):
+        table[k] = np.ones_like(table["t"])
+    model, _report = fit_response(name, table, np.zeros(table["t"].shape, bool), study,
+                                  settings=settings)
+
+    def predict(tab):
+        return np.asarray(model.value(tab["t"], tab["theta"], tab["H"], R_m=tab["R_m"],
+                                      H_m=tab["H_m"]), dtype=float)
+    return predict
+
+
+def blend_sizes(ds, name: str, R_m: float, H_m: float, exclude=HELD_OUT) -> np.ndarray:
+    """f on the DOE's (t, θ, H) grid for a magnet (R_m, H_m) [m]: at each grid point a
+    quadratic in (R_m, H_m) fitted by least squares over the data's sizes (those not in
+    ``exclude`` and finite there). Linear in the data: the same weights blend per-size models
+    (values and derivatives alike)."""
+    G = ds["G"].values.astype(float)
+    F = ds[f"F_{name[-1]}"].transpose("t", "theta", "H", "R_m", "H_m", "G").values.astype(float)
+    f = (F / G).mean(axis=-1)
+    Rs, Hs = ds["R_m"].values.astype(float), ds["H_m"].values.astype(float)
+    r0, h0 = Rs.mean(), Hs.mean()
+    def basis(r, h):
+        x, y = (r - r0) / r0, (h - h0) / h0
+        return np.array([1.0, x, y, x * x, x * y, y * y])
+    out = np.full(f.shape[:3], np.nan)
+    for idx in np.ndindex(*f.shape[:3]):
+        rows, vals = [], []
+        for i, r in enumerate(Rs):
+            for j, h in enumerate(Hs):
+                if any(np.isclose(r, a) and np.isclose(h, b) for a, b in exclude):
+                    continue
+                if np.isfinite(f[idx + (i, j)]):
+                    rows.append(basis(r, h))
+                    vals.append(f[idx + (i, j)])
+        if len(rows) >= 6:
+            coef, *_ = np.linalg.lstsq(np.array(rows), np.array(vals), rcond=None)
+            out[idx] = basis(R_m, H_m) @ coef
+    return out
+
+
+def _errors(pred: np.ndarray, table: dict, name: str) -> dict:
+    y = table[name]
+    span = float(y.max() - y.min())
+    err = np.abs(pred - y)
+    return {"max_error_of_range": float(err.max() / span),
+            "rms_error_of_range": float(np.sqrt(np.mean(err ** 2)) / span),
+            "range": span, "points": int(y.size)}
+
+
+def surrogate(models: list[str]) -> None:
+    import xarray as xr
+
+    with xr.open_dataset(_doe_file()) as ds:
+        table = sizes_table(ds.load())
+    held = np.zeros(table["t"].shape, bool)
+    for R_m, H_m in HELD_OUT:
+        held |= np.isclose(table["R_m"], R_m) & np.isclose(table["H_m"], H_m)
+    train = {k: v[~held] for k, v in table.items()}
+    sizes = sorted({(float(a), float(b)) for a, b in zip(train["R_m"], train["H_m"])})
+    checks = {f"{_label(*s)} (held out, this DOE)":
+              {k: v[np.isclose(table["R_m"], s[0]) & np.isclose(table["H_m"], s[1])]
+               for k, v in table.items()} for s in HELD_OUT}
+    checks["5 x 2 mm, the bundled MagOne data (held out)"] = magone_table()
+    result = {"command": "python bench/bench_sizes.py surrogate",
+              "training_sizes": [_label(*s) for s in sizes],
+              "training_points": int(train["t"].size),
+              "held_out_sizes": [_label(*s) for s in HELD_OUT],
+              "error_measure": "largest |error| over a size's points / that size's range "
+                               "(and the root-mean-square error / range)",
+              "models": {}}
+    X = _features(train)
+    for model_name in models:
+        entry = {}
+        for name in ("f_z", "f_r"):
+            start = time.perf_counter()
+            if model_name == "gp":
+                fitted = fit_gp(train, name)
+                predict = fitted
+            else:
+                fit = {"kriging": fit_kriging, "rbf": fit_rbf}[model_name]
+                f = fit(X, train[name], name)
+                predict = lambda tab, f=f: f(_features(tab))  # noqa: E731
+            fit_s = time.perf_counter() - start
+            entry[name] = {"fit_s": fit_s,
+                           **{label: _errors(predict(tab), tab, name)
+                              for label, tab in checks.items()}}
+            print(model_name, name, {k: round(v["max_error_of_range"], 4)
+                                     for k, v in entry[name].items() if isinstance(v, dict)},
+                  f"{fit_s:.1f} s", flush=True)
+        result["models"][model_name] = entry
+    _update("surrogate", result)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="step", required=True)
+    d = sub.add_parser("doe")
+    d.add_argument("--workers", type=int, default=1)
+    d.add_argument("--first", default="", help="sizes to solve first, e.g. 5x2,4x1")
+    sub.add_parser("status")
+    s = sub.add_parser("surrogate")
+    s.add_argument("--models", default="rbf,kriging,gp")
+    args = ap.parse_args(argv)
+    if args.step == "doe":
+        doe(args.workers, [x for x in args.first.split(",") if x])
+    elif args.step == "status":
+        status()
+    else:
+        surrogate(args.models.split(","))
+
+
+if __name__ == "__main__":
+    main()
