@@ -113,6 +113,7 @@ def _write(doc: dict, row: str, rec: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
+    global RESULTS
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", default="6151215", help="baseline commit")
     parser.add_argument("--head", default="HEAD", help="commit to compare with the baseline")
@@ -124,7 +125,6 @@ def main(argv: list[str] | None = None) -> None:
     unknown = [r for r in rows if r not in ROWS]
     if unknown:
         parser.error(f"unknown rows {unknown}; choose from {list(ROWS)}")
-    global RESULTS
     RESULTS = args.results
     old = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
     with tempfile.TemporaryDirectory(prefix="magtact-bench-speed-") as tmp:
