@@ -765,6 +765,46 @@ def timing_section(r: Results) -> list[str]:
     return out
 
 
+def speed_section(r: Results) -> list[str]:
+    if "speed" not in r.files:
+        return []
+    sp = r["speed"]
+    out = ["## Speed", "",
+           f"Source: {r.source('speed')} (`bench/bench_speed.py`). Whole processes of the "
+           f"baseline commit {sp['baseline'][:7]} and of {sp['head'][:7]}, timed in turn in one "
+           "call on the 2-core development machine, shared with other work: the load averages "
+           "below say how much. Wall time counts the waiting for a core; CPU time (user + "
+           "system) counts the work, and is the figure to compare across machines. Speed-up: "
+           "baseline median / new median.", ""]
+    rows = []
+    for rec in sp["rows"].values():
+        w, c = rec["median_wall_s"], rec["median_cpu_s"]
+        load = rec["load_average_start"][0], rec["load_average_end"][0]
+        rows.append([rec["what"], f"×{rec['speed_up_cpu']:.2f}", f"{c['baseline']:.1f}",
+                     f"{c['head']:.1f}", f"×{rec['speed_up_wall']:.2f}", f"{w['baseline']:.0f}",
+                     f"{w['head']:.0f}", str(rec.get("runs_done", rec["repeat"])),
+                     f"{load[0]:.1f}–{load[1]:.1f}", "yes" if rec["all_ok"] else "no"])
+    out += table(["what", "speed-up (CPU)", "CPU before [s]", "CPU now [s]", "speed-up (wall)",
+                  "wall before [s]", "wall now [s]", "runs (median of)", "load (1 min)",
+                  "every run exit 0"], rows)
+    if "speed_vectorised_only" in r.files:
+        v = r["speed_vectorised_only"]
+        for rec in v["rows"].values():
+            c, w = rec["median_cpu_s"], rec["median_wall_s"]
+            out += [f"The new commit also does more than the baseline (the sensor problem "
+                    "solved again at the worst corner of the tolerances, the robust verdict). "
+                    f"The baseline with the vectorised design problem alone ({v['head'][:7]}, "
+                    f"{r.source('speed_vectorised_only')}): {rec['what']} CPU "
+                    f"{c['baseline']:.1f} → {c['head']:.1f} s (×{rec['speed_up_cpu']:.2f}), "
+                    f"wall {w['baseline']:.0f} → {w['head']:.0f} s (×{rec['speed_up_wall']:.2f}), "
+                    f"{rec.get('runs_done', rec['repeat'])} run each, load "
+                    f"{rec['load_average_start'][0]:.1f}–{rec['load_average_end'][0]:.1f}."]
+        out += [""]
+    out += ["A row whose runs did not all exit 0 times a failed run: its ratio is no speed-up "
+            "(the runs' `stderr_tail` in the file says why)."]
+    return out + [""]
+
+
 def document(folder: Path) -> str:
     r = Results(folder)
     lines = ["# Verification of magtact", "",
@@ -778,7 +818,7 @@ def document(folder: Path) -> str:
              ""]
     for section in (field_section, mechanics_section, fit_section, gamma_section,
                     mesh_effect_section, frontier_section, optimise_section, geometry_section,
-                    broad_section, publication_section, timing_section):
+                    broad_section, publication_section, timing_section, speed_section):
         lines += section(r)
     return "\n".join(lines).rstrip() + "\n"
 
