@@ -158,11 +158,11 @@ MESSAGE_CASES = [
     (["study", "magone_printed"], "no preset has that name (presets: magone, "),
     (["study", "MagOne"], "no preset has that name (presets: magone, "),
     (["fit", "--out", "x", "--generations", "0"], "'--generations'"),
-    (["validate", "--mesh", "huge"], "--mesh must be one of"),
-    (["validate", "--solver", "fem"], "--solver must be 'exact' or 'fe'"),
+    (["validate", "--mesh", "huge"], "'huge' is not one of 'coarse', 'default', 'accurate', 'fine'"),
+    (["validate", "--solver", "fem"], "'fem' is not one of 'fe', 'exact'"),
     (["doe", "--workers", "-3", "--out", "x"], "'--workers'"),
     (["run", "--workers", "-1", "--out", "x"], "'--workers'"),
-    (["reproduce", "--workers", "0", "--out", "x"], "'--workers'"),
+    (["reproduce", "--workers", "-1", "--out", "x"], "'--workers'"),
     (["doe", "--scheduler", "nohost", "--out", "{tmp}"], "(--scheduler)"),
 ]
 
