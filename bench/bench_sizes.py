@@ -11,6 +11,7 @@ Steps (each writes its part of ``bench/results/sizes.json``)::
 
     nohup python bench/bench_sizes.py doe --workers 1 --first 5x2,4x1,4x2 > sizes_doe.log 2>&1 &
     python bench/bench_sizes.py status       # paths cached of the 144, their solver time
+    python bench/bench_sizes.py ship 3x2     # a finished size's data set and fit, shipped
     python bench/bench_sizes.py surrogate    # models across sizes, held-out sizes measured
 
 ``doe --first`` solves the named sizes' paths first (one sub-DOE each, through the same cache),
@@ -310,6 +311,67 @@ def blend_sizes(ds, name: str, R_m: float, H_m: float, exclude=HELD_OUT) -> np.n
     return out
 
 
+SIZE_DIR = RESULTS / "sizes"
+SHIP_DATA = ROOT / "src" / "magtact" / "doe" / "data"
+SHIP_FIT = ROOT / "src" / "magtact" / "metamodel" / "data"
+
+
+def ship(texts: list[str]) -> None:
+    """Each finished size's (t, θ, H) data set, read from the cache (a size with a path not
+    cached is refused: nothing is solved here), its ``magtact fit`` with the broad sizes'
+    settings (twice the default GP budget, up to five seeds, the field exact, 2 held-out
+    paths) and both copied into the package as ``broad_<D>x<H>``."""
+    import shutil
+    from dataclasses import replace
+
+    from magtact import study as mstudy
+    from magtact.doe import run_doe, save_dataset
+    from magtact.doe._cache import JobCache
+    from magtact.doe._jobs import plan
+    from magtact.magnetics import hall_field
+    from magtact.mechanics import simulate_path
+
+    study = mstudy.load_study(STUDY)
+    settings = replace(mstudy.magone().metamodel, b_model="exact", holdout_paths=2,
+                       generations=200, population=1000, retries=4)
+    record = json.loads(OUT.read_text()).get("ship", {}) if OUT.is_file() else {}
+    for text in texts:
+        size = _size(text)
+        sub = replace(study.at(**size), metamodel=settings,
+                      name=f"MagOne body, {text} mm magnet, H 2-10 mm")
+        _, jobs = plan(sub, simulate_path, hall_field)
+        missing = [j.label for j in jobs if JobCache(CACHE).get("path", j.key) is None]
+        if missing:
+            raise SystemExit(f"{text}: {len(missing)} path(s) not cached yet ({missing[0]} ...)")
+        ds = run_doe(sub, cache=CACHE, workers=0)
+        folder = SIZE_DIR / text
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "study.toml").write_text(sub.to_toml(), encoding="utf-8")
+        save_dataset(ds, folder / "doe.nc")
+        cmd = [sys.executable, "-m", "magtact", "fit", str(folder / "study.toml"), "--data",
+               str(folder / "doe.nc"), "--out", str(folder / "fit")]
+        start = time.perf_counter()
+        subprocess.run(cmd, check=True, cwd=ROOT)
+        wall = time.perf_counter() - start
+        data = SHIP_DATA / f"broad_{text}_doe.nc"
+        shutil.copy2(folder / "doe.nc", data)
+        fit_dir = SHIP_FIT / f"broad_{text}"
+        if fit_dir.exists():
+            shutil.rmtree(fit_dir)
+        fit_dir.mkdir(parents=True)
+        for src in sorted((folder / "fit").iterdir()):
+            if src.suffix in (".json", ".md", ".png") and not src.name.startswith("."):
+                shutil.copy2(src, fit_dir / src.name)
+        record[text] = {
+            "fit_wall_time_s": wall, "load_average": os.getloadavg(),
+            "data": str(data.relative_to(ROOT)), "fit": str(fit_dir.relative_to(ROOT)),
+            "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
+                         ["accuracy"] for k in ("f_r", "f_z")}}
+        _update("ship", record)
+        print(text, f"fit {wall:.0f} s", {k: v["test"]["max_abs_err_over_range"]
+                                          for k, v in record[text]["accuracy"].items()})
+
+
 def _errors(pred: np.ndarray, table: dict, name: str) -> dict:
     y = table[name]
     span = float(y.max() - y.min())
@@ -370,6 +432,8 @@ def main(argv=None) -> None:
     d.add_argument("--workers", type=int, default=1)
     d.add_argument("--first", default="", help="sizes to solve first, e.g. 5x2,4x1")
     sub.add_parser("status")
+    sh = sub.add_parser("ship")
+    sh.add_argument("sizes", help="finished sizes to ship, e.g. 3x2,5x2")
     s = sub.add_parser("surrogate")
     s.add_argument("--models", default="rbf,kriging,gp")
     args = ap.parse_args(argv)
@@ -377,6 +441,8 @@ def main(argv=None) -> None:
         doe(args.workers, [x for x in args.first.split(",") if x])
     elif args.step == "status":
         status()
+    elif args.step == "ship":
+        ship(args.sizes.split(","))
     else:
         surrogate(args.models.split(","))
 
