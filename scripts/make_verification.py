@@ -805,6 +805,83 @@ def speed_section(r: Results) -> list[str]:
     return out + [""]
 
 
+def robust_section(r: Results) -> list[str]:
+    if "robust" not in r.files:
+        return []
+    out = ["## Designing for every unit built", "",
+           "Sources: " + ", ".join(r.source(k) for k in ("robust", "robust_light")
+                                   if k in r.files)
+           + " (`bench/bench_robust.py`), docs/method.md §16: the sensor problem solved at the "
+           "nominal parts and at the worst corner of the parts' tolerances, each timed after a "
+           "warm-up run.", ""]
+    rows = []
+    for stem in ("robust", "robust_light"):
+        if stem not in r.files:
+            continue
+        d = r[stem]
+        for key in ("nominal", "robust"):
+            c = d[key]
+            rows.append([stem.replace("robust_light", "light specification")
+                         .replace("robust", "built-in study"), key,
+                         f"{c['saturation_F_z_N']:.3g}", f"{c['sigma_F_nominal_mN']:.3g}",
+                         f"{c['sigma_F_worst_mN']:.3g}", f"{c['wall_time_s']:.0f}"])
+        rows[-1][-1] += f" (×{d['robust_over_nominal_time']:.2f})"
+    out += table(["study", "design for", "saturates at [N] (nominal unit)",
+                  "σ_F,z nominal [mN]", "σ_F,z worst [mN]", "solve [s]"], rows)
+    if "calibrate_speed" in r.files:
+        c = r["calibrate_speed"]
+        m = c["median"]
+        out += ["", f"**`magtact calibrate` against `magtact run`** ({r.source('calibrate_speed')}, "
+                f"`bench/bench_calibrate_speed.py`, commit {c['commit'][:7]}, whole processes in "
+                f"turn, medians): run {m['run']['wall_s']:.0f} s wall / {m['run']['cpu_s']:.0f} s "
+                f"CPU, calibrate {m['calibrate']['wall_s']:.0f} s / {m['calibrate']['cpu_s']:.0f} "
+                f"s: ratio {c['ratio_of_medians']['wall_s']:.2f} (wall), "
+                f"{c['ratio_of_medians']['cpu_s']:.2f} (CPU); both pay the same design solve."]
+    return out + [""]
+
+
+def sizes_section(r: Results) -> list[str]:
+    if "sizes" not in r.files:
+        return []
+    d = r["sizes"]
+    out = ["## The magnet-size design space", "",
+           f"Source: {r.source('sizes')} (`bench/bench_sizes.py`, study `{d['study']}`): the "
+           "MagOne body over H 2–10 mm (4 levels) with magnets of diameter 3, 4, 5, 6 mm and "
+           "height 1, 2, 3 mm, 3 θ levels: 144 structural paths through the job cache it shares "
+           "with the broad study (`bench/results/broad_cache`, committed as it grows).", ""]
+    st = d.get("status")
+    if st:
+        out += [f"**Progress.** {st['paths_cached']} of {st['paths_total']} paths cached; their "
+                f"solver time {st['path_job_wall_time_s_sum'] / 3600:.1f} h in all, "
+                f"{st['path_job_wall_time_s_mean']:.0f} s a path on average (one worker, the "
+                "machine shared with other work). Per size (diameter × height): "
+                + ", ".join(f"{k} {v}" for k, v in st["per_size"].items()) + ".", ""]
+    runs = d.get("doe_runs", [])
+    if runs:
+        out += ["**Resumption.** The DOE was killed twice while a path was being solved and "
+                "started again (to solve the sizes the checks need first); the runs recorded "
+                "since, per size, with the paths they found finished in the cache and the paths "
+                "they solved:", ""]
+        rows = [[run["started"], k, str(v["paths_cached"]), str(v["paths_computed"]),
+                 str(v["paths_failed"]), f"{v['wall_time_s']:.0f}"]
+                for run in runs for k, v in run["sizes"].items()]
+        out += table(["run started", "size", "paths found cached", "paths solved",
+                      "paths failed", "wall [s]"], rows)
+    ship = d.get("ship", {})
+    if ship:
+        rows = [[k, f"{pct(v['accuracy']['f_z']['test']['max_abs_err_over_range'], 2)}",
+                 f"{pct(v['accuracy']['f_r']['test']['max_abs_err_over_range'], 2)}",
+                 f"{v['fit_wall_time_s']:.0f}", f"`{v['data']}`"] for k, v in ship.items()]
+        out += ["**Shipped sizes** (`python bench/bench_sizes.py ship SIZE`: the size's data set "
+                "from the cache and its own (t, θ, H) fit, held-out paths):", ""]
+        out += table(["size [mm]", "f_z held-out max error / range",
+                      "f_r held-out max error / range", "fit [s]", "data set"], rows)
+    out += ["The surrogate across sizes (`bench_sizes.py surrogate`: kriging, radial basis and "
+            "the GP fit over (t, θ, H, R_m, H_m), measured on held-out sizes and on the bundled "
+            "MagOne data) waits for the DOE's interior sizes."]
+    return out + [""]
+
+
 def document(folder: Path) -> str:
     r = Results(folder)
     lines = ["# Verification of magtact", "",
@@ -818,7 +895,9 @@ def document(folder: Path) -> str:
              ""]
     for section in (field_section, mechanics_section, fit_section, gamma_section,
                     mesh_effect_section, frontier_section, optimise_section, geometry_section,
-                    broad_section, publication_section, timing_section, speed_section):
+                    broad_section, sizes_section, robust_section, publication_section,
+                    timing_section,
+                    speed_section):
         lines += section(r)
     return "\n".join(lines).rstrip() + "\n"
 
