@@ -66,6 +66,7 @@ def magone(tmp_path_factory):
     return path, magtact.design(path, models=prefitted_dir())
 
 
+@pytest.mark.long  # over a minute: the sensor problem solved again with M_z as a variable
 def test_design_with_the_magnetisation_as_a_design_variable(tmp_path, magone):
     path, hg = magone
     s = load_study(path)
