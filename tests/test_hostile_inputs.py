@@ -66,7 +66,7 @@ def test_seeds_that_are_not_a_seed_study_are_refused(tmp_path, refused):
          "spread.jacobian.acc_f_r.max must be a relative error"),
         ('{"spread": {"jacobian": [1, 2]}}', "spread.jacobian must be a table"),
         ('{"spread": {"jacobian": {"acc_f_z": {"max": 0.1, "n": -3}}}}', "count of seeds"),
-        ("[" * 100_000, "is not JSON"),
+        ("[" * 100_000, "nests arrays or objects more than 64 deep"),
         ('{"spread": 3}', "not a seed study"),
     ]:
         path.write_text(text, encoding="utf-8")
@@ -250,6 +250,7 @@ def test_calibrate_fit_names_are_checked_with_presses(tmp_path, refused):
 
 
 def test_noise_option_has_one_form_and_says_what_it_replaces(capsys):
+    from magtact.budget import noise_given
     from magtact.cli._budget import noise_override, parse_noise
     from magtact.study import hall_chip
 
@@ -257,11 +258,17 @@ def test_noise_option_has_one_form_and_says_what_it_replaces(capsys):
     assert parse_noise(" 1.5 ,2.5") == pytest.approx((1.5e-6, 2.5e-6))
     chip = hall_chip(load_study(None))
     assert chip.noise is not None or chip.picked
-    replaced, said = noise_override(chip, (3e-6, 4e-6))
+    # the API replaces the chip's figure and says so (the budget's noise_source) ...
+    replaced, said = noise_given(chip, (3e-6, 4e-6))
     assert replaced.noise == pytest.approx((3e-6, 4e-6))
+    assert replaced.name == chip.name and replaced.noise != chip.noise
     assert "in place of the chip's own figure" in said and chip.name in said
-    assert "--noise-uT 3, 4 µT" in " ".join(capsys.readouterr().err.split())
-    assert noise_override(chip, None) == (chip, None)
+    # ... and the commands say on stderr what --noise-uT replaces
+    noise_override((3e-6, 4e-6))
+    captured = capsys.readouterr()
+    err = " ".join(captured.err.split())
+    assert "--noise-uT 3, 4 µT" in err and "in place of the chip's own figure" in err
+    assert "--noise-uT" not in captured.out
 
 
 # ---- 4. pairs no sensor has, open quotes, numbers as text --------------------------------------

@@ -429,7 +429,7 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
                         ftol=1e-12, gtol=1e-12, max_nfev=200, tr_solver="lsmr")
     theta, w = prob.unpack(sol.x)
     fit_rms = float(np.sqrt(np.mean(sol.fun ** 2)))
-    _check_scales(theta, free, n)
+    # residuals first: a fit that explains nothing has no meaningful scale to check
     if not fit_rms <= MAX_RMS_RESIDUAL:
         B, F = _model(exact, theta, w)
         rb = from_si(float(np.sqrt(np.mean((B - presses.B) ** 2))), "uT")
@@ -439,7 +439,9 @@ def calibrate_unit(smap: SensorMap, presses: Presses, fit=DEFAULT_FIT,
             f"residuals of {fit_rms:.3g} times their noise (RMS {rb:.3g} µT against sigma_B "
             f"{from_si(presses.sigma_B, 'uT'):.3g} µT, {rf:.3g} mN against sigma_F "
             f"{from_si(presses.sigma_F, 'mN'):.3g} mN; at most {MAX_RMS_RESIDUAL:g} times). "
-            "Check the columns' units (T, N), the design (H, G) and the noise metadata")
+            "Check the columns' units (T, N), their sign, the design (H, G) and the noise "
+            "metadata")
+    _check_scales(theta, free, n)
     s = _std(*prob.blocks(sol.x)) * _SCALE[free]
     names = [p for p, f in zip(PARAMETERS, free, strict=True) if f]
     std = dict(zip(names, s.tolist(), strict=True))
