@@ -29,6 +29,10 @@ from ._symbols import affine_in_H, feature_jacobian, features, q_hessian
 
 #: Finite-difference step in the Hall position [m].
 STEP = 2e-5
+#: Distance from the axis, relative to the magnet-point scale, below which B_ρ/ρ is taken as
+#: its limit −½ ∂B_z/∂z: the quotient's rounding error (~ε L/ρ) and the limit's truncation
+#: error (~(ρ/L)²) are equal near 2e-6, both ~1e-11 relative.
+AXIS_BAND = 2e-6
 _OFFSETS = np.arange(-3, 4)
 
 
@@ -199,12 +203,16 @@ class ExactField:
         (:func:`magtact.magnetics.cylinder_field_dz`) at each point; with ρ = |X| the
         derivatives along ρ follow from the field being curl- and divergence-free,
         ∂B_z/∂ρ = ∂B_ρ/∂z and ∂B_ρ/∂ρ = −B_ρ/ρ − ∂B_z/∂z (on the axis, where B_ρ/ρ → ∂B_ρ/∂ρ,
-        ∂B_ρ/∂ρ = −½ ∂B_z/∂z)."""
+        ∂B_ρ/∂ρ = −½ ∂B_z/∂z; within ``AXIS_BAND`` of it too)."""
         rho = np.abs(X)
         b_rho, b_z, d_rho, d_z = _jet_components(rho, Z, *magnet)
         sign = np.sign(X)
+        # B_ρ/ρ = −½ ∂B_z/∂z + O(ρ²/L²); the quotient itself loses ~ε L/ρ of its precision
+        # (B_ρ is computed to ~ε of the field), so close to the axis the limit is the more
+        # accurate: below ρ = AXIS_BAND · L both errors are under ~1e-11 (L = √(R_m² + Z²))
+        near = rho <= AXIS_BAND * np.hypot(magnet[0], Z)
         with np.errstate(invalid="ignore", divide="ignore"):
-            over = np.where(rho > 0, b_rho / np.where(rho > 0, rho, 1.0), -0.5 * d_z)
+            over = np.where(near, -0.5 * d_z, b_rho / np.where(near, 1.0, rho))
         if self.name == "B_r":  # B_r = sign(X) B_ρ(|X|): ∂B_r/∂X = ∂B_ρ/∂ρ
             return {(0, 0): sign * b_rho, (1, 0): -over - d_z, (0, 1): sign * d_rho}
         return {(0, 0): b_z, (1, 0): sign * d_rho, (0, 1): d_z}
