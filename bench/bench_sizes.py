@@ -390,7 +390,7 @@ def surrogate(models: list[str]) -> None:
     for R_m, H_m in HELD_OUT:
         held |= np.isclose(table["R_m"], R_m) & np.isclose(table["H_m"], H_m)
     train = {k: v[~held] for k, v in table.items()}
-    sizes = sorted({(float(a), float(b)) for a, b in zip(train["R_m"], train["H_m"])})
+    sizes = sorted({(float(a), float(b)) for a, b in zip(train["R_m"], train["H_m"], strict=True)})
     checks = {f"{_label(*s)} (held out, this DOE)":
               {k: v[np.isclose(table["R_m"], s[0]) & np.isclose(table["H_m"], s[1])]
                for k, v in table.items()} for s in HELD_OUT}

@@ -831,7 +831,8 @@ def robust_section(r: Results) -> list[str]:
     if "calibrate_speed" in r.files:
         c = r["calibrate_speed"]
         m = c["median"]
-        out += ["", f"**`magtact calibrate` against `magtact run`** ({r.source('calibrate_speed')}, "
+        out += ["", "**`magtact calibrate` against `magtact run`** "
+                f"({r.source('calibrate_speed')}, "
                 f"`bench/bench_calibrate_speed.py`, commit {c['commit'][:7]}, whole processes in "
                 f"turn, medians): run {m['run']['wall_s']:.0f} s wall / {m['run']['cpu_s']:.0f} s "
                 f"CPU, calibrate {m['calibrate']['wall_s']:.0f} s / {m['calibrate']['cpu_s']:.0f} "

@@ -88,7 +88,8 @@ def check_run(tmp_path, study_file, may_warn=()):
     assert len(re.findall(r"<img ", (out / "report.html").read_text())) == len(srcs)
 
 
-@pytest.mark.long  # an end-to-end run of minutes: the default suite's one run is the browser tests' built run
+# an end-to-end run of minutes: the default suite's one run is the browser tests' built run
+@pytest.mark.long
 def test_run_end_to_end_on_bundled_data(tmp_path):
     from magtact.doe import bundled_path
 
@@ -112,7 +113,8 @@ def test_run_end_to_end_on_bundled_data(tmp_path):
                                                          "standoff_mm")}
 
 
-@pytest.mark.long  # an end-to-end run of minutes: the default suite's one run is the browser tests' built run
+# an end-to-end run of minutes: the default suite's one run is the browser tests' built run
+@pytest.mark.long
 def test_run_end_to_end_with_stand_in_doe(tmp_path, monkeypatch):
     """Every stage after the DOE on an analytic stand-in data set (the chain, not the numbers):
     its constraints are set so that the stand-in's forces can meet them."""

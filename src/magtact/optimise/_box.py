@@ -302,6 +302,20 @@ def grid_local_optima(V: np.ndarray, k: int) -> np.ndarray:
     return np.where(ok | (np.arange(order.shape[1]) == 0), order, best[:, None])
 
 
+def box_grid(fun: BatchFun, lo, hi, grid: tuple[int, int], sign: float
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A uniform ``grid`` of points (bounds included) on each of n boxes [lo, hi] and
+    ``sign · fun`` there (inf where not finite): T, TH and values, each of shape (n, points)."""
+    rows = np.arange(lo.shape[0])
+    width = hi - lo
+    s_t, s_th = np.linspace(0, 1, grid[0]), np.linspace(0, 1, grid[1])
+    S_t, S_th = (a.ravel() for a in np.meshgrid(s_t, s_th, indexing="ij"))
+    T = lo[:, :1] + width[:, :1] * S_t
+    TH = lo[:, 1:] + width[:, 1:] * S_th
+    V = sign * np.asarray(fun(rows[:, None], T, TH), float)
+    return T, TH, np.where(np.isfinite(V), V, np.inf)
+
+
 def multistart_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *,
                        maximise: bool, grid: tuple[int, int], tol: float, starts: int = 4,
                        maxiter: int = 100) -> BatchOptimum:
@@ -318,13 +332,7 @@ def multistart_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *,
     n = lo.shape[0]
     sign = -1.0 if maximise else 1.0
     rows = np.arange(n)
-    width = hi - lo
-    s_t, s_th = np.linspace(0, 1, grid[0]), np.linspace(0, 1, grid[1])
-    S_t, S_th = (a.ravel() for a in np.meshgrid(s_t, s_th, indexing="ij"))
-    T = lo[:, :1] + width[:, :1] * S_t
-    TH = lo[:, 1:] + width[:, 1:] * S_th
-    V = sign * np.asarray(fun(rows[:, None], T, TH), float)
-    V = np.where(np.isfinite(V), V, np.inf)
+    T, TH, V = box_grid(fun, lo, hi, grid, sign)
     k = grid_local_optima(V.reshape(n, grid[0], grid[1]), max(1, int(starts)))
     m = k.shape[1]
     orig = np.repeat(rows, m)
@@ -394,12 +402,7 @@ def batch_optimum(fun: BatchFun, jac: BatchFun, hess: BatchFun, lo, hi, *, maxim
         return np.where(np.isfinite(v), v, np.inf)
 
     if start is None:  # best point of a grid on each box
-        s_t, s_th = np.linspace(0, 1, grid[0]), np.linspace(0, 1, grid[1])
-        S_t, S_th = (a.ravel() for a in np.meshgrid(s_t, s_th, indexing="ij"))
-        T = lo[:, :1] + width[:, :1] * S_t
-        TH = lo[:, 1:] + width[:, 1:] * S_th
-        V = sign * np.asarray(fun(rows[:, None], T, TH), float)
-        V = np.where(np.isfinite(V), V, np.inf)
+        T, TH, V = box_grid(fun, lo, hi, grid, sign)
         k = np.argmin(V, axis=1)
         x = np.stack([T[rows, k], TH[rows, k]], axis=1)
         f = V[rows, k]
