@@ -229,6 +229,7 @@ def test_card_shows_the_seed_spread_of_a_reproduce_run_of_the_same_study(tmp_pat
     import json
 
     from magtact.publication import spread
+    from magtact.publication._run import _finite
     from magtact.report import read_card, write_card
 
     answers = [answer(models, study, H0, G0, "chosen"), answer(models, study, H0, G0, "orig")]
@@ -242,11 +243,12 @@ def test_card_shows_the_seed_spread_of_a_reproduce_run_of_the_same_study(tmp_pat
     pub = tmp_path / "publication"
     pub.mkdir()
     doc = {"study": study.name, "spread": spread(records)}
-    (pub / "publication.json").write_text(json.dumps(doc))
+    # written as Reproduction.write writes it (NaN and inf as null: the reader refuses NaN)
+    (pub / "publication.json").write_text(json.dumps(_finite(doc), allow_nan=False))
     text = {r[0]: r[1:] for r in read_card(tmp_path / "optimise")["rows"]}
     assert text["height H over 3 GP seeds (min – max)"] == ["3 – 3.2 mm", "(fixed)"]
     assert text["shear modulus G over 3 GP seeds (min – max)"][0] == "22.5 – 24 kPa"
     assert not any("seed spread of the answer" in k for k in text)
     doc["study"] = "another"  # a seed study of another study is not this answer's spread
-    (pub / "publication.json").write_text(json.dumps(doc))
+    (pub / "publication.json").write_text(json.dumps(_finite(doc), allow_nan=False))
     assert read_card(tmp_path / "optimise")["rows"][-1][0] == "seed spread of the answer"
