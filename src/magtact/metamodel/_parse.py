@@ -232,6 +232,8 @@ def _node(node: ast.AST, local: dict) -> tuple[sp.Expr, float | None]:
         if isinstance(node.op, ast.UAdd):
             return value, v
         return -value, (None if v is None else -v)
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult):
+        return _product(node, local)
     if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
         (left, lv), (right, rv) = _node(node.left, local), _node(node.right, local)
         const = lv is not None and rv is not None
@@ -253,6 +255,27 @@ def _node(node: ast.AST, local: dict) -> tuple[sp.Expr, float | None]:
         return _constant(expr, None if v is None else _float_op(_MATH[node.func.id], v))
     raise ValueError(f"model expression is not well formed: {ast.unparse(node)[:80]!r} is not "
                      "a number, symbol, function call or arithmetic")
+
+
+def _product(node: ast.BinOp, local: dict) -> tuple[sp.Expr, float | None]:
+    """A chain of products ``a * b * c`` as one ``Mul(a, b, c)``, as SymPy prints it: built
+    pairwise, ``(a * b) * c``, a number times a sum is distributed over the sum first
+    (``1.3 * (x + 1) * (y + 1)`` read back as ``(1.3 x + 1.3) * (y + 1)``), and a saved model
+    would not read back as the expression it was."""
+    chain = []
+    while isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult):
+        chain.append(node.right)
+        node = node.left
+    chain.append(node)
+    factors = [_node(n, local) for n in reversed(chain)]
+    constants = [(f, fv) for f, fv in factors if fv is not None]
+    if constants:  # SymPy multiplies the constants together wherever they stand
+        c = constants[0][1]
+        for _, fv in constants[1:]:
+            c = _float_op(lambda a, b: a * b, c, fv)
+        _constant(_checked(sp.Mul(*(f for f, _ in constants))), c)
+    v = c if len(constants) == len(factors) else None
+    return _constant(_checked(sp.Mul(*(f for f, _ in factors))), v)
 
 
 def _constant(expr: sp.Expr, value: float | None) -> tuple[sp.Expr, float | None]:
