@@ -193,10 +193,12 @@ def chosen_or_given(result, *, H=None, G=None, grade=None, standoff=None, settin
     return changed, changed != sensor
 
 
-def print_sensor_line(sensor, given: bool) -> None:
-    """The sensor a command acts on, first in its output."""
+def print_sensor_line(sensor, given: bool, to=None) -> None:
+    """The sensor a command acts on, first in its output; ``to``: the console of the
+    command's other messages (default: this module's)."""
     what = "the chosen sensor with the options given" if given else "the chosen sensor"
-    console.print(f"{what}: {escape(sensor.words())}", highlight=False)
+    (console if to is None else to).print(f"{what}: {escape(sensor.words())}",
+                                          highlight=False)
 
 
 @app.command("budget")

@@ -118,7 +118,7 @@ def calibrate_command(
             result = design(s, models=models, log=lambda m: console.print(m, highlight=False))
         sensor, given = chosen_or_given(result, H=H, G=G, grade=grade, standoff=standoff,
                                         setting=setting, silicone=silicone)
-        print_sensor_line(sensor, given)
+        print_sensor_line(sensor, given, console)  # with the command's other messages
         eps = None if model_error is None else (model_error, model_error)
         if sigma is not None:  # says what --noise-uT replaces
             noise_override(sigma)
