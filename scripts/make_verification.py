@@ -872,11 +872,13 @@ def sizes_section(r: Results) -> list[str]:
     if ship:
         rows = [[k, f"{pct(v['accuracy']['f_z']['test']['max_abs_err_over_range'], 2)}",
                  f"{pct(v['accuracy']['f_r']['test']['max_abs_err_over_range'], 2)}",
-                 f"{v['fit_wall_time_s']:.0f}", f"`{v['data']}`"] for k, v in ship.items()]
+                 f"{v['fit_wall_time_s']:.0f}",
+                 f"`{v['data']}`" if v.get("shipped", True) else f"not shipped: {v['why_not']}"]
+                for k, v in ship.items()]
         out += ["**Shipped sizes** (`python bench/bench_sizes.py ship SIZE`: the size's data set "
                 "from the cache and its own (t, θ, H) fit, held-out paths):", ""]
         out += table(["size [mm]", "f_z held-out max error / range",
-                      "f_r held-out max error / range", "fit [s]", "data set"], rows)
+                      "f_r held-out max error / range", "fit [s]", "shipped data set"], rows)
     out += ["The surrogate across sizes (`bench_sizes.py surrogate`: kriging, radial basis and "
             "the GP fit over (t, θ, H, R_m, H_m), measured on held-out sizes and on the bundled "
             "MagOne data) waits for the DOE's interior sizes."]
