@@ -231,24 +231,27 @@ def split() -> None:
                       "settings": dict(vars(fit_settings)), "sizes": record})
 
 
+def ship_size(folder: Path, name: str) -> dict:
+    """Copy one size's data set (``folder/doe.nc``) and fit (``folder/fit``: models,
+    metamodels.md, PNG figures) into the package as ``broad_<name>``; their paths and sizes."""
+    data = SHIP_DATA / f"broad_{name}_doe.nc"
+    shutil.copy2(folder / "doe.nc", data)
+    fit_dir = SHIP_FIT / f"broad_{name}"
+    if fit_dir.exists():
+        shutil.rmtree(fit_dir)
+    fit_dir.mkdir(parents=True)
+    for src in sorted((folder / "fit").iterdir()):
+        if src.suffix in (".json", ".md", ".png") and not src.name.startswith("."):
+            shutil.copy2(src, fit_dir / src.name)
+    return {"data": str(data.relative_to(ROOT)), "fit": str(fit_dir.relative_to(ROOT)),
+            "data_bytes": data.stat().st_size,
+            "fit_bytes": sum(p.stat().st_size for p in fit_dir.iterdir())}
+
+
 def ship_sizes() -> None:
     """Copy each size's data set and fit (models, metamodels.md, PNG figures) into the package."""
-    data_dir, fit_root = SHIP_DATA, SHIP_FIT
-    sizes = {}
-    for folder in sorted(p for p in SIZE_DIR.iterdir() if (p / "doe.nc").is_file()):
-        data = data_dir / f"broad_{folder.name}_doe.nc"
-        shutil.copy2(folder / "doe.nc", data)
-        fit_dir = fit_root / f"broad_{folder.name}"
-        if fit_dir.exists():
-            shutil.rmtree(fit_dir)
-        fit_dir.mkdir(parents=True)
-        for src in sorted((folder / "fit").iterdir()):
-            if src.suffix in (".json", ".md", ".png") and not src.name.startswith("."):
-                shutil.copy2(src, fit_dir / src.name)
-        sizes[folder.name] = {"data": str(data.relative_to(ROOT)),
-                              "fit": str(fit_dir.relative_to(ROOT)),
-                              "data_bytes": data.stat().st_size,
-                              "fit_bytes": sum(p.stat().st_size for p in fit_dir.iterdir())}
+    sizes = {folder.name: ship_size(folder, folder.name)
+             for folder in sorted(p for p in SIZE_DIR.iterdir() if (p / "doe.nc").is_file())}
     _update("ship", {"command": "python bench/bench_broad.py ship_sizes", "sizes": sizes})
     print(json.dumps(sizes, indent=1))
 

@@ -174,15 +174,21 @@ def doe(workers: int, first: list[str]) -> None:
 
 
 # ---- the data as points ------------------------------------------------------------------------
-def sizes_table(ds) -> dict[str, np.ndarray]:
-    """Every finite point of the sizes DOE: t, theta, H, R_m, H_m [SI] and f_r, f_z [N/Pa]."""
-    dims = ("t", "theta", "H", "R_m", "H_m")
+def _points(ds, dims: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Every grid point of ``ds`` over ``dims`` [SI] with f_r, f_z = F / G [N/Pa] (mean over
+    the G levels: the forces are exactly proportional to G)."""
     grids = np.meshgrid(*(ds[d].values.astype(float) for d in dims), indexing="ij")
     out = {d: g.ravel() for d, g in zip(dims, grids, strict=True)}
     G = ds["G"].values.astype(float)
     for k in ("r", "z"):
         F = ds[f"F_{k}"].transpose(*dims, "G").values.astype(float)
         out[f"f_{k}"] = (F / G).mean(axis=-1).ravel()
+    return out
+
+
+def sizes_table(ds) -> dict[str, np.ndarray]:
+    """Every finite point of the sizes DOE: t, theta, H, R_m, H_m [SI] and f_r, f_z [N/Pa]."""
+    out = _points(ds, ("t", "theta", "H", "R_m", "H_m"))
     keep = np.isfinite(out["f_r"]) & np.isfinite(out["f_z"])
     return {k: v[keep] for k, v in out.items()}
 
@@ -194,13 +200,7 @@ def magone_table() -> dict[str, np.ndarray]:
     from magtact.doe import bundled_path
 
     with xr.open_dataset(bundled_path()) as ds:
-        dims = ("t", "theta", "H")
-        grids = np.meshgrid(*(ds[d].values.astype(float) for d in dims), indexing="ij")
-        out = {d: g.ravel() for d, g in zip(dims, grids, strict=True)}
-        G = ds["G"].values.astype(float)
-        for k in ("r", "z"):
-            F = ds[f"F_{k}"].transpose(*dims, "G").values.astype(float)
-            out[f"f_{k}"] = (F / G).mean(axis=-1).ravel()
+        out = _points(ds, ("t", "theta", "H"))
     out["R_m"] = np.full_like(out["t"], 2.5e-3)
     out["H_m"] = np.full_like(out["t"], 2.0e-3)
     return out
@@ -312,8 +312,6 @@ def blend_sizes(ds, name: str, R_m: float, H_m: float, exclude=HELD_OUT) -> np.n
 
 
 SIZE_DIR = RESULTS / "sizes"
-SHIP_DATA = ROOT / "src" / "magtact" / "doe" / "data"
-SHIP_FIT = ROOT / "src" / "magtact" / "metamodel" / "data"
 
 
 def ship(texts: list[str]) -> None:
@@ -321,8 +319,9 @@ def ship(texts: list[str]) -> None:
     cached is refused: nothing is solved here), its ``magtact fit`` with the broad sizes'
     settings (twice the default GP budget, up to five seeds, the field exact, 2 held-out
     paths) and both copied into the package as ``broad_<D>x<H>``."""
-    import shutil
     from dataclasses import replace
+
+    from bench_broad import ship_size
 
     from magtact import study as mstudy
     from magtact.doe import run_doe, save_dataset
@@ -353,18 +352,10 @@ def ship(texts: list[str]) -> None:
         start = time.perf_counter()
         subprocess.run(cmd, check=True, cwd=ROOT)
         wall = time.perf_counter() - start
-        data = SHIP_DATA / f"broad_{text}_doe.nc"
-        shutil.copy2(folder / "doe.nc", data)
-        fit_dir = SHIP_FIT / f"broad_{text}"
-        if fit_dir.exists():
-            shutil.rmtree(fit_dir)
-        fit_dir.mkdir(parents=True)
-        for src in sorted((folder / "fit").iterdir()):
-            if src.suffix in (".json", ".md", ".png") and not src.name.startswith("."):
-                shutil.copy2(src, fit_dir / src.name)
+        shipped = ship_size(folder, text)
         record[text] = {
             "fit_wall_time_s": wall, "load_average": os.getloadavg(),
-            "data": str(data.relative_to(ROOT)), "fit": str(fit_dir.relative_to(ROOT)),
+            **shipped,
             "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
                          ["accuracy"] for k in ("f_r", "f_z")}}
         _update("ship", record)
