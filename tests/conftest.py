@@ -204,6 +204,21 @@ def synthetic_models(f_r=None) -> ModelSet:
 H_ORIGINAL, G_ORIGINAL = 3e-3, 29.4e3
 
 
+@pytest.fixture(scope="session", autouse=True)
+def answers_folder(tmp_path_factory):
+    """Solved studies kept for this test session only (shared by the workers, never the
+    user's cache): each study is solved once per session, by the first test that asks."""
+    base = tmp_path_factory.getbasetemp()
+    folder = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "answers"
+    old = os.environ.get("MAGTACT_CACHE_DIR")
+    os.environ["MAGTACT_CACHE_DIR"] = str(folder)
+    yield folder
+    if old is None:
+        os.environ.pop("MAGTACT_CACHE_DIR", None)
+    else:
+        os.environ["MAGTACT_CACHE_DIR"] = old
+
+
 @pytest.fixture(scope="session")
 def shipped_models():
     """The metamodels shipped for the bundled MagOne data set."""

@@ -22,6 +22,10 @@ sweep_n = 201
 nsga2_generations = 30
 population = 40
 ga_generations = 5
+sensor_population = 20
+sensor_generations = 10
+[tolerances]
+robust_samples = 256
 """
 
 

@@ -42,6 +42,8 @@ def test_bad_study_is_one_line_and_exit_status_2(tmp_path):
 def test_internal_error_in_the_optimiser_shows_its_traceback(tmp_path):
     """A LinAlgError raised inside the optimiser is a fault, not a user error."""
     code = textwrap.dedent("""
+        import os
+        os.environ["MAGTACT_CACHE_DIR"] = "off"  # solve, not read a kept answer
         import numpy as np
         import magtact.optimise._run as run
 

@@ -10,11 +10,12 @@ design. ``magtact run``, ``magtact optimise`` and the Python API all go through 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from . import _answers
 from ._errors import MagtactError
 from ._sensor import Sensor
 from .study import Study, checked_si, from_si, load_study
@@ -647,7 +648,7 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
         values), a chip that reads nothing but its limit.
     """
     from .designer import check_rest_field
-    from .optimise import InfeasibleError, force_constraints, optimise, optimise_geometry
+    from .optimise import force_constraints
 
     own = study.geometry()
     sensor = study.optimise.problem == "sensor" and not study.geometric_variables
@@ -658,6 +659,22 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
         chip_options(study)
     if constraints is None:
         constraints = force_constraints(models, study)
+
+    def answer() -> dict:
+        r = _solve(models, study, constraints, sensor)
+        return {f.name: getattr(r, f.name) for f in fields(Result)
+                if f.name not in ("models", "models_source", "dataset")}
+
+    kept = _answers.kept(_answers.key(models, study, constraints), answer)
+    return Result(models=models, models_source=models_source, dataset=dataset, **kept)
+
+
+def _solve(models: ModelSet, study: Study, constraints: ForceConstraints, sensor: bool
+           ) -> Result:
+    """:func:`solve`'s work (its models source and data set left for the caller)."""
+    from .optimise import InfeasibleError, optimise, optimise_geometry
+
+    models_source, dataset, own = "given", None, study.geometry()
     if sensor:
         try:
             opt = optimise(models, study, constraints)

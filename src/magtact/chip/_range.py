@@ -18,8 +18,15 @@ from ..study import HallChip, Study, StudyError, hall_chip, mm, mt
 #: Load levels and angles of the saturation scan along the paths (the scan brackets where the
 #: chip leaves its range; a bisection locates it, :func:`onset`).
 N_SCAN_T, N_SCAN_THETA = 101, 21
-#: Halvings of the bracket of :func:`onset` (t to 2^-50 of a level's width).
+#: Precision of :func:`onset`: t to 2^-50 of a level's width (or the floats' resolution).
 ONSET_ITERATIONS = 50
+
+#: |ratio − 1| below which a point of :func:`onset`'s search is the crossing (round-off of the
+#: field's evaluation).
+G_ROUNDOFF = 1e-14
+#: Paths per level of the zooming search over θ of :func:`saturation`, and the width (a
+#: fraction of θ_max) at which it stops; each level narrows the bracket (N - 1) / 2-fold.
+ZOOM_N, ZOOM_XATOL = 9, 1e-6
 
 #: Grid over each height's stable region (fractions of t_m and θ_m) on which the field is read.
 N_T, N_THETA = 41, 11
@@ -92,8 +99,9 @@ class Saturation:
 def onset(ratio, theta, t_max, n_scan: int = N_SCAN_T, iterations: int = ONSET_ITERATIONS
           ) -> np.ndarray:
     """The load t at which the chip first leaves its range on each path, by a scan of
-    ``n_scan`` levels over [0, t_max] that brackets the first crossing and a bisection of the
-    bracket (``iterations`` halvings: t to 2^-iterations of a level's width).
+    ``n_scan`` levels over [0, t_max] that brackets the first crossing and an Illinois search
+    in the bracket (:func:`_illinois`) to 2^-iterations of a level's width (or the floats'
+    resolution).
 
     Parameters
     ----------
@@ -124,12 +132,44 @@ def onset(ratio, theta, t_max, n_scan: int = N_SCAN_T, iterations: int = ONSET_I
     hi = np.take_along_axis(T, i[None], axis=0)[0]
     lo = np.take_along_axis(T, np.maximum(i - 1, 0)[None], axis=0)[0]
     todo = hit & (i > 0)
-    if todo.any():  # every path is bisected (ratio may close over per-path arrays)
-        for _ in range(iterations):
-            mid = 0.5 * (lo + hi)
-            out = (ratio(mid, theta) > 1.0) | ~todo
-            hi, lo = np.where(out, mid, hi), np.where(out, lo, mid)
+    if todo.any():  # every path at once (ratio may close over per-path arrays)
+        lo, hi = _illinois(ratio, theta, lo, hi, todo, (hi - lo) * 2.0 ** -iterations)
     return np.where(hit, np.where(todo, hi, 0.0), np.nan)
+
+
+def _illinois(ratio, theta, lo, hi, todo, xtol, max_steps: int = 200):
+    """Narrow the brackets [lo, hi] (ratio ≤ 1 at lo, > 1 at hi) of the rows ``todo`` to
+    ``xtol`` (or to the floats' resolution) by the Illinois variant of false position: the
+    secant's point where the ratio is smooth, with the retained end's excess halved when the
+    same end is kept twice, so that both ends converge; a bisection where the secant's point
+    falls outside the bracket. A point whose ratio is within :data:`G_ROUNDOFF` of 1 ends its
+    row as the crossing (returned as ``hi``)."""
+    g_lo = np.where(todo, ratio(lo, theta) - 1.0, -1.0)
+    g_hi = np.where(todo, ratio(hi, theta) - 1.0, 1.0)
+    side = np.zeros(lo.shape, int)  # the end replaced last: -1 lo, +1 hi
+    tol = np.maximum(xtol, 4.0 * np.finfo(float).eps * np.abs(hi))
+    active = todo & (hi - lo > tol)
+    for _ in range(max_steps):
+        if not active.any():
+            break
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = hi - g_hi * (hi - lo) / (g_hi - g_lo)
+        mid = 0.5 * (lo + hi)
+        x = np.where(np.isfinite(x) & (x > lo) & (x < hi), x, mid)
+        g = ratio(x, theta) - 1.0
+        over = (g > 0) & active
+        under = ~(g > 0) & active
+        # Illinois: keep the far end's excess halved when the same end moves twice
+        g_lo = np.where(over & (side == 1), 0.5 * g_lo, g_lo)
+        g_hi = np.where(under & (side == -1), 0.5 * g_hi, g_hi)
+        hi, g_hi = np.where(over, x, hi), np.where(over, g, g_hi)
+        lo, g_lo = np.where(under, x, lo), np.where(under, g, g_lo)
+        side = np.where(over, 1, np.where(under, -1, side))
+        # a point within round-off of the range's edge is the crossing
+        root = active & (np.abs(g) <= G_ROUNDOFF)
+        hi = np.where(root, x, hi)
+        active &= (hi - lo > tol) & ~root
+    return lo, hi
 
 
 def field_ratio(study: Study, H, chip: HallChip | tuple[float, float]):
@@ -151,13 +191,11 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
 
     On each of ``N_SCAN_THETA`` paths the load at which the chip leaves its range is found by
     :func:`onset` (a root of the field's ratio to the range along the path); the path of the
-    least normal force at that load is then refined between its neighbours (bounded Brent
-    search over θ). The normal force there is *the* saturation figure of the design. A range
+    least normal force at that load is then refined between its neighbours (a zooming grid
+    over θ, :data:`ZOOM_N` paths a level, to :data:`ZOOM_XATOL` of θ_max). The normal force there is *the* saturation figure of the design. A range
     below the field at rest shows as saturation at t = 0 (see :func:`check_rest_field` for
     the study-wide check).
     """
-    from scipy.optimize import minimize_scalar
-
     theta_max = study.loading.theta_max if theta_max is None else float(theta_max)
     t = np.linspace(0.0, t_max, N_SCAN_T)
     th = np.linspace(0.0, theta_max, N_SCAN_THETA)
@@ -170,20 +208,23 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
     if np.isnan(t_on).all():
         return Saturation(**out)
 
-    def F_z_at(theta):  # the normal force where the chip leaves its range on path θ
-        ts = onset(ratio, np.array([theta]), t_max)[0]
-        return np.inf if np.isnan(ts) else float(models.forces(ts, theta, H, G)[1])
+    def F_z_at(theta, t_on):  # the normal force where the chip leaves its range on paths θ
+        return np.where(np.isnan(t_on), np.inf,
+                        np.asarray(models.forces(np.nan_to_num(t_on), theta, H, G)[1], float))
 
-    F_z = np.where(np.isnan(t_on), np.inf,
-                   np.asarray(models.forces(np.nan_to_num(t_on), th, H, G)[1], float))
+    F_z = F_z_at(th, t_on)
     j = int(np.argmin(F_z))
     best_theta, best_F = float(th[j]), float(F_z[j])
-    if th.size > 1:
+    if th.size > 1:  # zoom in between the neighbours, every path of a level in one call
         lo, hi = th[max(j - 1, 0)], th[min(j + 1, th.size - 1)]
-        r = minimize_scalar(F_z_at, bounds=(lo, hi), method="bounded",
-                            options={"xatol": 1e-6 * max(theta_max, 1e-9)})
-        if np.isfinite(r.fun) and r.fun < best_F:
-            best_theta, best_F = float(r.x), float(r.fun)
+        while hi - lo > ZOOM_XATOL * max(theta_max, 1e-9):
+            cand = np.linspace(lo, hi, ZOOM_N)
+            F = F_z_at(cand, onset(ratio, cand, t_max))
+            k = int(np.argmin(F))
+            if F[k] < best_F:
+                best_theta, best_F = float(cand[k]), float(F[k])
+            step = cand[1] - cand[0]
+            lo, hi = max(lo, best_theta - step), min(hi, best_theta + step)
     ts = float(onset(ratio, np.array([best_theta]), t_max)[0])
     bx = abs(float(ExactField(study, "B_r").value(ts, best_theta, H))) / chip.range_x
     bz = abs(float(ExactField(study, "B_z").value(ts, best_theta, H))) / chip.range_z

@@ -241,6 +241,23 @@ class HeightTable:
         return HeightTable(*(getattr(self, f.name)[rows] for f in fields(self)[:-1]),
                            {k: v[rows] for k, v in self.geometry.items()})
 
+    def at(self, H) -> HeightTable:
+        """The table read at heights ``H`` within its own (rows sorted by H, no geometric
+        variables): the extrema interpolated linearly between the bracketing rows, the maxima's
+        locations those of the nearer row, converged where both rows are."""
+        H = np.atleast_1d(np.asarray(H, float))
+        i = np.clip(np.searchsorted(self.H, H), 1, self.H.size - 1)
+        w = (H - self.H[i - 1]) / (self.H[i] - self.H[i - 1])
+        near = np.where(w < 0.5, i - 1, i)
+
+        def line(a):
+            return a[i - 1] + w * (a[i] - a[i - 1])
+
+        return HeightTable(H, *(line(getattr(self, k)) for k in (
+            "t_m", "theta_m", "f_r_min", "f_z_max", "gamma_r_max", "gamma_z_max")),
+            self.loc_f_z[near], self.loc_gamma_r[near], self.loc_gamma_z[near],
+            self.converged[i - 1] & self.converged[i])
+
 
 def heights_batch(models: Responses | ModelSet, H, study: Study,
                   warm: HeightTable | None = None, coarse_start: bool = True,

@@ -353,9 +353,12 @@ class DesignProblem:
     study : Study
     constraints : ForceConstraints
     warm : HeightTable, optional
-        A dense :func:`sweep` of a study without geometric variables: each design's per-height
-        problems start from the optima at the bracketing swept heights (:func:`heights_batch`),
-        and the chip's margin, which depends on H alone there, is read off it.
+        A dense :func:`sweep` of a study without geometric variables: NSGA-II's search reads
+        each design's per-height extrema off it (:meth:`HeightTable.at`, linear between the
+        ``sweep_n`` heights: the per-height extrema depend on H alone, and the exact reduction
+        uses the same sweep), and the set it returns is evaluated exactly, each height's
+        problems started from the optima at the bracketing swept heights
+        (:func:`heights_batch`); the chip's margin is read off it.
     maxiter : int
         Newton iterations at most per per-height problem.
     """
@@ -375,6 +378,7 @@ class DesignProblem:
         self.hi = np.array([float(b[1]) for b in bounds.values()])
         self.scale = (abs(constraints.F_r_c) or 1.0, abs(constraints.F_z_c) or 1.0)
         self.chip_range = bool(study.constraints.chip_range)
+        self._search = False  # NSGA-II searching: read the sweep
         self._known: dict[float, int] = {}  # height -> its row in self._solved
         self._solved: HeightTable | None = None
         self._chip_on_sweep = (chip_margin(study, warm.H, warm.t_m, warm.theta_m)
@@ -384,6 +388,8 @@ class DesignProblem:
     def _heights(self, H: np.ndarray) -> HeightTable:
         """The per-height extrema at ``H``, warm-started from the sweep; each height is solved
         once (the extrema do not depend on G, and offspring often keep a parent's H)."""
+        if self._search:
+            return self.warm.at(H)
         new = np.unique(H[[h not in self._known for h in H.tolist()]])
         if new.size:
             tab = heights_batch(self.R, new, self.study, warm=self.warm, coarse_start=False,
@@ -460,8 +466,12 @@ class DesignProblem:
         from pymoo.optimize import minimize
 
         o = self.study.optimise
-        res = minimize(self.problem(), NSGA2(pop_size=o.population),
-                       ("n_gen", o.nsga2_generations), seed=o.seed, verbose=False)
+        self._search = self.warm is not None and not self.geometric
+        try:
+            res = minimize(self.problem(), NSGA2(pop_size=o.population),
+                           ("n_gen", o.nsga2_generations), seed=o.seed, verbose=False)
+        finally:
+            self._search = False
         opt = res.opt  # None when no feasible design was found
         feasible = np.zeros(0, bool) if opt is None else np.ravel(opt.get("CV")) <= 0
         if not feasible.any():
