@@ -42,7 +42,9 @@ def timed(args: list[str], folder: Path) -> dict:
     shutil.rmtree(folder, ignore_errors=True)
     load_before = os.getloadavg()
     cpu0, t0 = _cpu(), time.perf_counter()
-    proc = subprocess.run([*args, "--out", str(folder)], capture_output=True, text=True)
+    # each command computes its answer (not one kept by the run before it: magtact._answers)
+    proc = subprocess.run([*args, "--out", str(folder)], capture_output=True, text=True,
+                          env=dict(os.environ, MAGTACT_CACHE_DIR="off"))
     wall, cpu = time.perf_counter() - t0, _cpu() - cpu0
     return {"wall_s": wall, "cpu_s": cpu, "exit_status": proc.returncode,
             "load_average_before": list(load_before), "load_average_after": list(os.getloadavg()),

@@ -74,7 +74,8 @@ def worktree(commit: str, where: Path) -> tuple[Path, str]:
 
 def timed(src: Path, args: list[str], out: Path) -> dict:
     """One run of ``python ARGS`` with ``src`` first on the path: wall and CPU seconds."""
-    env = dict(os.environ, PYTHONPATH=str(src), MPLBACKEND="Agg")
+    # the computation is timed, not an answer kept by an earlier run (magtact._answers)
+    env = dict(os.environ, PYTHONPATH=str(src), MPLBACKEND="Agg", MAGTACT_CACHE_DIR="off")
     cmd = [sys.executable, *(a.replace("{out}", str(out)) for a in args)]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()

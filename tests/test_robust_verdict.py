@@ -125,15 +125,18 @@ def test_a_tolerance_of_zero_width_is_its_nominal_value():
 
 def test_the_chosen_sensor_is_designed_for_its_worst_corner(magone_design):
     """``[tolerances] design_for = "worst"`` (the default): the chosen sensor's worst corner
-    reads the required normal force, its robust verdict comes with the answer and its JSON,
-    and σ_F is stated nominal and worst."""
+    reads the required normal force and carries and reads the required shear on the load
+    envelope, its robust verdict comes with the answer and its JSON, and σ_F is stated
+    nominal and worst."""
     from magtact.designer import answer_json
 
     a = magone_design.chosen
     assert magone_design.study.tolerances.design_for == "worst"
     r = a.robust
-    assert r["normal"].met and r["normal"].worst > a.study.requirements.F_z
-    assert r["normal"].yield_fraction == 1.0
+    req = a.study.requirements
+    assert r["normal"].met and r["normal"].worst > req.F_z
+    assert r["shear"].met and r["shear"].worst >= req.F_r * (1 - 1e-6)
+    assert r.met and r["normal"].yield_fraction == r["shear"].yield_fraction == 1.0
     doc = answer_json(a)["robust_verdict"]
     assert doc["requirements"][0]["requirement"] == "normal"
     assert doc["sigma_F_worst_N"] >= doc["sigma_F_nominal_N"] > 0

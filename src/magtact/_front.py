@@ -9,6 +9,7 @@ design. ``magtact run``, ``magtact optimise`` and the Python API all go through 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, fields
 from functools import cached_property
@@ -729,11 +730,18 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
     k = 1.0 - constraints.tolerance
     if (F_r * k, F_z * k) != (req.F_r, req.F_z):
         study = replace(study, requirements=replace(req, F_r=F_r * k, F_z=F_z * k))
-    sensor = optimise_sensor(models, study, opt.reduction.table, constraints)
+    table = opt.reduction.table
+    sensor = optimise_sensor(models, study, table, constraints, nsga2=False)
     c = sensor.choice
     chosen = _answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen")
-    sensor, chosen = _for_every_unit(models, study, opt.reduction.table, constraints, sensor,
-                                     chosen)
+    sensor, chosen, problem = _for_every_unit(models, study, table, constraints, sensor, chosen)
+    # NSGA-II's cross-check on the problem solved last, its reduction reused
+    checked = optimise_sensor(models, study, table, *problem, reduction=sensor)
+    if checked.choice != sensor.choice:
+        chosen = _robust(models, _answer(models, checked.choice.apply(study),
+                                         {"H": checked.choice.H, "G": checked.choice.G},
+                                         "chosen"))
+    sensor = checked
     c = sensor.choice
     sensor = _root_found_saturation(models, study, sensor, chosen.verdict.F_saturation)
     original = _answer(models, study, {"H": study.design.H_original,
@@ -753,48 +761,66 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     (``[tolerances] design_for = "worst"``, docs/method.md §16), and the chosen answer with
     its robust verdict.
 
-    Where the nominal choice's worst corner does not read the required normal force, the
-    problem is solved again with the chip's constraint at that corner
+    Where the nominal choice's worst corner does not read the required normal force or
+    carry the required shear, the problem is solved again with the chip's constraint at that corner
     (:func:`magtact.tolerance.worst_factors`: the forces' factor of the softest body and the
     FE bias, the reading's factor that folds the field's tolerances into one scale, both
-    calibrated on the sensor chosen before) and the force constraints for the softest body;
-    the factors are calibrated again on the new choice while its worst corner does not read
-    the force, at most :data:`WORST_CORNER_SOLVES` times. With ``[tolerances] yield_target``
+    calibrated on the sensor chosen before) and the force constraints for the softest body
+    (the shear's, where it falls short, for the worst corner's shear over the nominal one's);
+    the factors are calibrated again on the new choice while its worst corner falls short,
+    at most :data:`WORST_CORNER_SOLVES` times. NSGA-II cross-checks the problem solved last. With ``[tolerances] yield_target``
     the same for that fraction of units (:func:`magtact.tolerance.yield_factors`).
     """
     from dataclasses import replace
 
     from .chip import exact_field_models
     from .optimise import InfeasibleError, optimise_sensor
-    from .tolerance import robust_verdict, worst_factors, yield_factors
+    from .tolerance import worst_factors, yield_factors
 
-    def robust(a):
-        return replace(a, robust=robust_verdict(exact_field_models(models, a.study), a))
-
-    chosen = robust(chosen)
+    chosen = _robust(models, chosen)
+    problem = (constraints, 1.0, 1.0)
     if study.tolerances.design_for != "worst":
-        return sensor, chosen
+        return sensor, chosen, problem
     k = 1.0 - constraints.tolerance  # the required forces
     target = study.tolerances.yield_target
     for _ in range(WORST_CORNER_SOLVES):
-        if chosen.robust["normal"].met:
-            break
+        normal, shear = chosen.robust["normal"], chosen.robust["shear"]
+        if normal.met and (shear.met or shear.nominal < study.requirements.F_r):
+            break  # (a shear the nominal unit does not carry is not the tolerances' doing)
         m = exact_field_models(models, chosen.study)
         w = worst_factors(m, chosen) if target <= 0 else yield_factors(m, chosen, target)
         force = min(w.force, k)
-        at_worst = replace(constraints, F_r_c=constraints.F_r_c * k / force,
+        # the shear the worst corner carries over the nominal unit's (besides the softest
+        # body and the FE bias, the forces' factor, the body's height moves it), where the
+        # nominal unit carries the required shear and the worst corner does not
+        short = (not shear.met and math.isfinite(shear.nominal)
+                 and shear.nominal >= study.requirements.F_r > 0 and shear.worst > 0)
+        force_r = min(force, shear.worst / shear.nominal * k) if short else force
+        at_worst = replace(constraints, F_r_c=constraints.F_r_c * k / force_r,
                            F_z_c=constraints.F_z_c * k / force, tolerance=1.0 - force)
         try:
             worst = optimise_sensor(models, study, table, at_worst, field_factor=w.field,
-                                    read_factor=w.read)
+                                    read_factor=w.read, nsga2=False)
         except InfeasibleError:
             # no sensor reads the requirements at the worst corner: the nominal choice stands,
             # its robust verdict saying for which fraction of units each requirement holds
             break
-        sensor = worst
+        sensor, problem = worst, (at_worst, w.field, w.read)
         c = sensor.choice
-        chosen = robust(_answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen"))
-    return sensor, chosen
+        chosen = _robust(models, _answer(models, c.apply(study), {"H": c.H, "G": c.G},
+                                         "chosen"))
+    return sensor, chosen, problem
+
+
+def _robust(models: ModelSet, answer):
+    """``answer`` with its robust verdict (:func:`magtact.tolerance.robust_verdict`)."""
+    from dataclasses import replace
+
+    from .chip import exact_field_models
+    from .tolerance import robust_verdict
+
+    return replace(answer, robust=robust_verdict(exact_field_models(models, answer.study),
+                                                 answer))
 
 
 def _root_found_saturation(models: ModelSet, study: Study, sensor, F_chosen: float):

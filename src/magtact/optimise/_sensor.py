@@ -500,10 +500,13 @@ class SensorOptimisation:
 
 def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = None,
                     constraints: ForceConstraints | None = None, field_factor: float = 1.0,
-                    read_factor: float = 1.0) -> SensorOptimisation:
+                    read_factor: float = 1.0, *, nsga2: bool = True,
+                    reduction: SensorOptimisation | None = None) -> SensorOptimisation:
     """The sensor problem of ``study`` (see the module notes): the exact reduction and
     NSGA-II, the decision and their gap; ``field_factor`` and ``read_factor``: the chip's
-    constraint at a worst corner (:class:`SensorSpace`).
+    constraint at a worst corner (:class:`SensorSpace`). Without ``nsga2`` the reduction's
+    answer alone (NSGA-II's cross-check left for the final problem); ``reduction``: that
+    answer of this same problem, reused instead of solved again.
 
     Raises
     ------
@@ -512,8 +515,12 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
     """
     t0 = time.perf_counter()
     space = sensor_space(models, study, table, constraints, field_factor, read_factor)
-    red, combos = exact_sensor_reduction(models, study, space)
-    pareto = sensor_nsga2(models, study, space) if red.feasible else None
+    if reduction is None:
+        red, combos = exact_sensor_reduction(models, study, space)
+    else:
+        red, combos = reduction.reduction_choice, reduction.combinations
+        t0 -= reduction.wall_time
+    pareto = sensor_nsga2(models, study, space) if red.feasible and nsga2 else None
     choice, gap = red, float("nan")
     if pareto is not None:
         i = int(np.argmin(np.hypot(pareto.sigma_r, pareto.sigma_z)))
