@@ -785,23 +785,29 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     target = study.tolerances.yield_target
     for _ in range(WORST_CORNER_SOLVES):
         normal, shear = chosen.robust["normal"], chosen.robust["shear"]
-        if normal.met and (shear.met or shear.nominal < study.requirements.F_r):
-            break  # (a shear the nominal unit does not carry is not the tolerances' doing)
+        if normal.met and shear.met:
+            break
         m = exact_field_models(models, chosen.study)
         w = worst_factors(m, chosen) if target <= 0 else yield_factors(m, chosen, target)
         force = min(w.force, k)
-        # the shear the worst corner carries over the nominal unit's (besides the softest
-        # body and the FE bias, the forces' factor, the body's height moves it), where the
-        # nominal unit carries the required shear and the worst corner does not
-        short = (not shear.met and math.isfinite(shear.nominal)
-                 and shear.nominal >= study.requirements.F_r > 0 and shear.worst > 0)
-        force_r = min(force, shear.worst / shear.nominal * k) if short else force
-        at_worst = replace(constraints, F_r_c=constraints.F_r_c * k / force_r,
-                           F_z_c=constraints.F_z_c * k / force, tolerance=1.0 - force)
-        try:
-            worst = optimise_sensor(models, study, table, at_worst, field_factor=w.field,
-                                    read_factor=w.read, nsga2=False)
-        except InfeasibleError:
+        # where the worst corner falls short of the shear: the body asked for the shear over
+        # the worst corner's share of the nominal unit's (besides the softest body and the FE
+        # bias, the forces' factor, the body's height and the load envelope move it); where
+        # no sensor then meets the problem, the normal force's factors alone
+        short = (not shear.met and 0 < shear.worst < shear.nominal
+                 and math.isfinite(shear.nominal))
+        shear_factors = [min(force, shear.worst / shear.nominal * k)] if short else []
+        worst = None
+        for force_r in [*shear_factors, force]:
+            at_worst = replace(constraints, F_r_c=constraints.F_r_c * k / force_r,
+                               F_z_c=constraints.F_z_c * k / force, tolerance=1.0 - force)
+            try:
+                worst = optimise_sensor(models, study, table, at_worst, field_factor=w.field,
+                                        read_factor=w.read, nsga2=False)
+                break
+            except InfeasibleError:
+                continue
+        if worst is None:
             # no sensor reads the requirements at the worst corner: the nominal choice stands,
             # its robust verdict saying for which fraction of units each requirement holds
             break
