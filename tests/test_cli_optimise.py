@@ -26,7 +26,10 @@ sensor_population = 20
 sensor_generations = 10
 [tolerances]
 robust_samples = 256
+design_for = "nominal"
 """
+#: The publication's (H, G) problem of the same study (no sensor problem).
+SMALL_PUBLICATION = SMALL.replace("[tolerances]", 'problem = "publication"\n[tolerances]', 1)
 
 
 @pytest.fixture(scope="module")
@@ -72,7 +75,9 @@ def test_optimise_writes_design_tables_and_figures(tmp_path, model_dir, small_st
 
 def test_constraints_from_a_reference_design(tmp_path, model_dir, small_study):
     out = tmp_path / "ref"
-    result = CliRunner().invoke(app, ["optimise", str(small_study), "--models", str(model_dir),
+    study = small_study.with_name("publication.toml")
+    study.write_text(SMALL_PUBLICATION)
+    result = CliRunner().invoke(app, ["optimise", str(study), "--models", str(model_dir),
                                       "--constraints-from", "3,29.4", "--out", str(out)])
     assert result.exit_code == 0, result.output
     c = json.loads((out / "design.json").read_text())["constraints"]
