@@ -187,3 +187,16 @@ def test_gamma_from_data_needs_three_levels():
     ds = synthetic_doe(replace(STUDY, doe=replace(STUDY.doe, n_theta=2)), n_t=5)
     with pytest.raises(ValueError, match="at least 3 levels of t and of theta"):
         gamma_from_data(ds)
+
+
+def test_the_written_gamma_code_is_the_sympy_derivation():
+    """``_phi_code.py`` (scripts/make_phi.py) gives what a fresh SymPy derivation of γ, its
+    gradient and Hessian gives, at random points and at points near a singular Jacobian."""
+    from magtact.sensitivity._gamma import _phi, _phi_functions
+
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(6, 200))
+    v[2:, :5] = [[1.0], [2.0], [1.0], [2.0 + 1e-6]]  # det(∂B/∂x) near 0
+    for written, derived in zip(_phi(), _phi_functions(), strict=True):
+        a, b = (np.asarray(f(*v), float) for f in (written, derived))
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=0.0)

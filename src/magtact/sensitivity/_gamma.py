@@ -59,14 +59,12 @@ def _phi_functions():
             sp.lambdify(v, d2, "numpy", cse=True))
 
 
-_PHI = None
-
-
 def _phi():
-    global _PHI
-    if _PHI is None:
-        _PHI = _phi_functions()
-    return _PHI
+    """:func:`_phi_functions` as written out by ``scripts/make_phi.py`` (the derivation takes
+    seconds; its code is checked against a fresh one by the tests)."""
+    from ._phi_code import phi, phi_d1, phi_d2
+
+    return phi, phi_d1, phi_d2
 
 
 def _stack(nested, shape, tail):
