@@ -13,6 +13,10 @@ import os
 # tests start too).
 for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_name, "1")
+if os.environ["OPENBLAS_NUM_THREADS"] == "1":  # a plugin may have loaded NumPy's BLAS already
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=1)
 
 from dataclasses import dataclass
 from pathlib import Path

@@ -2,6 +2,7 @@
 the benchmark recorded (bench/results/optimise.json)."""
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -20,7 +21,8 @@ def test_readme_python_example(tmp_path):
     src = str(ROOT / "src")
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                          text=True, timeout=600,
-                         env={"PYTHONPATH": src, "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg"})
+                         env={"PYTHONPATH": src, "PATH": "/usr/bin:/bin", "MPLBACKEND": "Agg",
+                              "MAGTACT_CACHE_DIR": os.environ["MAGTACT_CACHE_DIR"]})
     assert out.returncode == 0, out.stderr
     # each printed object: a title line, then its indented rows
     blocks = re.split(r"\n(?=\S)", out.stdout.strip())
