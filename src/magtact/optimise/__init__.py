@@ -66,6 +66,7 @@ from ._sensor import (
 )
 from ._sensor import (
     SensorDesign,
+    SensorGapWarning,
     SensorOptimisation,
     SensorPareto,
     SensorSpace,
@@ -78,7 +79,8 @@ from ._sensor import (
 from ._setting import best_setting, sigma_objective
 
 __all__ = [
-    "WARN_GAP_SENSOR", "SensorDesign", "SensorOptimisation", "SensorPareto", "SensorSpace",
+    "WARN_GAP_SENSOR", "SensorDesign", "SensorGapWarning", "SensorOptimisation", "SensorPareto",
+    "SensorSpace",
     "evaluate_designs",
     "exact_sensor_reduction", "optimise_sensor", "sensor_nsga2", "sensor_space",
     "SettingChoice", "best_setting", "setting_for", "sigma_objective", "with_setting",

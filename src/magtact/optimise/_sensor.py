@@ -22,18 +22,18 @@ Two solvers answer it, and each checks the other:
   in how they search the heights and the discrete choices.
 
 The decision takes the least √(σ_F,r² + σ_F,z²) of each, and the lower of the two is the
-answer; NSGA-II's may not lie more than ``WARN_GAP`` above the reduction's. The standoff takes
+answer; where NSGA-II's lies more than ``WARN_GAP`` above the reduction's, a warning says so. The standoff takes
 levels ``STANDOFF_STEP`` apart (boards and spacers come in steps).
 """
 
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._errors import MagtactError
 from ..chip import ChipOption, SensorGrid, chip_options, sensor_grid
 from ..metamodel import ModelSet
 from ..parts import grade as catalogue_grade
@@ -49,6 +49,11 @@ N_H = 41
 G_STEP = 1e-9
 #: Largest relative gap between NSGA-II's and the reduction's least σ_F that counts as agreement.
 WARN_GAP = 0.05
+
+
+class SensorGapWarning(UserWarning):
+    """NSGA-II's sensor lies more than ``WARN_GAP`` above the exact reduction's: its search fell
+    short (the reduction's sensor is the answer)."""
 
 
 @dataclass(frozen=True)
@@ -508,10 +513,11 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
     answer alone (NSGA-II's cross-check left for the final problem); ``reduction``: that
     answer of this same problem, reused instead of solved again.
 
-    Raises
-    ------
-    MagtactError
-        If NSGA-II's choice lies more than ``WARN_GAP`` above the exact reduction's.
+    Warns
+    -----
+    SensorGapWarning
+        If NSGA-II's choice lies more than ``WARN_GAP`` above the exact reduction's (the
+        reduction's is kept).
     """
     t0 = time.perf_counter()
     space = sensor_space(models, study, table, constraints, field_factor, read_factor)
@@ -530,10 +536,11 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
                        pareto.option[i])
         gap = (nsga.sigma - red.sigma) / red.sigma
         if gap > WARN_GAP:
-            raise MagtactError(
+            warnings.warn(
                 f"NSGA-II's sensor (σ_F {from_si(nsga.sigma, 'mN'):.3g} mN) lies {gap:.3g} "
-                f"above the exact reduction's ({from_si(red.sigma, 'mN'):.3g} mN): raise "
-                "[optimise] population and nsga2_generations")
-        if nsga.sigma < red.sigma:
+                f"above the exact reduction's ({from_si(red.sigma, 'mN'):.3g} mN), which is "
+                "kept: raise [optimise] sensor_population and sensor_generations",
+                SensorGapWarning, stacklevel=2)
+        elif nsga.sigma < red.sigma:
             choice = nsga
     return SensorOptimisation(choice, red, pareto, gap, combos, time.perf_counter() - t0)
