@@ -309,7 +309,7 @@ def test_guard_rails_reject_and_refit(monkeypatch):
     import magtact.metamodel._fit as fitmod
 
     ds = synthetic_doe(STUDY, n_t=6)
-    real = fitmod.SymbolicRegressor.fit
+    real = SymbolicRegressor.fit
     seeds = []
 
     def fake_fit(self, X, y):
@@ -319,13 +319,13 @@ def test_guard_rails_reject_and_refit(monkeypatch):
             self.expression_ = self.expression_ / (self.symbols_[0] - 0.5)
         return self
 
-    monkeypatch.setattr(fitmod.SymbolicRegressor, "fit", fake_fit)
+    monkeypatch.setattr(SymbolicRegressor, "fit", fake_fit)
     cfg = replace(STUDY.metamodel, generations=2, population=20, retries=1, operators="rational")
     res = fit_models(ds, STUDY, settings=cfg, names=("f_z",))
     rep = res.reports["f_z"]
     assert seeds == [0, 1] and rep.seed == 1 and rep.tries == 2
     assert "seed 0: non-finite" in rep.rejected[0] or "pole" in rep.rejected[0]
-    monkeypatch.setattr(fitmod.SymbolicRegressor, "fit",
+    monkeypatch.setattr(SymbolicRegressor, "fit",
                         lambda self, X, y: (real(self, X, y), setattr(
                             self, "expression_", self.expression_ / (self.symbols_[0] - 0.5)),
                             self)[-1])
@@ -415,7 +415,7 @@ def test_fallback_transform_when_log_fits_fail_the_guard_rails(monkeypatch):
     import magtact.metamodel._fit as fitmod
 
     ds = synthetic_doe(STUDY, n_t=6)
-    real = fitmod.SymbolicRegressor.fit
+    real = SymbolicRegressor.fit
 
     def fake_fit(self, X, y):
         real(self, X, y)
@@ -423,7 +423,7 @@ def test_fallback_transform_when_log_fits_fail_the_guard_rails(monkeypatch):
             self.expression_ = self.expression_ / (self.symbols_[1] + 4.0)
         return self
 
-    monkeypatch.setattr(fitmod.SymbolicRegressor, "fit", fake_fit)
+    monkeypatch.setattr(SymbolicRegressor, "fit", fake_fit)
     monkeypatch.setitem(fitmod.TRAIN_TARGET, "B_z", 1.0)
     cfg = replace(STUDY.metamodel, generations=2, population=20, retries=1, operators="rational")
     rep = fit_models(ds, STUDY, settings=cfg, names=("B_z",)).reports["B_z"]
@@ -442,7 +442,7 @@ def test_infinite_anchor_is_rejected_and_refitted(monkeypatch):
     import magtact.metamodel._fit as fitmod
 
     ds = synthetic_doe(STUDY, n_t=6)
-    real = fitmod.SymbolicRegressor.fit
+    real = SymbolicRegressor.fit
 
     def fake_fit(self, X, y):
         real(self, X, y)
@@ -450,7 +450,7 @@ def test_infinite_anchor_is_rejected_and_refitted(monkeypatch):
             self.expression_ = self.expression_ + 1e-9 / self.symbols_[0]
         return self
 
-    monkeypatch.setattr(fitmod.SymbolicRegressor, "fit", fake_fit)
+    monkeypatch.setattr(SymbolicRegressor, "fit", fake_fit)
     monkeypatch.setitem(fitmod.TRAIN_TARGET, "B_r", 1.0)
     cfg = replace(STUDY.metamodel, generations=2, population=20, retries=1, operators="rational")
     rep = fit_models(ds, STUDY, settings=cfg, names=("B_r",)).reports["B_r"]

@@ -37,7 +37,7 @@ from ._prefitted import (
     shipped_models,
 )
 from ._quality import POOR_OVER_RANGE, POOR_R2, FitQuality, fit_quality, fit_quality_rows
-from ._regressor import OPERATOR_SETS, SymbolicRegressor
+from ._parse import OPERATOR_SETS
 from ._select import Selection, select_metamodels
 from ._symbols import H, feature_jacobian, features, p, q, q_hessian, t, theta
 
@@ -54,3 +54,12 @@ __all__ = [
     "prefitted_dir", "q", "q_hessian", "save_model", "save_models", "select_metamodels", "t",
     "theta", "write_fit_outputs",
 ]
+
+
+def __getattr__(name: str):
+    # the regressor needs scikit-learn (seconds to import): loaded when a fit asks for it
+    if name == "SymbolicRegressor":
+        from ._regressor import SymbolicRegressor
+
+        return SymbolicRegressor
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -47,7 +47,6 @@ from ..geometry import hall_from_magnet_centre, loading_path
 from ..study import Study, holdout_limit, mm, mt
 from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
-from ._regressor import SymbolicRegressor
 from ._symbols import GEOMETRY, SYMBOLS, H, affine_in_H, features, p, q
 
 #: Names of the geometric design variables besides H (data-set dimensions, model inputs).
@@ -381,6 +380,8 @@ def fit_response(name: str, table: dict, test_mask, study: Study, *, settings=No
         for k in range(cfg.retries + 1):
             seed = cfg.seed + k
             tries += 1
+            from ._regressor import SymbolicRegressor  # scikit-learn: only for a fit
+
             reg = SymbolicRegressor(
                 generations=cfg.generations, population_size=cfg.population,
                 max_length=cfg.max_length, operators=cfg.operators,

@@ -58,6 +58,12 @@ MAX_INTEGER = 2**53
 
 _BINARY = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**"}
 
+#: Operator sets (all smooth: no abs, min/max, floor, or powers with kinks).
+OPERATOR_SETS: dict[str, str] = {
+    "smooth": "add,sub,mul,div,exp,log,sqrt,tanh",
+    "rational": "add,sub,mul,div",
+}
+
 
 def parse_expression(text: str, allowed_symbols=None) -> sp.Expr:
     """Build a SymPy expression from ``text`` through a whitelist grammar.

@@ -7,13 +7,8 @@ import sympy as sp
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, check_X_y, validate_data
 
-from ._parse import format_expression, parse_expression
+from ._parse import OPERATOR_SETS, format_expression, parse_expression
 
-#: Operator sets (all smooth: no abs, min/max, floor, or powers with kinks).
-OPERATOR_SETS: dict[str, str] = {
-    "smooth": "add,sub,mul,div,exp,log,sqrt,tanh",
-    "rational": "add,sub,mul,div",
-}
 #: Operon formats constants with this many decimals; inputs and target are scaled to O(1).
 _DIGITS = 15
 
