@@ -195,6 +195,13 @@ def test_the_last_screen_of_magtact_run_holds_the_verdict_with_margins_and_the_p
             v, "\n".join(last))
     for label, value in card["parts"]:
         assert f"{label}: {round_text(value)}" in shown, (label, "\n".join(last))
+    # each requirement over the units built, under its nominal answer
+    built = card["answers"][0]["robust_verdict"]["requirements"]
+    assert built
+    for r in built:
+        line = "units built: " + round_text(r["answer"].replace(" of units", "", 1))
+        assert line in shown, (r, "\n".join(last))
+        assert shown.index(r["statement"]) < shown.index(line)
     # progress and warnings come first; the answer ends the output
     assert text.index("[7/7]") < text.index("WARNING: the fit") < text.index(card["verdict"][0][
         "statement"])

@@ -131,6 +131,9 @@ EXIT_INFEASIBLE = 3
 
 #: Rows of the card printed where it judges no requirement (the publication's problem).
 CARD_ROWS = 8
+#: Label of a requirement's answer over the units built (the robust verdict), printed under
+#: its nominal answer.
+UNITS_LABEL = "units built"
 
 
 def answer_lines(card: dict, tail: list[tuple[str, str]] | None = None
@@ -143,14 +146,24 @@ def answer_lines(card: dict, tail: list[tuple[str, str]] | None = None
     infeasible = card.get("infeasible")
     if isinstance(infeasible, dict):
         return infeasible_rows(infeasible)[1] + list(tail or [])
-    rows = requirement_rows(card.get("verdict"))
+    answers = card.get("answers") or [{}]
+    first = answers[0] if isinstance(answers[0], dict) else {}
+    robust = first.get("robust_verdict")
+    built = {r.get("requirement"): r for r in (robust.get("requirements") or [])
+             if isinstance(r, dict)} if isinstance(robust, dict) else {}
+    rows = []
+    items = [v for v in card.get("verdict") or [] if isinstance(v, dict)]
+    for v, row in zip(items, requirement_rows(items), strict=True):
+        rows.append(row)
+        unit = built.get(v.get("requirement"))
+        if isinstance(unit, dict) and unit.get("answer"):  # the same line over the units built
+            text = str(unit["answer"]).replace(" of units", "", 1)
+            rows.append((UNITS_LABEL, round_text(text)))
     parts = [p for p in card.get("parts") or [] if isinstance(p, (list, tuple)) and len(p) == 2]
     rows += [(str(k), round_text(str(v))) for k, v in parts]
     if not rows:  # no requirements judged (the publication's problem): the card's first rows
         rows = [(str(r[0]), round_text(str(r[1]))) for r in (card.get("rows") or [])[:CARD_ROWS]
                 if isinstance(r, (list, tuple)) and len(r) > 1]
-    answers = card.get("answers") or [{}]
-    first = answers[0] if isinstance(answers[0], dict) else {}
     s_r, s_z = (first.get(f"sigma_F{a}_required_loads_mN") for a in "rz")
     if isinstance(s_r, float) and isinstance(s_z, float) and s_r == s_r:
         from .._display import sig
@@ -179,6 +192,8 @@ def answer_text(card: dict, study: str, tail: list[tuple[str, str]] | None = Non
     for label, value in answer_lines(card, tail):
         if label[:1] in "✓✗?" and label[1:2] == " ":
             lines += [f"  {label}", f"      {value}"]
+        elif label == UNITS_LABEL:
+            lines.append(f"      {label}: {value}")
         else:
             lines.append(f"  {label}: {value}" if label else f"  {value}")
     return lines
