@@ -333,3 +333,21 @@ def test_the_quasi_linear_force_follows_a_finite_strain_viscoelastic_fe_path():
     gap_fe = np.max(np.abs(fe[: half + 1] - fe[half:][::-1]))
     gap_qlv = np.max(np.abs(qlv[: half + 1] - qlv[half:][::-1]))
     assert gap_qlv == pytest.approx(gap_fe, rel=0.2)
+
+
+def test_equal_steps_as_one_filter_are_the_step_by_step_recursion():
+    """On equal time steps the hereditary integrals run as one linear filter; they equal the
+    step-by-step recursion (:class:`_State`) to round-off, for one and for two force columns."""
+    from magtact.viscoelastic._prony import Prony, _State, hereditary_force
+
+    p = Prony(G_inf=10e3, G=(5e3, 2e3), tau=(0.05, 1.3))
+    t = np.linspace(0.0, 2.0, 401)
+    f = np.column_stack([np.sin(3 * t) + 0.2, t**2])
+    st = _State(p, f[0], t[0])
+    slow = np.empty_like(f)
+    slow[0] = st.force()
+    for k in range(1, len(t)):
+        slow[k] = st.to_f(t[k], f[k])
+    np.testing.assert_allclose(hereditary_force(p, t, f), slow, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(hereditary_force(p, t, f[:, 0]), slow[:, 0], rtol=1e-12,
+                               atol=1e-12)

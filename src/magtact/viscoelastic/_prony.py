@@ -193,11 +193,29 @@ def hereditary_force(prony: Prony, time, f) -> np.ndarray:
         For a time or an f that is not finite, or times that do not increase.
     """
     time, f = _history(time, "f", f, "the elastic force")
+    dt = np.diff(time)
+    if dt.size and np.all(np.abs(dt - dt[0]) <= 1e-12 * dt[0]):
+        return _uniform_hereditary_force(prony, dt[0], f)
     st = _State(prony, f[0], time[0])
     out = np.empty_like(f)
     out[0] = st.force()
     for k in range(1, len(time)):
         out[k] = st.to_f(time[k], f[k])
+    return out
+
+
+def _uniform_hereditary_force(prony: Prony, dt: float, f: np.ndarray) -> np.ndarray:
+    """:func:`hereditary_force` on equal steps ``dt``: each term's recursion
+    h_k = a h_(k−1) + b (f_k − f_(k−1)), h_0 = f_0 (:class:`_State`, a = e^(−Δ/τ),
+    b = τ (1 − a)/Δ), as one linear filter over the whole history."""
+    from scipy.signal import lfilter
+
+    out = prony.G_inf * f
+    for G, tau in zip(np.atleast_1d(prony.G), np.atleast_1d(prony.tau), strict=True):
+        a = np.exp(-dt / tau)
+        b = -tau * np.expm1(-dt / tau) / dt
+        x = np.concatenate([f[:1], b * np.diff(f, axis=0)], axis=0)
+        out = out + G * lfilter([1.0], [1.0, -a], x, axis=0)
     return out
 
 
