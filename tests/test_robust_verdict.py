@@ -137,6 +137,12 @@ def test_the_chosen_sensor_is_designed_for_its_worst_corner(magone_design):
     assert r["normal"].met and r["normal"].worst > req.F_z
     assert r["shear"].met and r["shear"].worst >= req.F_r * (1 - 1e-6)
     assert r.met and r["normal"].yield_fraction == r["shear"].yield_fraction == 1.0
+    # the card states it under the verdict: the yield over every requirement, the worst corner
+    rows = {row[0]: row[1:] for row in magone_design.card["rows"]}
+    lo, hi = r.interval
+    assert rows["units built that meet every requirement"][0] == (
+        f"{100 * r.yield_fraction:.3g} % (95 % CI {100 * lo:.3g}–{100 * hi:.3g} %); "
+        "the worst corner meets all")
     doc = answer_json(a)["robust_verdict"]
     assert doc["requirements"][0]["requirement"] == "normal"
     assert doc["sigma_F_worst_N"] >= doc["sigma_F_nominal_N"] > 0

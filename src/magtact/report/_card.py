@@ -33,6 +33,8 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
     if all(v is not None for v in verdicts):  # the verdict leads the card
         for i, r in enumerate(verdicts[0].requirements):
             rows.append([r.statement, *(_verdict_cell(v.requirements[i]) for v in verdicts)])
+        if any(getattr(a, "robust", None) is not None for a in answers):
+            row("units built that meet every requirement", _units_cell)
     row("height H", lambda a: f"{mm(a.H):.3g} mm")
     row("shear modulus G", lambda a: f"{kpa(a.G):.3g} kPa")
     if any(a.parts is not None for a in answers):
@@ -91,6 +93,20 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
 
 def _verdict_cell(r) -> str:
     return r.answer
+
+
+def _units_cell(a) -> str:
+    """The robust verdict in a cell: the yield over every requirement with its interval, and
+    the requirements the worst corner of the parts' tolerances fails (method.md §16)."""
+    rob = getattr(a, "robust", None)
+    if rob is None:
+        return "not computed"
+    lo, hi = rob.interval
+    failed = [r.key for r in rob.requirements if not r.met]
+    corner = ("the worst corner meets all" if not failed
+              else f"the worst corner fails {', '.join(failed)}")
+    return (f"{100 * rob.yield_fraction:.3g} % (95 % CI {100 * lo:.3g}–{100 * hi:.3g} %); "
+            f"{corner}")
 
 
 def parts_list(a) -> list[list[str]]:
