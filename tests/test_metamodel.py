@@ -306,7 +306,6 @@ def test_fit_with_exact_field(tmp_path):
 
 def test_guard_rails_reject_and_refit(monkeypatch):
     """A model with a pole inside the domain is rejected and refitted with the next seed."""
-    import magtact.metamodel._fit as fitmod
 
     ds = synthetic_doe(STUDY, n_t=6)
     real = SymbolicRegressor.fit

@@ -761,15 +761,15 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     (``[tolerances] design_for = "worst"``, docs/method.md §16), and the chosen answer with
     its robust verdict.
 
-    Where the nominal choice's worst corner does not read the required normal force or
-    carry the required shear, the problem is solved again with the chip's constraint at that corner
-    (:func:`magtact.tolerance.worst_factors`: the forces' factor of the softest body and the
-    FE bias, the reading's factor that folds the field's tolerances into one scale, both
-    calibrated on the sensor chosen before) and the force constraints for the softest body
-    (the shear's, where it falls short, for the worst corner's shear over the nominal one's);
-    the factors are calibrated again on the new choice while its worst corner falls short,
-    at most :data:`WORST_CORNER_SOLVES` times. NSGA-II cross-checks the problem solved last. With ``[tolerances] yield_target``
-    the same for that fraction of units (:func:`magtact.tolerance.yield_factors`).
+    Where the nominal choice's worst corner does not read the required normal force or carry the
+    required shear, the problem is solved again with the chip's constraint at that corner
+    (:func:`magtact.tolerance.worst_factors`: the forces' factor of the softest body and the FE
+    bias, the reading's factor that folds the field's tolerances into one scale, both calibrated on
+    the sensor chosen before) and the force constraints for the softest body (the shear's, where it
+    falls short, for the worst corner's shear over the nominal one's); the factors are calibrated
+    again on the new choice while its worst corner falls short, at most :data:`WORST_CORNER_SOLVES`
+    times. NSGA-II cross-checks the problem solved last. With ``[tolerances] yield_target`` the same
+    for that fraction of units (:func:`magtact.tolerance.yield_factors`).
     """
     from dataclasses import replace
 

@@ -190,11 +190,11 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
     up to the load t_max (default: the whole paths, t ∈ [0, 1], θ ∈ [0, loading.theta_max]).
 
     On each of ``N_SCAN_THETA`` paths the load at which the chip leaves its range is found by
-    :func:`onset` (a root of the field's ratio to the range along the path); the path of the
-    least normal force at that load is then refined between its neighbours (a zooming grid
-    over θ, :data:`ZOOM_N` paths a level, to :data:`ZOOM_XATOL` of θ_max). The normal force there is *the* saturation figure of the design. A range
-    below the field at rest shows as saturation at t = 0 (see :func:`check_rest_field` for
-    the study-wide check).
+    :func:`onset` (a root of the field's ratio to the range along the path); the path of the least
+    normal force at that load is then refined between its neighbours (a zooming grid over θ,
+    :data:`ZOOM_N` paths a level, to :data:`ZOOM_XATOL` of θ_max). The normal force there is *the*
+    saturation figure of the design. A range below the field at rest shows as saturation at t = 0
+    (see :func:`check_rest_field` for the study-wide check).
     """
     theta_max = study.loading.theta_max if theta_max is None else float(theta_max)
     t = np.linspace(0.0, t_max, N_SCAN_T)

@@ -27,7 +27,7 @@ from ._io import (
 )
 from ._model import RESPONSES, Metamodel, ModelSet, Response
 from ._outputs import write_fit_outputs
-from ._parse import format_expression, parse_expression
+from ._parse import OPERATOR_SETS, format_expression, parse_expression
 from ._prefitted import (
     SHIPPED,
     copy_prefitted,
@@ -37,7 +37,6 @@ from ._prefitted import (
     shipped_models,
 )
 from ._quality import POOR_OVER_RANGE, POOR_R2, FitQuality, fit_quality, fit_quality_rows
-from ._parse import OPERATOR_SETS
 from ._select import Selection, select_metamodels
 from ._symbols import H, feature_jacobian, features, p, q, q_hessian, t, theta
 

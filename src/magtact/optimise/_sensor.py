@@ -21,9 +21,9 @@ Two solvers answer it, and each checks the other:
   its least-noise feasible G (the reduction's exact step in G), so that the two solvers differ
   in how they search the heights and the discrete choices.
 
-The decision takes the least √(σ_F,r² + σ_F,z²) of each, and the lower of the two is the
-answer; where NSGA-II's lies more than ``WARN_GAP`` above the reduction's, a warning says so. The standoff takes
-levels ``STANDOFF_STEP`` apart (boards and spacers come in steps).
+The decision takes the least √(σ_F,r² + σ_F,z²) of each, and the lower of the two is the answer;
+where NSGA-II's lies more than ``WARN_GAP`` above the reduction's, a warning says so. The standoff
+takes levels ``STANDOFF_STEP`` apart (boards and spacers come in steps).
 """
 
 from __future__ import annotations
