@@ -99,7 +99,8 @@ def test_an_infeasible_specification_leads_with_the_verdict_and_what_to_relax(br
     assert first.bounding_box()["y"] < 600
     front = first.inner_text()
     assert "no design meets the requirements" in front and "✗" in front
-    assert "What to relax" in front and "requirements.F_r_N = 0.323" in front
+    relax = re.search(r"relax: (requirements\.F_r_N = [\d.]+)", stdout)
+    assert "What to relax" in front and relax and relax.group(1) in front
     # every link inside the page names a section it holds
     dead = page.evaluate("""[...document.querySelectorAll('a[href^="#"]')]
         .map(a => a.getAttribute('href').slice(1))

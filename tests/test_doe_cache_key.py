@@ -45,7 +45,8 @@ def test_model_version_and_settings_change_the_key(monkeypatch):
     relaxing = replace(study, material=replace(study.material, relaxation_g1=0.3,
                                                relaxation_tau1=2.0))
     assert _keys(relaxing) == (field, paths)
-    stiffer = replace(study, material=replace(study.material, bulk_ratio=2 * study.material.bulk_ratio))
+    stiffer = replace(study, material=replace(study.material,
+                                              bulk_ratio=2 * study.material.bulk_ratio))
     assert set(_keys(stiffer)[1]).isdisjoint(paths)
 
 

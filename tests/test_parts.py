@@ -143,6 +143,26 @@ def test_min_rate_trades_force_noise_for_speed(models, study, fast_answer):
     assert part.holds and part.figures.range_z >= 0.036  # above the field at rest
 
 
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.floats(0, 1e6) | st.just(float("nan")),
+                          st.floats(0, 1e6) | st.just(float("nan"))), min_size=1, max_size=40),
+       st.floats(0, 1e3), st.floats(0, 1e3))
+def test_the_worst_noise_over_the_undominated_points_is_the_worst_over_all(points, a, b):
+    """A non-negatively weighted sum is largest at a point no other exceeds in both columns;
+    NaN points are left out as ``nanmax`` leaves them out."""
+    from magtact.chip._setting import _maximal
+
+    P = np.array(points, float)
+    M = _maximal(P)
+    whole = P[:, 0] * a + P[:, 1] * b
+    if np.isnan(whole).all():
+        assert len(M) == 0
+        return
+    assert np.max(M[:, 0] * a + M[:, 1] * b) == np.nanmax(whole)
+    # each kept point is one of the given ones
+    assert all(any(np.array_equal(m, p) for p in P) for m in M)
+
+
 @pytest.mark.long
 def test_sigma_objective_is_the_force_noise_and_nsga2_meets_the_exact_reduction(models, study):
     from magtact.optimise import exact_reduction, force_constraints, front_gap, pareto_nsga2, sweep

@@ -102,3 +102,27 @@ def test_onset_finds_the_first_crossing_of_a_known_ratio():
         return np.where(((t > 0.2) & (t < 0.3)) | (t > 0.7), 2.0, 0.5)
 
     assert onset(bump, np.zeros(1), 1.0)[0] == pytest.approx(0.2, abs=1e-12)
+
+
+def test_the_saturation_of_another_modulus_is_the_forces_scaled_by_it(magone_design):
+    """Where the chip leaves its range depends on the load path, not on G (the forces are G
+    times the per-unit-G forces): a design of another G saturates at the same t and θ, at the
+    forces scaled by the ratio of the moduli, and a kept figure equals a fresh search."""
+    from magtact.chip import saturation
+    from magtact.chip._range import _unit_saturation
+
+    a = magone_design.chosen
+    models, _ = magone_design.of(a)
+    d, study = a.design, a.study
+    s1 = saturation(study, models, d.H, d.G, a.chip, d.t_m, d.theta_m)
+    s2 = saturation(study, models, d.H, 2.5 * d.G, a.chip, d.t_m, d.theta_m)
+    assert (s2.t, s2.theta, s2.axis) == (s1.t, s1.theta, s1.axis)
+    assert s2.F_z == pytest.approx(2.5 * s1.F_z, rel=1e-14)
+    assert s2.F_r == pytest.approx(2.5 * s1.F_r, rel=1e-14)
+    _unit_saturation.cache_clear()
+    fresh = saturation(study, models, d.H, 2.5 * d.G, a.chip, d.t_m, d.theta_m)
+    assert fresh == s2
+    # against the models' own forces at G where the chip leaves its range
+    F_r, F_z = models.forces(s2.t, s2.theta, d.H, 2.5 * d.G)
+    assert (s2.F_r, s2.F_z) == (pytest.approx(float(F_r), rel=1e-14),
+                                pytest.approx(float(F_z), rel=1e-14))

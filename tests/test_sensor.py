@@ -299,6 +299,19 @@ def test_the_reduction_is_exact_in_G_on_its_grid():
     assert value[0] <= brute * (1 + 1e-6) and value[0] >= brute * (1 - 1e-3)
     s_r, s_z = grid.sigma(G_best, [M_z], [1e-6], [2e-6], F_z)
     assert np.hypot(s_r, s_z)[0] == pytest.approx(value[0], rel=1e-9)
+    # with a shear the loads within F_z must include: the same scan, kept where they do
+    within = scan[:, None] * f_z.reshape(1, -1) <= F_z
+    shear = scan * np.where(within, f_z.reshape(1, -1), 0.0).max(axis=1)  # |f_r| = f_z here
+    sigma = np.hypot(*grid.sigma(scan, np.full(scan.size, M_z), np.full(scan.size, 1e-6),
+                                 np.full(scan.size, 2e-6), F_z))
+    noise = _Noise(grid, (1e-6, 2e-6))
+    for F_r in (0.5 * shear.max(), 0.9 * shear.max()):
+        value, G_best = noise.least(M_z, G_low, 1e6, F_z, F_r)
+        brute = sigma[shear >= F_r].min()
+        assert value[0] <= brute * (1 + 1e-6) and value[0] >= brute * (1 - 1e-3)
+        assert G_best[0] * f_z[0][f_z[0] * G_best[0] <= F_z].max() >= F_r * (1 - 1e-12)
+    value, _ = noise.least(M_z, G_low, 1e6, F_z, 1.01 * shear.max())
+    assert np.isinf(value[0])  # no G's loads include that shear
 
 
 def test_the_publication_preset_keeps_the_publications_problem():

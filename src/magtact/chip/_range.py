@@ -8,7 +8,8 @@ is used in restricts the heights, whatever the silicone.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -195,8 +196,25 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
     :data:`ZOOM_N` paths a level, to :data:`ZOOM_XATOL` of θ_max). The normal force there is *the*
     saturation figure of the design. A range below the field at rest shows as saturation at t = 0
     (see :func:`check_rest_field` for the study-wide check).
+
+    The forces are G times the models' per-unit-G forces, so where the chip leaves its range
+    does not depend on G: it is found once per (study, models, H, range, path box) and kept,
+    for a grid of designs that differ in G alone.
     """
     theta_max = study.loading.theta_max if theta_max is None else float(theta_max)
+    s = _unit_saturation(study, models, float(H), (float(chip.range_x), float(chip.range_z)),
+                         float(t_max), theta_max)
+    if s.F_z is None:
+        return s
+    G = np.asarray(G, dtype=float)
+    return replace(s, F_r=float(G * s.F_r), F_z=float(G * s.F_z))
+
+
+@functools.lru_cache(maxsize=256)
+def _unit_saturation(study: Study, models: ModelSet, H: float, chip: tuple[float, float],
+                     t_max: float, theta_max: float) -> Saturation:
+    """:func:`saturation` at G = 1 Pa against the range ``chip`` = (range_x, range_z) [T]."""
+    G = 1.0
     t = np.linspace(0.0, t_max, N_SCAN_T)
     th = np.linspace(0.0, theta_max, N_SCAN_THETA)
     T, TH = np.meshgrid(t, th, indexing="ij")
@@ -226,8 +244,8 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
             step = cand[1] - cand[0]
             lo, hi = max(lo, best_theta - step), min(hi, best_theta + step)
     ts = float(onset(ratio, np.array([best_theta]), t_max)[0])
-    bx = abs(float(ExactField(study, "B_r").value(ts, best_theta, H))) / chip.range_x
-    bz = abs(float(ExactField(study, "B_z").value(ts, best_theta, H))) / chip.range_z
+    bx = abs(float(ExactField(study, "B_r").value(ts, best_theta, H))) / chip[0]
+    bz = abs(float(ExactField(study, "B_z").value(ts, best_theta, H))) / chip[1]
     F_r, F_z_s = models.forces(ts, best_theta, H, G)
     return Saturation(**out, t=ts, theta=best_theta, axis="x" if bx > bz else "z",
                       F_r=float(F_r), F_z=float(F_z_s))
@@ -244,8 +262,6 @@ def saturation_force(study: Study, models: ModelSet, H: float, G: float, chip: H
 def _weakest(study: Study) -> Study:
     """``study`` with its sensor problem's weakest field: the lowest grade, the largest
     standoff."""
-    from dataclasses import replace
-
     from ..parts import grade
     from ..study import MU0
 

@@ -15,6 +15,7 @@ saturate at the largest load t compete, and the answer says so.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -77,17 +78,19 @@ def setting_for(models: ModelSet, study: Study, design) -> SettingChoice | None:
     Bx, Bz = float(Bx_t.max()), float(Bz_t.max())
     J = dF_dB(models, T, TH, H, G).reshape(-1, 2, 2) / design.field_scale
     A = J**2  # (points, force, field axis)
-    figs = [f for f in (setting_figures(study, s) for s in candidate_settings(study))
-            if f.rate >= study.requirements.rate
-            and np.isfinite(f.sigma_x[1]) and np.isfinite(f.sigma_z[1])]
+    figs = _fast_settings(study.hall, study.requirements.rate)
     if not figs:  # the loader refuses a rate no allowed setting reaches
         raise ValueError("no chip setting reaches the study's requirements.rate_Hz")
     sx = np.array([[f.sigma_x[0], f.sigma_x[1]] for f in figs])  # (settings, end)
     sz = np.array([[f.sigma_z[0], f.sigma_z[1]] for f in figs])
     # worst σ_F per setting, end and force: max over points of √(A_kx σx² + A_kz σz²)
-    var = (A[None, None, :, :, 0] * sx[:, :, None, None] ** 2
-           + A[None, None, :, :, 1] * sz[:, :, None, None] ** 2)
-    worst = np.sqrt(np.nanmax(var, axis=2))  # (settings, end, force)
+    worst = np.full((len(figs), 2, 2), np.nan)  # (settings, end, force)
+    for k in range(2):
+        P = _maximal(A[:, k, :])
+        if len(P):
+            var = (P[None, None, :, 0] * sx[:, :, None] ** 2
+                   + P[None, None, :, 1] * sz[:, :, None] ** 2)
+            worst[..., k] = np.sqrt(var.max(axis=2))
     score = np.hypot(worst[..., 0], worst[..., 1])  # (settings, end)
     rx = np.array([f.range_x for f in figs])
     rz = np.array([f.range_z for f in figs])
@@ -107,6 +110,26 @@ def setting_for(models: ModelSet, study: Study, design) -> SettingChoice | None:
     k = int(idx[order[0]])
     return SettingChoice(figs[k], bool(holds[k]), Bx, Bz, float(worst[k, 1, 0]),
                          float(worst[k, 1, 1]), len(figs))
+
+
+def _maximal(P: np.ndarray) -> np.ndarray:
+    """The rows of ``P`` (n, 2) that no other row exceeds in both columns, NaN rows left out:
+    a weighted sum with non-negative weights is largest at one of them, so the worst noise of
+    every setting is found over these few points instead of the whole grid."""
+    P = P[~np.isnan(P).any(axis=1)]
+    P = P[np.lexsort((-P[:, 1], -P[:, 0]))]  # x falling, then y falling
+    before = np.maximum.accumulate(np.concatenate(([-np.inf], P[:-1, 1])))
+    return P[P[:, 1] > before]
+
+
+@functools.lru_cache(maxsize=64)
+def _fast_settings(hall, rate: float) -> tuple[SettingFigures, ...]:
+    """The figures of the settings a study's ``[hall]`` allows that reach ``rate`` [Hz] and
+    have a noise figure (they depend on the ``[hall]`` section alone: kept per section, since
+    a grid of designs asks for them once per design)."""
+    study = Study(hall=hall)
+    return tuple(f for f in (setting_figures(study, s) for s in candidate_settings(study))
+                 if f.rate >= rate and np.isfinite(f.sigma_x[1]) and np.isfinite(f.sigma_z[1]))
 
 
 def with_setting(study: Study, setting: ChipSetting) -> Study:

@@ -4,9 +4,14 @@ requirement that makes the specification feasible (docs/method.md §10).
 
 With a = f_r,min(H) < 0 and b = f_z,max(H) > 0 per unit G (the sweep over the H range), a design
 (H, G) carries F_z,req normal when G b ≥ F_z,req and F_r,req shear when −G a ≥ F_r,req; both
-grow with G, so the best a height offers is at the stiffest G of the range. The best shear with
-the normal requirement met is max over the heights where G_hi b ≥ F_z,req of −G_hi a, and the
-best normal force with the shear requirement met is the same with the roles swapped. The
+grow with G, so the best a height offers is at the stiffest G of the range. The shear must also
+occur within the normal range (the verdict's reading): the largest |F_r| among the loads with
+F_z ≤ F_z,req, which over G is largest at the end of one of the pieces the sensor problem
+splits G into (:func:`magtact.optimise.most_shear_within`). The best shear with the normal
+requirement met is max over the heights where G_hi b ≥ F_z,req of the lesser of −G_hi a and
+that shear over G ∈ [F_z,req / b, G_hi], and the best normal force with the shear requirement
+met is max over the heights where −G_hi a ≥ F_r,req of G_hi b (at that force every load of the
+stable region is within the normal range, so the shear occurs). The
 requirement that binds is the one whose relaxation to that figure is the smaller relative
 change; the relaxed figure is rounded down to 3 significant figures, so that it is met.
 """
@@ -19,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..metamodel import ModelSet
-from ..optimise import ForceConstraints, InfeasibleError, sweep
+from ..optimise import ForceConstraints, InfeasibleError, most_shear_within, sweep
 from ..study import Study, from_si
 from ._verdict import Requirement, _n, footprint
 
@@ -129,7 +134,13 @@ def infeasibility(models: ModelSet, study: Study, constraints: ForceConstraints,
         i = int(np.flatnonzero(ok)[np.argmax(values[ok])])
         return float(values[i]), i
 
-    shear_with, i_r = best(shear, normal >= F_z)
+    # the shear where it occurs: among the loads within the normal force F_z (the verdict's
+    # reading), over the G that carry F_z, [F_z / f_z,max, G_hi] for the softest unit
+    with np.errstate(divide="ignore"):
+        G_normal = np.where(table.f_z_max > 0, F_z / np.asarray(table.f_z_max, float), np.inf)
+    shear_within = np.minimum(shear, most_shear_within(models, study, table, G_normal,
+                                                       k * G_hi, F_z))
+    shear_with, i_r = best(shear_within, normal >= F_z)
     normal_with, i_z = best(normal, shear >= F_r)
     shear_alone, _ = best(shear, np.ones(shear.shape, bool))
     normal_alone, _ = best(normal, np.ones(normal.shape, bool))

@@ -2,11 +2,13 @@
 (docs/method.md §10).
 
 The problem: minimise the force noise σ_F,r and σ_F,z (1 σ, worst over the loads the sensor
-must read) subject to the force constraints (the body carries the required forces stably) and
-to the chip's range (it reads every required load without leaving the range of its setting).
-The setting must reach the required sample rate. The grade and the standoff change the field
-only (exactly: B ∝ M_z, and the chip's position), not the mechanics; the setting changes the
-range and the noise.
+must read) subject to the force constraints (the body carries the required forces stably), to
+the shear where it occurs (the loads within the required normal force include the required
+shear, as the verdict reads it; where no sensor's do, the problem is solved without it and the
+verdict says no) and to the chip's range (it reads every required load without leaving the
+range of its setting). The setting must reach the required sample rate. The grade and the
+standoff change the field only (exactly: B ∝ M_z, and the chip's position), not the mechanics;
+the setting changes the range and the noise.
 
 Two solvers answer it, and each checks the other:
 
@@ -14,7 +16,9 @@ Two solvers answer it, and each checks the other:
   heights, and is exact in G: over the required loads σ_F = (G / M_z) W(F_z,req / G), with W
   the largest per-unit noise among the grid points whose normal force per unit G is at most
   F_z,req / G. W steps down only where G passes a point's F_z,req / f_z, so the least σ_F over
-  G lies at the smallest feasible G or just above one of these breakpoints;
+  G lies at the smallest feasible G, just above one of these breakpoints, or where the shear
+  among the loads, G R (R the largest |f_r| per unit G among the same points), reaches the
+  required shear;
 - **NSGA-II** over the mixed variables (H real; the standoff level, the grade and the chip
   option integers, each in the order of its effect: standoff, magnetisation, range), with
   pymoo's mixed-variable operators, minimising (σ_F,r, σ_F,z); each design it proposes takes
@@ -30,7 +34,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -62,7 +66,9 @@ class SensorSpace:
     options, the H and G bounds, the per-height table of the stable region and extrema, the
     force constraints and the required normal force F_z [N]; the chip's constraint reads the
     field times ``field_factor`` up to the normal force F_z × ``read_factor`` (a worst corner
-    of the parts' tolerances, :func:`magtact.tolerance.worst_factors`; 1: the nominal parts)."""
+    of the parts' tolerances, :func:`magtact.tolerance.worst_factors`; 1: the nominal parts).
+    ``F_r`` [N]: the shear the loads within the normal force F_z must include (the shear
+    requirement where it occurs, as the verdict reads it; 0: none asked)."""
 
     grades: tuple[str, ...]
     M_z: np.ndarray
@@ -75,6 +81,7 @@ class SensorSpace:
     F_z: float
     field_factor: float = 1.0
     read_factor: float = 1.0
+    F_r: float = 0.0
 
     def box(self, H) -> tuple[np.ndarray, ...]:
         """(t_m, θ_m, f_r,min, f_z,max) at heights H [m], interpolated in the table."""
@@ -113,8 +120,11 @@ def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = Non
     if constraints is None:
         constraints = force_constraints(models, study)
     F_z = constraints.F_z_c * (1.0 - constraints.tolerance)  # the force, not its tolerant bound
+    # the shear where it occurs: the nominal unit's, as the verdict reads it (a worst corner's
+    # problem moves the force constraints, not the requirement)
+    F_r = max(float(study.requirements.F_r), 0.0)
     return SensorSpace(grades, M_z, standoffs, tuple(chip_options(study)), d.H, d.G,
-                       table.take(order), constraints, F_z, field_factor, read_factor)
+                       table.take(order), constraints, F_z, field_factor, read_factor, F_r)
 
 
 @dataclass(frozen=True)
@@ -141,6 +151,8 @@ class SensorDesign:
     F_saturation : float
         The smallest normal force [N] on the grid at which the chip has left its range (inf:
         never in the stable region).
+    F_r_within : float
+        The largest shear [N] on the grid among the loads within the required normal force.
     """
 
     H: float
@@ -154,12 +166,11 @@ class SensorDesign:
     G_force: float
     G_range: float
     F_saturation: float
+    F_r_within: float = float("nan")
 
     def apply(self, study: Study) -> Study:
         """``study`` with this sensor's parts: the magnet's grade and M_z, the chip's standoff
         and setting."""
-        from dataclasses import replace
-
         from ..chip import with_setting
 
         s = replace(study, magnet=replace(study.magnet, grade=self.grade, M_z=self.M_z),
@@ -189,7 +200,8 @@ class SensorDesign:
                 "sigma_Fz_mN": from_si(self.sigma_z, "mN"),
                 "G_force_kPa": _finite(from_si(self.G_force, "kPa")),
                 "G_range_kPa": _finite(from_si(self.G_range, "kPa")),
-                "F_saturation_N": _finite(self.F_saturation), "feasible": self.feasible}
+                "F_saturation_N": _finite(self.F_saturation),
+                "F_r_within_N": _finite(self.F_r_within), "feasible": self.feasible}
 
 
 def _finite(x: float) -> float | None:
@@ -198,10 +210,10 @@ def _finite(x: float) -> float | None:
 
 def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, standoff,
                      grade, option) -> dict[str, np.ndarray]:
-    """σ_F,r, σ_F,z [N], G [Pa], G_force, G_range [Pa] and F_saturation [N] of designs given by
-    arrays: H [m], G [Pa], and indices of the standoff level, grade and chip option. Where G is
-    None, each design takes the G of least √(σ_r² + σ_z²) among those it may have (exact on
-    the grid; inf σ where none is feasible)."""
+    """σ_F,r, σ_F,z [N], G [Pa], G_force, G_range [Pa], F_saturation and F_r_within [N] of
+    designs given by arrays: H [m], G [Pa], and indices of the standoff level, grade and chip
+    option. Where G is None, each design takes the G of least √(σ_r² + σ_z²) among those it
+    may have (exact on the grid; inf σ where none is feasible)."""
     H = np.atleast_1d(np.asarray(H, float))
     standoff, grade, option = (np.atleast_1d(np.asarray(v, int)) for v in (standoff, grade,
                                                                             option))
@@ -215,15 +227,21 @@ def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, s
     # every design in one grid, each with its chip at its own standoff
     grid = sensor_grid(models, study, H, t_m, theta_m, space.standoffs[standoff])
     G_range = grid.G_range(M_z * space.field_factor, rx, rz, space.F_z * space.read_factor)
+    none = np.zeros(H.size, bool)  # designs with no G that meets the problem
     if free.any():  # the best G of each design
         i = np.flatnonzero(free)
         low = np.maximum(np.maximum(G_force[i], G_range[i]), space.G_bounds[0])
-        _, G[i] = _Noise(grid.take(i), (sx[i], sz[i])).least(M_z[i], low, space.G_bounds[1],
-                                                             space.F_z)
-    out = dict(zip(("sigma_r", "sigma_z"), grid.sigma(G, M_z, sx, sz, space.F_z),
-                   strict=True))
+        value, G[i] = _Noise(grid.take(i), (sx[i], sz[i])).least(
+            M_z[i], low, space.G_bounds[1], space.F_z, space.F_r)
+        none[i] = ~np.isfinite(value)
+    sigma = grid.sigma(G, M_z, sx, sz, space.F_z)
+    out = {k: np.where(none, np.inf, v) for k, v in zip(("sigma_r", "sigma_z"), sigma,
+                                                        strict=True)}
     out["G_range"] = G_range
     out["F_saturation"] = grid.F_saturation(G, M_z, rx, rz)
+    with np.errstate(invalid="ignore"):  # G may be inf where no G is feasible
+        within = G[:, None, None] * grid.f_z <= space.F_z
+        out["F_r_within"] = G * np.where(within, np.abs(grid.f_r), 0.0).max(axis=(1, 2))
     out["G"], out["G_force"] = G, G_force
     return out
 
@@ -232,7 +250,8 @@ def _design(space: SensorSpace, values: dict, H, s, g, k, i: int = 0) -> SensorD
     return SensorDesign(float(np.atleast_1d(H)[i]), float(values["G"][i]), space.grades[g],
                         float(space.M_z[g]), float(space.standoffs[s]), space.options[k],
                         *(float(values[n][i]) for n in ("sigma_r", "sigma_z", "G_force",
-                                                        "G_range", "F_saturation")))
+                                                        "G_range", "F_saturation",
+                                                        "F_r_within")))
 
 
 @dataclass(frozen=True)
@@ -245,22 +264,23 @@ class _Best:
     k: int
 
 
-class _Noise:
-    """Per height of a grid and one chip noise: the grid's points sorted by their normal force
-    per unit G, and the worst per-unit √(σ_r² + σ_z²) among the first i of them."""
+class _Within:
+    """Per height of a grid: its points sorted by their normal force per unit G, and the largest
+    per-unit |f_r| among the first i of them (the shear the loads within a normal force include).
 
-    def __init__(self, grid: SensorGrid, noise: tuple, order: np.ndarray | None = None):
+    Over G the points within the normal force F_z change only where G passes a point's
+    F_z / f_z: on the piece G ∈ (F_z / f_i, F_z / f_(i−1)] (f sorted, f_(−1) = 0) they are the
+    first i, for i = 0 … P (:meth:`pieces`)."""
+
+    def __init__(self, grid: SensorGrid, order: np.ndarray | None = None):
         n = grid.f_z.shape[0]
-        f = grid.f_z.reshape(n, -1)
         if order is None:
             order = self.order(grid)
-        self.f = np.take_along_axis(f, order, axis=1)
-        S = grid.unit_noise(*noise).reshape(n, -1, 2)
-        cm = np.maximum.accumulate(np.take_along_axis(S, order[..., None], axis=1), axis=1)
-        cm = np.concatenate([np.zeros((n, 1, 2)), cm], axis=1)  # cm[:, i]: worst of first i
-        self.W = np.hypot(cm[..., 0], cm[..., 1])  # (n, P + 1)
+        self.f = np.take_along_axis(grid.f_z.reshape(n, -1), order, axis=1)
         with np.errstate(divide="ignore"):
             self.breaks = np.where(self.f > 0, 1.0 / np.where(self.f > 0, self.f, 1.0), np.inf)
+        r = np.take_along_axis(np.abs(grid.f_r.reshape(n, -1)), order, axis=1)
+        self.R = np.concatenate([np.zeros((n, 1)), np.maximum.accumulate(r, axis=1)], axis=1)
 
     @staticmethod
     def order(grid: SensorGrid) -> np.ndarray:
@@ -269,23 +289,72 @@ class _Noise:
         n = grid.f_z.shape[0]
         return np.argsort(grid.f_z.reshape(n, -1), axis=1, kind="stable")
 
-    def least(self, M_z: float, G_low: np.ndarray, G_high: float, F_z: float
-              ) -> tuple[np.ndarray, np.ndarray]:
-        """Per height: the least √(σ_r² + σ_z²) [N] over G ∈ [G_low, G_high] and its G
-        (exact on the grid; see the module notes); inf where G_low > G_high. ``M_z`` [A/m]:
-        a scalar or one per height."""
+    def pieces(self, F_z: float) -> tuple[np.ndarray, np.ndarray]:
+        """(start, end) [Pa] of the pieces i = 0 … P of G (shape (n, P + 1)): just above
+        F_z / f_i (0 for i = P) and F_z / f_(i−1) (inf for i = 0)."""
+        n = self.f.shape[0]
+        start = np.concatenate([F_z * self.breaks * (1.0 + G_STEP), np.zeros((n, 1))], axis=1)
+        end = np.concatenate([np.full((n, 1), np.inf), F_z * self.breaks], axis=1)
+        return start, end
+
+    def most_shear(self, G_low, G_high: float, F_z: float) -> np.ndarray:
+        """Per height: the largest shear [N] the loads within the normal force F_z [N] include
+        over G ∈ [G_low, G_high] (G R_i grows with G on a piece: its largest is at the piece's
+        end); 0 where the interval is empty."""
+        start, end = self.pieces(F_z)
+        G = np.minimum(end, G_high)
+        low = np.broadcast_to(np.asarray(G_low, float), (self.f.shape[0],))[:, None]
+        ok = (G >= np.maximum(start, low)) & np.isfinite(G)
+        return np.where(ok, G * self.R, 0.0).max(axis=1)
+
+
+class _Noise(_Within):
+    """:class:`_Within` with one chip noise: the worst per-unit √(σ_r² + σ_z²) among the first
+    i points."""
+
+    def __init__(self, grid: SensorGrid, noise: tuple, order: np.ndarray | None = None):
+        if order is None:
+            order = self.order(grid)
+        super().__init__(grid, order)
+        n = self.f.shape[0]
+        S = grid.unit_noise(*noise).reshape(n, -1, 2)
+        cm = np.maximum.accumulate(np.take_along_axis(S, order[..., None], axis=1), axis=1)
+        cm = np.concatenate([np.zeros((n, 1, 2)), cm], axis=1)  # cm[:, i]: worst of first i
+        self.W = np.hypot(cm[..., 0], cm[..., 1])  # (n, P + 1)
+
+    def least(self, M_z: float, G_low: np.ndarray, G_high: float, F_z: float,
+              F_r: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Per height: the least √(σ_r² + σ_z²) [N] over the G ∈ [G_low, G_high] at which the
+        loads within the normal force F_z [N] include a shear of F_r [N], and its G (exact on
+        the grid; see the module notes); inf (and G_low) where there is none. ``M_z`` [A/m]:
+        a scalar or one per height.
+
+        On piece i σ = G W_i / M_z grows with G, and the shear G R_i reaches F_r from
+        G = F_r / R_i on: the piece's best G is the largest of its start, G_low and F_r / R_i,
+        where that is within the piece and G_high."""
         n = self.f.shape[0]
         rows = np.arange(n)
         M = np.broadcast_to(np.asarray(M_z, float), (n,))
+        G_low = np.broadcast_to(np.asarray(G_low, float), (n,))
+        start, end = self.pieces(F_z)
         with np.errstate(divide="ignore", invalid="ignore"):
-            count = (self.f <= (F_z / G_low)[:, None]).sum(axis=1)  # the region at G_low
-            low = np.where(G_low <= G_high, G_low * self.W[rows, count] / M, np.inf)
-            Gb = F_z * self.breaks * (1.0 + G_STEP)  # just above each breakpoint: the first i
-            ok = (Gb >= G_low[:, None]) & (Gb <= G_high)
-            at = np.where(ok, Gb * self.W[:, :-1] / M[:, None], np.inf)
-        j = np.argmin(at, axis=1)
-        use = at[rows, j] < low
-        return np.where(use, at[rows, j], low), np.where(use, Gb[rows, j], G_low)
+            need = np.where(self.R > 0, F_r / self.R, np.inf) if F_r > 0 else 0.0
+            G = np.maximum(np.maximum(start, G_low[:, None]), need)
+            ok = (G <= np.minimum(end, G_high)) & np.isfinite(G)
+            value = np.where(ok, G * self.W / M[:, None], np.inf)
+        j = np.argmin(value, axis=1)
+        best = value[rows, j]
+        return best, np.where(np.isfinite(best), G[rows, j], G_low)
+
+
+def most_shear_within(models: ModelSet, study: Study, table: HeightTable, G_low, G_high: float,
+                      F_z: float) -> np.ndarray:
+    """Per height of ``table``: the largest shear [N] among the loads of its stable region
+    within the normal force F_z [N], over G ∈ [G_low, G_high] [Pa] (``G_low``: one per height
+    or a scalar), on the sensor problem's grid (the shear the sensor problem asks of the
+    loads); 0 where the interval is empty."""
+    grid = sensor_grid(models, study, table.H, table.t_m, table.theta_m)
+    return _Within(grid).most_shear(G_low, G_high, F_z)
 
 
 def exact_sensor_reduction(models: ModelSet, study: Study, space: SensorSpace
@@ -295,6 +364,8 @@ def exact_sensor_reduction(models: ModelSet, study: Study, space: SensorSpace
     feasible. Returns it and the number of discrete combinations compared."""
     H = np.linspace(*space.H_bounds, N_H)
     best, fallback = _reduce_heights(models, study, space, H, np.arange(space.standoffs.size))
+    if best is None and space.F_r > 0:  # no sensor's loads include the shear: the problem
+        return exact_sensor_reduction(models, study, replace(space, F_r=0.0))  # without it
     if best is not None:  # refine the height between the grid's neighbours
         step = H[1] - H[0]
         Hf = np.clip(np.linspace(best.H - step, best.H + step, 41), *space.H_bounds)
@@ -333,7 +404,7 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
             G_range = grid.G_range(M_z * space.field_factor, o.range_x, o.range_z,
                                    space.F_z * space.read_factor)
             G_low = np.maximum(np.maximum(G_force, G_range), space.G_bounds[0])
-            value, G = noise.least(M_z, G_low, G_hi, space.F_z)
+            value, G = noise.least(M_z, G_low, G_hi, space.F_z, space.F_r)
             # per standoff level: the first height of the least value
             v = value.reshape(levels.size, n)
             i = np.argmin(v, axis=1)
@@ -414,7 +485,9 @@ def sensor_nsga2(models: ModelSet, study: Study, space: SensorSpace) -> SensorPa
                                 np.stack([r["sigma_r"], r["sigma_z"]], axis=1) * scale, 1e6)
             low = np.maximum(r["G_force"], r["G_range"])
             with np.errstate(invalid="ignore", divide="ignore"):
-                out["G"] = np.minimum(low / space.G_bounds[1] - 1.0, 1e6)[:, None]
+                g = np.minimum(low / space.G_bounds[1] - 1.0, 1e6)
+            # a design whose loads never include the shear breaks the problem too
+            out["G"] = np.where(feasible, g, np.maximum(g, 1.0))[:, None]
 
     dup = MixedVariableDuplicateElimination()
     algorithm = NSGA2(pop_size=o.sensor_population, sampling=MixedVariableSampling(),
@@ -526,6 +599,9 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
     else:
         red, combos = reduction.reduction_choice, reduction.combinations
         t0 -= reduction.wall_time
+    if space.F_r > 0 and not red.F_r_within >= space.F_r * (1.0 - 1e-9):
+        # no sensor's loads include the shear: the reduction answered the problem without it
+        space = replace(space, F_r=0.0)
     pareto = sensor_nsga2(models, study, space) if red.feasible and nsga2 else None
     choice, gap = red, float("nan")
     if pareto is not None:

@@ -69,4 +69,7 @@ def save(fig, path: str | Path, formats: tuple[str, ...] = ("png", "svg")) -> li
         target = path.with_suffix("." + fmt)
         fig.savefig(target)
         written.append(target)
+        if fig.get_layout_engine() is not None:
+            # the first file fixed the layout; the others keep it instead of solving it again
+            fig.set_layout_engine("none")
     return written
