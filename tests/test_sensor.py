@@ -28,8 +28,9 @@ def _study(**sections):
 
 
 @pytest.fixture(scope="module")
-def result():
-    return magtact.design(_study(), models=prefitted_dir())
+def result(magone_design):
+    """The built-in study's design (the session's: solved once for every test that asks)."""
+    return magone_design
 
 
 def field_magpylib(study, H, t, theta):

@@ -733,10 +733,15 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
     table = opt.reduction.table
     sensor = optimise_sensor(models, study, table, constraints, nsga2=False)
     c = sensor.choice
+    # where no sensor's loads within the normal force include the shear, the later solves ask
+    # without it at once (the verdict says no)
+    within = not c.F_r_within < study.requirements.F_r * (1.0 - 1e-9)
     chosen = _answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen")
-    sensor, chosen, problem = _for_every_unit(models, study, table, constraints, sensor, chosen)
+    sensor, chosen, problem = _for_every_unit(models, study, table, constraints, sensor, chosen,
+                                              within)
     # NSGA-II's cross-check on the problem solved last, its reduction reused
-    checked = optimise_sensor(models, study, table, *problem, reduction=sensor)
+    checked = optimise_sensor(models, study, table, *problem, reduction=sensor,
+                              shear_within=within)
     if checked.choice != sensor.choice:
         chosen = _robust(models, _answer(models, checked.choice.apply(study),
                                          {"H": checked.choice.H, "G": checked.choice.G},
@@ -756,7 +761,8 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
 WORST_CORNER_SOLVES = 2
 
 
-def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, chosen):
+def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, chosen,
+                    shear_within: bool = True):
     """The sensor problem solved for the worst corner of the chosen sensor's tolerance box
     (``[tolerances] design_for = "worst"``, docs/method.md §16), and the chosen answer with
     its robust verdict.
@@ -769,7 +775,8 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     falls short, for the worst corner's shear over the nominal one's); the factors are calibrated
     again on the new choice while its worst corner falls short, at most :data:`WORST_CORNER_SOLVES`
     times. NSGA-II cross-checks the problem solved last. With ``[tolerances] yield_target`` the same
-    for that fraction of units (:func:`magtact.tolerance.yield_factors`).
+    for that fraction of units (:func:`magtact.tolerance.yield_factors`). ``shear_within``: as
+    :func:`magtact.optimise.optimise_sensor`.
     """
     from dataclasses import replace
 
@@ -803,7 +810,8 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
                                F_z_c=constraints.F_z_c * k / force, tolerance=1.0 - force)
             try:
                 worst = optimise_sensor(models, study, table, at_worst, field_factor=w.field,
-                                        read_factor=w.read, nsga2=False)
+                                        read_factor=w.read, nsga2=False,
+                                        shear_within=shear_within)
                 break
             except InfeasibleError:
                 continue

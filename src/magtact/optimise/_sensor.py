@@ -98,10 +98,11 @@ class SensorSpace:
 
 def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = None,
                  constraints: ForceConstraints | None = None, field_factor: float = 1.0,
-                 read_factor: float = 1.0) -> SensorSpace:
+                 read_factor: float = 1.0, shear_within: bool = True) -> SensorSpace:
     """The choices of ``study``'s sensor problem (``table``: a sweep over the H range, computed
     when not given; ``constraints``: the force constraints, default the study's, whose normal
-    force is also the one the chip must read)."""
+    force is also the one the chip must read; ``shear_within``: ask the required shear among
+    the loads within the normal force, :attr:`SensorSpace.F_r`)."""
     d = study.design
     if d.grades:
         grades = tuple(d.grades)
@@ -122,7 +123,7 @@ def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = Non
     F_z = constraints.F_z_c * (1.0 - constraints.tolerance)  # the force, not its tolerant bound
     # the shear where it occurs: the nominal unit's, as the verdict reads it (a worst corner's
     # problem moves the force constraints, not the requirement)
-    F_r = max(float(study.requirements.F_r), 0.0)
+    F_r = max(float(study.requirements.F_r), 0.0) if shear_within else 0.0
     return SensorSpace(grades, M_z, standoffs, tuple(chip_options(study)), d.H, d.G,
                        table.take(order), constraints, F_z, field_factor, read_factor, F_r)
 
@@ -579,12 +580,15 @@ class SensorOptimisation:
 def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = None,
                     constraints: ForceConstraints | None = None, field_factor: float = 1.0,
                     read_factor: float = 1.0, *, nsga2: bool = True,
-                    reduction: SensorOptimisation | None = None) -> SensorOptimisation:
+                    reduction: SensorOptimisation | None = None,
+                    shear_within: bool = True) -> SensorOptimisation:
     """The sensor problem of ``study`` (see the module notes): the exact reduction and
     NSGA-II, the decision and their gap; ``field_factor`` and ``read_factor``: the chip's
     constraint at a worst corner (:class:`SensorSpace`). Without ``nsga2`` the reduction's
     answer alone (NSGA-II's cross-check left for the final problem); ``reduction``: that
-    answer of this same problem, reused instead of solved again.
+    answer of this same problem, reused instead of solved again; ``shear_within``: ask the
+    shear among the loads within the normal force (False where an earlier solve found that no
+    sensor's loads include it).
 
     Warns
     -----
@@ -593,7 +597,8 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
         reduction's is kept).
     """
     t0 = time.perf_counter()
-    space = sensor_space(models, study, table, constraints, field_factor, read_factor)
+    space = sensor_space(models, study, table, constraints, field_factor, read_factor,
+                         shear_within)
     if reduction is None:
         red, combos = exact_sensor_reduction(models, study, space)
     else:
