@@ -9,6 +9,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import magtact
 from magtact.chip import SensorGrid
@@ -343,3 +345,27 @@ def test_a_chip_without_a_noise_figure_is_refused_before_the_work(monkeypatch):
     study = magtact.load("magone", hall={"chip": "TLE493D"})
     with pytest.raises(StudyError, match=r"\[hall\.noise_x_uT\] the sensor problem needs"):
         _front.solve(magtact.models_for(study, models=prefitted_dir())[0], study)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from([3e-3, 3.5e-3, 4e-3]), st.integers(0, 2),
+                          st.integers(0, 1)), min_size=1, max_size=25),
+       st.lists(st.tuples(st.sampled_from([3e-3, 4e-3]), st.integers(0, 2), st.integers(0, 1)),
+                max_size=8))
+def test_the_hashed_duplicate_elimination_marks_what_pymoos_pairwise_one_marks(designs, others):
+    from pymoo.core.mixed import MixedVariableDuplicateElimination
+    from pymoo.core.population import Population
+
+    from magtact.optimise._sensor import same_designs
+
+    def population(rows):
+        return Population.new(X=np.array([{"H": h, "standoff": s, "grade": g}
+                                          for h, s, g in rows], dtype=object))
+
+    pop, other = population(designs), population(others)
+    for args in ((None,), (other,)):
+        if args[0] is not None and len(others) == 0:
+            continue
+        want = MixedVariableDuplicateElimination()._do(pop, *args, np.full(len(pop), False))
+        got = same_designs()._do(pop, *args, np.full(len(pop), False))
+        np.testing.assert_array_equal(got, want)

@@ -453,15 +453,35 @@ class SensorPareto:
     evaluations: int
 
 
+def same_designs():
+    """pymoo's mixed-variable duplicate elimination, by hashing each design's variables instead
+    of comparing every pair in Python: an individual is a duplicate where a later one of its
+    population, or one of ``other``, equals it in every variable (the same marks as
+    ``pymoo.core.mixed.MixedVariableDuplicateElimination``, in linear time)."""
+    from pymoo.core.duplicate import DuplicateElimination
+
+    class _SameDesigns(DuplicateElimination):
+        def _do(self, pop, other, is_duplicate):
+            keys = [tuple(sorted(x.items())) for x in pop.get("X")]
+            if other is None:
+                seen: set = set()
+                for i in range(len(keys) - 1, -1, -1):
+                    is_duplicate[i] = keys[i] in seen
+                    seen.add(keys[i])
+            else:
+                known = {tuple(sorted(x.items())) for x in other.get("X")}
+                for i, key in enumerate(keys):
+                    is_duplicate[i] = is_duplicate[i] or key in known
+            return is_duplicate
+
+    return _SameDesigns()
+
+
 def sensor_nsga2(models: ModelSet, study: Study, space: SensorSpace) -> SensorPareto | None:
     """NSGA-II over the mixed variables (see the module notes), seeded by ``optimise.seed``;
     None if it found no feasible design."""
     from pymoo.algorithms.moo.nsga2 import NSGA2
-    from pymoo.core.mixed import (
-        MixedVariableDuplicateElimination,
-        MixedVariableMating,
-        MixedVariableSampling,
-    )
+    from pymoo.core.mixed import MixedVariableMating, MixedVariableSampling
     from pymoo.core.problem import Problem
     from pymoo.core.variable import Integer, Real
     from pymoo.optimize import minimize
@@ -490,7 +510,7 @@ def sensor_nsga2(models: ModelSet, study: Study, space: SensorSpace) -> SensorPa
             # a design whose loads never include the shear breaks the problem too
             out["G"] = np.where(feasible, g, np.maximum(g, 1.0))[:, None]
 
-    dup = MixedVariableDuplicateElimination()
+    dup = same_designs()
     algorithm = NSGA2(pop_size=o.sensor_population, sampling=MixedVariableSampling(),
                       mating=MixedVariableMating(eliminate_duplicates=dup),
                       eliminate_duplicates=dup)
