@@ -279,7 +279,7 @@ def test_nsga2_meets_the_exact_reduction_and_is_seeded():
 def test_the_reduction_is_exact_in_G_on_its_grid():
     """On a grid of one height, the least σ over G from the breakpoints equals a brute-force
     scan of G; G_range is the smallest G whose required loads avoid every saturated point."""
-    from magtact.optimise._sensor import _Noise
+    from magtact.optimise._sensor import _Noise, _Within
 
     rng = np.random.default_rng(1)
     shape = (1, 6, 3)
@@ -294,7 +294,7 @@ def test_the_reduction_is_exact_in_G_on_its_grid():
     before = np.concatenate([np.zeros((1, 1, 3)), f_z[:, :-1]], axis=1)
     assert G_range == pytest.approx(1.02 * (F_z / before[sat]).max(), rel=1e-12)
     G_low = np.array([G_range])
-    value, G_best = _Noise(grid, (1e-6, 2e-6)).least(M_z, G_low, 1e6, F_z)
+    value, G_best = _Noise(_Within(grid), (1e-6, 2e-6)).least(M_z, G_low, 1e6, F_z)
     scan = np.geomspace(G_range, 1e6, 200_001)
     s_r, s_z = grid.sigma(scan, np.full(scan.size, M_z), np.full(scan.size, 1e-6),
                           np.full(scan.size, 2e-6), F_z)
@@ -307,7 +307,7 @@ def test_the_reduction_is_exact_in_G_on_its_grid():
     shear = scan * np.where(within, f_z.reshape(1, -1), 0.0).max(axis=1)  # |f_r| = f_z here
     sigma = np.hypot(*grid.sigma(scan, np.full(scan.size, M_z), np.full(scan.size, 1e-6),
                                  np.full(scan.size, 2e-6), F_z))
-    noise = _Noise(grid, (1e-6, 2e-6))
+    noise = _Noise(_Within(grid), (1e-6, 2e-6))
     for F_r in (0.5 * shear.max(), 0.9 * shear.max()):
         value, G_best = noise.least(M_z, G_low, 1e6, F_z, F_r)
         brute = sigma[shear >= F_r].min()

@@ -800,9 +800,10 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
         # where the worst corner falls short of the shear: the body asked for the shear over
         # the worst corner's share of the nominal unit's (besides the softest body and the FE
         # bias, the forces' factor, the body's height and the load envelope move it); where
-        # no sensor then meets the problem, the normal force's factors alone
+        # no sensor then meets the problem, or the nominal unit itself falls short of the
+        # shear, the normal force's factors alone
         short = (not shear.met and 0 < shear.worst < shear.nominal
-                 and math.isfinite(shear.nominal))
+                 and math.isfinite(shear.nominal) and chosen.verdict["shear"].met is True)
         shear_factors = [min(force, shear.worst / shear.nominal * k)] if short else []
         worst = None
         for force_r in [*shear_factors, force]:

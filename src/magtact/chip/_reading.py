@@ -81,19 +81,35 @@ class SensorGrid:
         """The grid of the designs ``rows`` (index array or mask)."""
         return SensorGrid(*(getattr(self, f.name)[rows] for f in fields(self)))
 
+    def M_limit(self, range_x, range_z) -> np.ndarray:
+        """The magnetisation [A/m] above which the chip leaves its range (±range_x, ±range_z
+        [T]) at each point, min(range_x / |b_x|, range_z / |b_z|) (inf where the field is
+        zero); ``range_x``, ``range_z`` scalars or of shape (n,)."""
+        rx, rz = (np.asarray(v, float).reshape(-1, 1, 1) for v in (range_x, range_z))
+        with np.errstate(divide="ignore"):
+            return np.minimum(rx / np.abs(self.b_x), rz / np.abs(self.b_z))
+
     def saturated(self, M_z, range_x, range_z) -> np.ndarray:
         """Where the chip leaves its range (±range_x, ±range_z [T]) with magnetisation M_z
         [A/m] (arrays of shape (n,) or scalars)."""
-        M_z, rx, rz = (np.asarray(v, float).reshape(-1, 1, 1) for v in (M_z, range_x, range_z))
-        return (M_z * np.abs(self.b_x) > rx) | (M_z * np.abs(self.b_z) > rz)
+        return np.asarray(M_z, float).reshape(-1, 1, 1) > self.M_limit(range_x, range_z)
 
     def G_range(self, M_z, range_x, range_z, F_z: float) -> np.ndarray:
         """The smallest G [Pa] at which the chip reads every load up to the normal force F_z
         [N] (see the module notes); inf where it leaves its range at rest."""
-        sat = self.saturated(M_z, range_x, range_z)
+        return self.G_range_at(self.M_limit(range_x, range_z), M_z, self.read_need(F_z))
+
+    def read_need(self, F_z: float) -> np.ndarray:
+        """The G [Pa] at which each point lies beyond the normal force F_z [N] by its level
+        before, F_z / f_z(t_(i−1), θ) (inf at the first level)."""
         before = np.concatenate([np.zeros_like(self.f_z[:, :1]), self.f_z[:, :-1]], axis=1)
         with np.errstate(divide="ignore"):
-            need = np.where(before > 0, F_z / np.where(before > 0, before, 1.0), np.inf)
+            return np.where(before > 0, F_z / np.where(before > 0, before, 1.0), np.inf)
+
+    def G_range_at(self, M_limit: np.ndarray, M_z, need: np.ndarray) -> np.ndarray:
+        """:meth:`G_range` from the points' :meth:`M_limit` and :meth:`read_need` (computed
+        once for a range and a force, and asked for every magnetisation)."""
+        sat = np.asarray(M_z, float).reshape(-1, 1, 1) > M_limit
         need = np.where(sat, need, 0.0)
         return need.reshape(need.shape[0], -1).max(axis=1) * (1.0 + READ_MARGIN)
 

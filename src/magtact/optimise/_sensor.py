@@ -232,7 +232,7 @@ def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, s
     if free.any():  # the best G of each design
         i = np.flatnonzero(free)
         low = np.maximum(np.maximum(G_force[i], G_range[i]), space.G_bounds[0])
-        value, G[i] = _Noise(grid.take(i), (sx[i], sz[i])).least(
+        value, G[i] = _Noise(_Within(grid.take(i)), (sx[i], sz[i])).least(
             M_z[i], low, space.G_bounds[1], space.F_z, space.F_r)
         none[i] = ~np.isfinite(value)
     sigma = grid.sigma(G, M_z, sx, sz, space.F_z)
@@ -271,24 +271,18 @@ class _Within:
 
     Over G the points within the normal force F_z change only where G passes a point's
     F_z / f_z: on the piece G ∈ (F_z / f_i, F_z / f_(i−1)] (f sorted, f_(−1) = 0) they are the
-    first i, for i = 0 … P (:meth:`pieces`)."""
+    first i, for i = 0 … P (:meth:`pieces`). One per grid, shared by every chip noise."""
 
-    def __init__(self, grid: SensorGrid, order: np.ndarray | None = None):
+    def __init__(self, grid: SensorGrid):
         n = grid.f_z.shape[0]
-        if order is None:
-            order = self.order(grid)
-        self.f = np.take_along_axis(grid.f_z.reshape(n, -1), order, axis=1)
+        self.grid = grid
+        self.order = np.argsort(grid.f_z.reshape(n, -1), axis=1, kind="stable")
+        self.f = np.take_along_axis(grid.f_z.reshape(n, -1), self.order, axis=1)
         with np.errstate(divide="ignore"):
             self.breaks = np.where(self.f > 0, 1.0 / np.where(self.f > 0, self.f, 1.0), np.inf)
-        r = np.take_along_axis(np.abs(grid.f_r.reshape(n, -1)), order, axis=1)
+        r = np.take_along_axis(np.abs(grid.f_r.reshape(n, -1)), self.order, axis=1)
         self.R = np.concatenate([np.zeros((n, 1)), np.maximum.accumulate(r, axis=1)], axis=1)
-
-    @staticmethod
-    def order(grid: SensorGrid) -> np.ndarray:
-        """The grid's points of each height in the order of their normal force (the same for
-        every chip noise)."""
-        n = grid.f_z.shape[0]
-        return np.argsort(grid.f_z.reshape(n, -1), axis=1, kind="stable")
+        self._kept: dict = {}  # the pieces' bounds per (F_z, F_r, G_high)
 
     def pieces(self, F_z: float) -> tuple[np.ndarray, np.ndarray]:
         """(start, end) [Pa] of the pieces i = 0 … P of G (shape (n, P + 1)): just above
@@ -297,6 +291,18 @@ class _Within:
         start = np.concatenate([F_z * self.breaks * (1.0 + G_STEP), np.zeros((n, 1))], axis=1)
         end = np.concatenate([np.full((n, 1), np.inf), F_z * self.breaks], axis=1)
         return start, end
+
+    def bounds(self, F_z: float, F_r: float, G_high: float) -> tuple[np.ndarray, np.ndarray]:
+        """Per piece: the least G at which its loads include the shear F_r [N] (the larger of
+        its start and F_r / R_i), and the largest G it may take (the lesser of its end and
+        G_high); kept, since every chip noise and grade asks for the same."""
+        key = (F_z, F_r, G_high)
+        if key not in self._kept:
+            start, end = self.pieces(F_z)
+            with np.errstate(divide="ignore"):
+                need = np.where(self.R > 0, F_r / self.R, np.inf) if F_r > 0 else 0.0
+            self._kept[key] = (np.maximum(start, need), np.minimum(end, G_high))
+        return self._kept[key]
 
     def most_shear(self, G_low, G_high: float, F_z: float) -> np.ndarray:
         """Per height: the largest shear [N] the loads within the normal force F_z [N] include
@@ -309,15 +315,14 @@ class _Within:
         return np.where(ok, G * self.R, 0.0).max(axis=1)
 
 
-class _Noise(_Within):
-    """:class:`_Within` with one chip noise: the worst per-unit √(σ_r² + σ_z²) among the first
-    i points."""
+class _Noise:
+    """One chip noise over a grid's :class:`_Within`: the worst per-unit √(σ_r² + σ_z²) among
+    the first i points."""
 
-    def __init__(self, grid: SensorGrid, noise: tuple, order: np.ndarray | None = None):
-        if order is None:
-            order = self.order(grid)
-        super().__init__(grid, order)
-        n = self.f.shape[0]
+    def __init__(self, within: _Within, noise: tuple):
+        self.within = within
+        grid, order = within.grid, within.order
+        n = order.shape[0]
         S = grid.unit_noise(*noise).reshape(n, -1, 2)
         cm = np.maximum.accumulate(np.take_along_axis(S, order[..., None], axis=1), axis=1)
         cm = np.concatenate([np.zeros((n, 1, 2)), cm], axis=1)  # cm[:, i]: worst of first i
@@ -328,23 +333,21 @@ class _Noise(_Within):
         """Per height: the least √(σ_r² + σ_z²) [N] over the G ∈ [G_low, G_high] at which the
         loads within the normal force F_z [N] include a shear of F_r [N], and its G (exact on
         the grid; see the module notes); inf (and G_low) where there is none. ``M_z`` [A/m]:
-        a scalar or one per height.
+        a scalar or one per height; ``G_high`` finite.
 
         On piece i σ = G W_i / M_z grows with G, and the shear G R_i reaches F_r from
         G = F_r / R_i on: the piece's best G is the largest of its start, G_low and F_r / R_i,
         where that is within the piece and G_high."""
-        n = self.f.shape[0]
+        n = self.W.shape[0]
         rows = np.arange(n)
         M = np.broadcast_to(np.asarray(M_z, float), (n,))
         G_low = np.broadcast_to(np.asarray(G_low, float), (n,))
-        start, end = self.pieces(F_z)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            need = np.where(self.R > 0, F_r / self.R, np.inf) if F_r > 0 else 0.0
-            G = np.maximum(np.maximum(start, G_low[:, None]), need)
-            ok = (G <= np.minimum(end, G_high)) & np.isfinite(G)
-            value = np.where(ok, G * self.W / M[:, None], np.inf)
+        lowest, cap = self.within.bounds(F_z, F_r, G_high)
+        G = np.maximum(lowest, G_low[:, None])
+        with np.errstate(invalid="ignore"):  # inf × 0 where no G is feasible: masked
+            value = np.where(G <= cap, G * self.W, np.inf)
         j = np.argmin(value, axis=1)
-        best = value[rows, j]
+        best = value[rows, j] / M
         return best, np.where(np.isfinite(best), G[rows, j], G_low)
 
 
@@ -397,13 +400,14 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
     ok = np.isfinite(G_force) & (G_force <= G_hi)
     options = [(k, o) for k, o in enumerate(space.options) if only is None or k == only[1]]
     grades = [(g, M) for g, M in enumerate(space.M_z) if only is None or g == only[0]]
-    order = _Noise.order(grid)
+    within = _Within(grid)
+    need = grid.read_need(space.F_z * space.read_factor)
     cands, falls = [], []
     for k, o in options:
-        noise = _Noise(grid, (o.noise_x, o.noise_z), order)
+        noise = _Noise(within, (o.noise_x, o.noise_z))
+        M_limit = grid.M_limit(o.range_x, o.range_z)
         for g, M_z in grades:
-            G_range = grid.G_range(M_z * space.field_factor, o.range_x, o.range_z,
-                                   space.F_z * space.read_factor)
+            G_range = grid.G_range_at(M_limit, M_z * space.field_factor, need)
             G_low = np.maximum(np.maximum(G_force, G_range), space.G_bounds[0])
             value, G = noise.least(M_z, G_low, G_hi, space.F_z, space.F_r)
             # per standoff level: the first height of the least value
