@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 from typer.testing import CliRunner
@@ -46,11 +44,13 @@ def test_fit_writes_models_report_and_figures(fitted):
     (["fit", "--data", "no/such/doe.nc", "--out", "x"], "DOE data set not found: no/such/doe.nc"),
     (["fit", "nosuchstudy.toml", "--out", "x"], "nosuchstudy.toml"),
 ])
-def test_user_errors_reported_without_traceback(tmp_path, args, msg):
-    r = subprocess.run([sys.executable, "-c", "from magtact.cli import main; main()", *args],
-                       capture_output=True, text=True, cwd=tmp_path)
-    assert r.returncode == 2
-    assert msg in " ".join(r.stderr.split()) and "Traceback" not in r.stderr
+def test_user_errors_reported_without_traceback(tmp_path, monkeypatch, args, msg):
+    from test_command_outputs import cli  # the command line's entry point, in this process
+
+    monkeypatch.chdir(tmp_path)
+    code, text = cli(*args)
+    assert code == 2
+    assert msg in text and "Traceback" not in text, text
 
 
 def test_generations_must_be_positive():

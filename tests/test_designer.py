@@ -147,17 +147,14 @@ def test_a_range_below_the_field_at_rest(models, study):
 
 
 def test_cli_refuses_a_useless_chip_in_one_line_before_the_work(tmp_path):
-    import subprocess
-    import sys
+    from test_command_outputs import cli  # the command line's entry point, in this process
 
     study = tmp_path / "s.toml"
     study.write_text("[hall]\nchip = 'custom'\nnoise_x_uT = 1.0\nnoise_z_uT = 1.0\n"
                      "range_x_mT = 0.5\nrange_z_mT = 0.5\n")
-    res = subprocess.run([sys.executable, "-m", "magtact", "optimise", str(study), "--out",
-                          str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
-    assert res.returncode == 2
-    assert "[hall.range_z_mT]" in res.stdout + res.stderr
-    assert "Traceback" not in res.stdout + res.stderr
+    code, text = cli("optimise", study, "--out", tmp_path / "o")
+    assert code == 2
+    assert "[hall.range_z_mT]" in text and "Traceback" not in text, text
     assert not (tmp_path / "o" / "design.json").exists()
 
 

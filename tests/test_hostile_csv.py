@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import csv
 import math
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -110,10 +108,11 @@ def test_design_metadata_is_checked_in_si(tmp_path):
     ("--f-lo", "inf", "--f-lo must be between 0"),
 ])
 def test_validate_options_are_refused_with_their_bounds(tmp_path, option, value, fragment):
-    res = subprocess.run([sys.executable, "-m", "magtact", "validate", option, value, "--out",
-                          str(tmp_path / "v")], capture_output=True, text=True, timeout=120)
-    assert res.returncode == 2, res.stderr
-    assert fragment in res.stderr and "Traceback" not in res.stderr, res.stderr
+    from test_command_outputs import cli  # the command line's entry point, in this process
+
+    code, text = cli("validate", option, value, "--out", tmp_path / "v")
+    assert code == 2, text
+    assert fragment in text and "Traceback" not in text, text
     assert not (tmp_path / "v").exists()
 
 

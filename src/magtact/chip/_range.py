@@ -27,7 +27,7 @@ ONSET_ITERATIONS = 50
 G_ROUNDOFF = 1e-14
 #: Paths per level of the zooming search over θ of :func:`saturation`, and the width (a
 #: fraction of θ_max) at which it stops; each level narrows the bracket (N - 1) / 2-fold.
-ZOOM_N, ZOOM_XATOL = 9, 1e-6
+ZOOM_N, ZOOM_XATOL = 33, 1e-6
 
 #: Grid over each height's stable region (fractions of t_m and θ_m) on which the field is read.
 N_T, N_THETA = 41, 11
