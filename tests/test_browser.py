@@ -103,6 +103,12 @@ def test_the_real_card_shows_its_verdict_first(browser, folder):
     assert page.locator("#verdict li").count() == len(card["verdict"])
     marks = [li.inner_text()[0] for li in page.locator("#verdict li").all()]
     assert marks == ["✓" if v["met"] else "✗" for v in card["verdict"]]
+    # the units built under the verdict: the card's row of the robust verdict, on screen
+    units = next(r[1] for r in card["rows"] if r[0] == "units built that meet every requirement")
+    line = page.locator("#verdict p.units")
+    assert units in " ".join(line.inner_text().split())
+    box = line.bounding_box()
+    assert box is not None and box["y"] + box["height"] <= SCREEN
     if card.get("parts"):
         box = page.locator("table.parts").bounding_box()
         assert box is not None and box["y"] + box["height"] <= SCREEN

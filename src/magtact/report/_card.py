@@ -34,7 +34,7 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
         for i, r in enumerate(verdicts[0].requirements):
             rows.append([r.statement, *(_verdict_cell(v.requirements[i]) for v in verdicts)])
         if any(getattr(a, "robust", None) is not None for a in answers):
-            row("units built that meet every requirement", _units_cell)
+            row(UNITS_ROW, _units_cell)
     row("height H", lambda a: f"{mm(a.H):.3g} mm")
     row("shear modulus G", lambda a: f"{kpa(a.G):.3g} kPa")
     if any(a.parts is not None for a in answers):
@@ -93,6 +93,10 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
 
 def _verdict_cell(r) -> str:
     return r.answer
+
+
+#: The card's row of the robust verdict (the report's first screen repeats it under the verdict).
+UNITS_ROW = "units built that meet every requirement"
 
 
 def _units_cell(a) -> str:

@@ -24,7 +24,7 @@ from pathlib import Path
 from .._errors import MissingFileError
 from .._runfolder import MANIFEST, RunManifest, StageRecord
 from ..study import from_si
-from ._card import read_card
+from ._card import UNITS_ROW, read_card
 from ._explorer import explorer_section
 from ._fragments import collecting, damaged_section, load_captions, load_record, read_text
 from ._fragments import escape as _e
@@ -295,8 +295,12 @@ def _front(card: dict | None) -> str:
         for v, (label, text) in zip(verdict, requirement_rows(verdict), strict=True))
     title = ("Verdict: no design meets the requirements" if infeasible is not None
              else "Verdict")
-    left = (f'<div id="verdict"><h2>{title}</h2><ul class="verdict-list">{items}</ul></div>'
-            if verdict else "")
+    units = next((r[1] for r in card.get("rows") or [] if isinstance(r, (list, tuple))
+                  and len(r) > 1 and r[0] == UNITS_ROW and r[1] != "not computed"), None)
+    units = (f'<p class="units"><b>Units built that meet every requirement</b>: '
+             f"{_inline(units)}</p>" if isinstance(units, str) else "")
+    left = (f'<div id="verdict"><h2>{title}</h2><ul class="verdict-list">{items}</ul>{units}'
+            "</div>" if verdict else "")
     if infeasible is not None:
         rows = infeasible_rows(infeasible)[1][len(verdict):]
         table = "".join(f'<tr><th class="l">{_inline(k)}</th><td class="l">{_inline(v)}</td>'
