@@ -230,20 +230,33 @@ def fit_table(smap: SensorMap, n: int, polygon) -> Approximation:
     """A bilinear table candidate: the map's own F_r, F_z at the nodes of an n × n grid over
     the region's bounding box (nodes outside the region hold the models' force at the
     inversion's solution, or the nearest node's value where there is none)."""
+    return fit_tables(smap, (n,), polygon)[0]
+
+
+def fit_tables(smap: SensorMap, sizes, polygon) -> list[Approximation]:
+    """:func:`fit_table` for each size in ``sizes``, the map inverted once at every node of
+    every table."""
     lo_r, hi_r = 0.0, float(polygon[:, 0].max())
     lo_z, hi_z = float(polygon[:, 1].min()), float(polygon[:, 1].max())
-    R, Z = np.meshgrid(np.linspace(lo_r, hi_r, n), np.linspace(lo_z, hi_z, n), indexing="ij")
-    B = np.stack([R, np.zeros_like(R), Z], axis=-1)
+    grids = [np.meshgrid(np.linspace(lo_r, hi_r, n), np.linspace(lo_z, hi_z, n), indexing="ij")
+             for n in sizes]
+    B = np.concatenate([np.stack([R, np.zeros_like(R), Z], axis=-1).reshape(-1, 3)
+                        for R, Z in grids])
     reading = smap.force(B)
-    F = reading.F_model.copy()
-    good = np.isfinite(F).all(axis=-1) & (reading.flag != 2)
-    if not good.all():
-        from scipy.spatial import cKDTree
+    out, start = [], 0
+    for n in sizes:
+        F = reading.F_model[start:start + n * n].reshape(n, n, 3).copy()
+        good = (np.isfinite(F).all(axis=-1)
+                & (reading.flag[start:start + n * n].reshape(n, n) != 2))
+        start += n * n
+        if not good.all():
+            from scipy.spatial import cKDTree
 
-        _, k = cKDTree(np.argwhere(good)).query(np.argwhere(~good))
-        F[~good] = F[good][k]
-    return Approximation("table", n, "B_z", (lo_r, hi_r, lo_z, hi_z),
-                         F[..., 0], F[..., 2], polygon)
+            _, k = cKDTree(np.argwhere(good)).query(np.argwhere(~good))
+            F[~good] = F[good][k]
+        out.append(Approximation("table", n, "B_z", (lo_r, hi_r, lo_z, hi_z),
+                                 F[..., 0], F[..., 2], polygon))
+    return out
 
 
 def _measured(a: Approximation, test) -> Approximation:
@@ -455,7 +468,7 @@ def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
     cands = [fit_features(smap, n, tr, seed) for tr in TRANSFORMS for n in degrees]
     if axisymmetric:  # the planar forms need a map that is the same at every azimuth
         cands += [fit_poly(smap, n, tr, train, polygon) for tr in TRANSFORMS for n in degrees]
-        cands += [fit_table(smap, n, polygon) for n in table_sizes]
+        cands += fit_tables(smap, tuple(table_sizes), polygon)
     cands = [_measured(a, test) for a in cands]
 
     def score(a):
