@@ -236,6 +236,8 @@ def fit_table(smap: SensorMap, n: int, polygon) -> Approximation:
 def fit_tables(smap: SensorMap, sizes, polygon) -> list[Approximation]:
     """:func:`fit_table` for each size in ``sizes``, the map inverted once at every node of
     every table."""
+    if not sizes:
+        return []
     lo_r, hi_r = 0.0, float(polygon[:, 0].max())
     lo_z, hi_z = float(polygon[:, 1].min()), float(polygon[:, 1].max())
     grids = [np.meshgrid(np.linspace(lo_r, hi_r, n), np.linspace(lo_z, hi_z, n), indexing="ij")
