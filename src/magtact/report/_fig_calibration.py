@@ -22,8 +22,9 @@ def draw_calibration(fig, cal) -> list:
     a = cal.firmware.chosen
     for ax, key, sigma, name in ((axes[0], "err_r", cal.sigma_F[0], "F_r"),
                                  (axes[1], "err_z", cal.sigma_F[1], "F_z")):
+        # rasterised: as vector paths the grid's cells make the SVG slow to write and to show
         mesh = ax.pcolormesh(g["t"], g["theta"], from_si(g[key], "mN"), cmap=CMAP_SEQ,
-                             shading="auto")
+                             shading="auto", rasterized=True)
         fig.colorbar(mesh, ax=ax, label=f"|error of ${name[0]}_{name[2]}$| [mN]")
         ax.set_xlabel("load t")
         ax.set_ylabel("shear angle θ [rad]")
