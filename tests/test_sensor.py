@@ -315,6 +315,11 @@ def test_the_reduction_is_exact_in_G_on_its_grid():
         assert G_best[0] * f_z[0][f_z[0] * G_best[0] <= F_z].max() >= F_r * (1 - 1e-12)
     value, _ = noise.least(M_z, G_low, 1e6, F_z, 1.01 * shear.max())
     assert np.isinf(value[0])  # no G's loads include that shear
+    # the largest shear the loads include over G (what the relaxation of a specification asks)
+    most, G_most = _Within(grid).most_shear(G_low, 1e6, F_z)
+    assert shear.max() <= most[0] * (1 + 1e-12) and most[0] <= shear.max() * (1 + 1e-3)
+    assert G_most[0] * f_z[0][f_z[0] * G_most[0] <= F_z].max() == pytest.approx(most[0],
+                                                                                rel=1e-12)
 
 
 def test_the_publication_preset_keeps_the_publications_problem():

@@ -138,15 +138,17 @@ def infeasibility(models: ModelSet, study: Study, constraints: ForceConstraints,
     # reading), over the G that carry F_z, [F_z / f_z,max, G_hi] for the softest unit
     with np.errstate(divide="ignore"):
         G_normal = np.where(table.f_z_max > 0, F_z / np.asarray(table.f_z_max, float), np.inf)
-    shear_within = np.minimum(shear, most_shear_within(models, study, table, G_normal,
-                                                       k * G_hi, F_z))
+    envelope, G_envelope = most_shear_within(models, study, table, G_normal, k * G_hi, F_z)
+    shear_within = np.minimum(shear, envelope)
+    G_shear = np.where(envelope < shear, G_envelope / k, G_hi)  # the nominal unit's G
     shear_with, i_r = best(shear_within, normal >= F_z)
     normal_with, i_z = best(normal, shear >= F_r)
     shear_alone, _ = best(shear, np.ones(shear.shape, bool))
     normal_alone, _ = best(normal, np.ones(normal.shape, bool))
 
-    def at(i):
-        return (f"H {_n(from_si(table.H[i], 'mm'))} mm, G {_n(from_si(G_hi, 'kPa'))} kPa"
+    def at(i, G=None):
+        G = G_hi if G is None else float(G[i])
+        return (f"H {_n(from_si(table.H[i], 'mm'))} mm, G {_n(from_si(G, 'kPa'))} kPa"
                 if i >= 0 else "no height")
 
     # the setting to change: the study's requirement, or the force constraint given instead
@@ -169,7 +171,7 @@ def infeasibility(models: ModelSet, study: Study, constraints: ForceConstraints,
     items = [_force("normal", f"reads 0–{_n(F_z)} N normal without saturating", F_z,
                     normal_with, at(i_z), normal_alone, f"{_n(F_r)} N shear"),
              _force("shear", f"carries and reads 0–{_n(F_r)} N shear", F_r, shear_with,
-                    at(i_r), shear_alone, f"{_n(F_z)} N normal")]
+                    at(i_r, G_shear), shear_alone, f"{_n(F_z)} N normal")]
     if req.rate > 0:
         items.append(_rate(study))
     if req.resolution > 0:

@@ -304,15 +304,19 @@ class _Within:
             self._kept[key] = (np.maximum(start, need), np.minimum(end, G_high))
         return self._kept[key]
 
-    def most_shear(self, G_low, G_high: float, F_z: float) -> np.ndarray:
+    def most_shear(self, G_low, G_high: float, F_z: float) -> tuple[np.ndarray, np.ndarray]:
         """Per height: the largest shear [N] the loads within the normal force F_z [N] include
         over G ∈ [G_low, G_high] (G R_i grows with G on a piece: its largest is at the piece's
-        end); 0 where the interval is empty."""
+        end), and the G [Pa] where it is; 0 and NaN where the interval is empty."""
         start, end = self.pieces(F_z)
         G = np.minimum(end, G_high)
         low = np.broadcast_to(np.asarray(G_low, float), (self.f.shape[0],))[:, None]
         ok = (G >= np.maximum(start, low)) & np.isfinite(G)
-        return np.where(ok, G * self.R, 0.0).max(axis=1)
+        S = np.where(ok, G * self.R, 0.0)
+        j = np.argmax(S, axis=1)
+        rows = np.arange(S.shape[0])
+        best = S[rows, j]
+        return best, np.where(ok[rows, j], G[rows, j], np.nan)
 
 
 class _Noise:
@@ -352,11 +356,11 @@ class _Noise:
 
 
 def most_shear_within(models: ModelSet, study: Study, table: HeightTable, G_low, G_high: float,
-                      F_z: float) -> np.ndarray:
+                      F_z: float) -> tuple[np.ndarray, np.ndarray]:
     """Per height of ``table``: the largest shear [N] among the loads of its stable region
     within the normal force F_z [N], over G ∈ [G_low, G_high] [Pa] (``G_low``: one per height
     or a scalar), on the sensor problem's grid (the shear the sensor problem asks of the
-    loads); 0 where the interval is empty."""
+    loads), and the G [Pa] where it is; 0 and NaN where the interval is empty."""
     grid = sensor_grid(models, study, table.H, table.t_m, table.theta_m)
     return _Within(grid).most_shear(G_low, G_high, F_z)
 
