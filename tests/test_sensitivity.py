@@ -200,3 +200,16 @@ def test_the_written_gamma_code_is_the_sympy_derivation():
     for written, derived in zip(_phi(), _phi_functions(), strict=True):
         a, b = (np.asarray(f(*v), float) for f in (written, derived))
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=0.0)
+
+
+def test_the_closed_form_two_by_two_inverse_equals_a_solve():
+    """∂F/∂B through the displacement, stacked 2 × 2 blocks in closed form, equals
+    (∂F/∂x)(∂B/∂x)⁻¹ by LAPACK, also for a single row of F."""
+    from magtact.sensitivity._gamma import through_displacement
+
+    rng = np.random.default_rng(3)
+    dB = rng.normal(size=(4, 5, 2, 2))
+    for rows in (2, 1):
+        dF = rng.normal(size=(4, 5, rows, 2))
+        want = dF @ np.linalg.inv(dB)
+        assert np.allclose(through_displacement(dF, dB), want, rtol=1e-12, atol=1e-12)

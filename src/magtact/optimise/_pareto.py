@@ -531,6 +531,20 @@ def curve_gap(points: np.ndarray, front: np.ndarray, joined: np.ndarray | None =
     return float(np.max(np.min(d, axis=1)))
 
 
+def reduction_set(reduction: Reduction, study: Study) -> ParetoSet:
+    """The exact reduction's Pareto set as a :class:`ParetoSet` (the front's heights at their
+    least feasible G; ``generations`` and ``evaluations`` 0: no NSGA-II run).
+
+    The sensor problem answers with the whole sensor; the publication's (H, G) problem beside
+    it is read from its exact front, which NSGA-II would only approach."""
+    idx = np.flatnonzero(reduction.front)
+    t, G = reduction.table, reduction.G_star[idx]
+    M = None if reduction.M_z_star is None else reduction.M_z_star[idx]
+    return ParetoSet(t.H[idx], G, reduction.Gamma_r[idx], reduction.Gamma_z[idx],
+                     G * t.f_r_min[idx], G * t.f_z_max[idx], reduction.constraints,
+                     study.optimise.seed, 0, 0, M)
+
+
 def front_gap(pareto: ParetoSet, reduction: Reduction) -> float:
     """Largest relative distance of NSGA-II's set from the exact Pareto curve in objective space
     (:func:`curve_gap`, the curve joining neighbouring front heights only)."""

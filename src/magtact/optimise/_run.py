@@ -28,6 +28,7 @@ from ._pareto import (
     force_constraints,
     front_gap,
     pareto_nsga2,
+    reduction_set,
     sweep,
 )
 from ._setting import sigma_objective
@@ -279,6 +280,11 @@ def optimise(models: Responses | ModelSet, study: Study,
              constraints: ForceConstraints | None = None) -> Optimisation:
     """Run the optimisation stage: constraints, sweep + exact reduction, NSGA-II, choice, maps.
 
+    In the sensor problem (``optimise.problem = "sensor"``) the (H, G) problem is the
+    publication's, kept beside the whole sensor for the report: its Pareto set is the exact
+    reduction's front (:func:`reduction_set`) and NSGA-II is not run (NSGA-II cross-checks the
+    sensor problem itself, :func:`optimise_sensor`).
+
     Parameters
     ----------
     models : Responses or ModelSet
@@ -303,7 +309,8 @@ def optimise(models: Responses | ModelSet, study: Study,
     table = sweep(R, study)
     reduction = exact_reduction(R, study, constraints, table)
     t2 = clock()
-    pareto: ParetoSet = pareto_nsga2(R, study, constraints, table)
+    pareto: ParetoSet = (reduction_set(reduction, study) if study.optimise.problem == "sensor"
+                         else pareto_nsga2(R, study, constraints, table))
     t3 = clock()
     choice = choose(R, study, pareto)
     reduction_choice = choose(R, study, reduction)
@@ -343,6 +350,14 @@ CAPTIONS = {
 }
 
 
+#: The captions that change where the Pareto set is the exact reduction's (the sensor problem).
+EXACT_CAPTIONS = {
+    "pareto_set": "Pareto set of the exact reduction (points and grey line) in objective, "
+                  "constraint and design space; the chosen design is the star.",
+    "pareto": "The exact reduction's Pareto set (H, G, objectives, constraints).",
+}
+
+
 def write_optimise_outputs(result: Optimisation, models: Responses | ModelSet,
                            folder: str | Path, *,
                            figures: Callable[..., list[Path]] | None = None) -> list[Path]:
@@ -369,7 +384,8 @@ def write_optimise_outputs(result: Optimisation, models: Responses | ModelSet,
     flat["constraints"] = {"F_r_c_N": result.constraints.F_r_c,
                            "F_z_c_N": result.constraints.F_z_c,
                            "source": result.constraints.source}
-    for name, doc in (("chosen.json", flat), ("captions.json", CAPTIONS)):
+    captions = CAPTIONS if result.pareto.generations else CAPTIONS | EXACT_CAPTIONS
+    for name, doc in (("chosen.json", flat), ("captions.json", captions)):
         (folder / name).write_text(json.dumps(doc, indent=2) + "\n")
         files.append(folder / name)
     return files

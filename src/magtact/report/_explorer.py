@@ -366,7 +366,7 @@ function card(p){
                 ['F_r range', sig(Math.abs(p.F_r_min)) + ' N']];
   if (p.card) {
     const c = cardOf(p.card, p.G_kPa);
-    // Γ and the forces above are NSGA-II's; these two are Result.evaluate's at the point
+    // Γ and the forces above are the Pareto set's; these two are Result.evaluate's at the point
     rows.push(['σ_Fr, σ_Fz worst (the magnet and standoff above the grid)',
                sig(c.srw * 1e3) + ', ' + sig(c.szw * 1e3) + ' mN']);
     rows.push(['saturation (the same)', satText(p.card, c)]);

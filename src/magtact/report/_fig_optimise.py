@@ -82,7 +82,8 @@ def draw_pareto(opt):
                 label=r"$(H, G^*(H))$, all $H$")
         ax.plot(r.Gamma_r[front], r.Gamma_z[front], "o-", color="0.4", lw=2.5, ms=4, alpha=0.6,
                 label="exact Pareto set")
-        ax.plot(p.Gamma_r_max, p.Gamma_z_max, ".", color="C0", ms=3, label="NSGA-II")
+        ax.plot(p.Gamma_r_max, p.Gamma_z_max, ".", color="C0", ms=3,
+                label="NSGA-II" if p.generations else "exact front's designs")
         ax.plot(chosen.Gamma_r_max, chosen.Gamma_z_max, "*", color="C3", ms=10, label="chosen")
         ax.set(xlabel=GR + " [N/T]", ylabel=GZ + " [N/T]", title="Objective space")
         ax.legend(loc="upper right")

@@ -39,7 +39,16 @@ def through_displacement(dF_dx, dB_dx):
     """
     if isinstance(dB_dx, sp.MatrixBase):
         return dF_dx * dB_dx.inv()
-    return dF_dx @ np.linalg.inv(dB_dx)
+    # the inverse of each 2 × 2 block in closed form, adj(J) / det J: a stacked
+    # ``numpy.linalg.inv`` costs a LAPACK call per block
+    a, b = dB_dx[..., 0, 0], dB_dx[..., 0, 1]
+    c, d = dB_dx[..., 1, 0], dB_dx[..., 1, 1]
+    det = a * d - b * c
+    f, g = dF_dx[..., 0], dF_dx[..., 1]  # (..., rows of F)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.stack([(f * d[..., None] - g * c[..., None]),
+                        (g * a[..., None] - f * b[..., None])], axis=-1) / det[..., None, None]
+    return out
 
 
 def row_norms(S):

@@ -376,7 +376,7 @@ class Optimise:
                                "'publication': the publication's (H, G) problem")
     sensor_population: int = setting(60, integer=True, minimum=4, maximum=100_000,
                                      doc="population of NSGA-II in the sensor problem")
-    sensor_generations: int = setting(60, integer=True, minimum=1, maximum=10_000,
+    sensor_generations: int = setting(30, integer=True, minimum=1, maximum=10_000,
                                       doc="NSGA-II generations in the sensor problem")
     objective: str = setting("gamma", choices=("gamma", "sigma_F"),
                              doc="'gamma': minimise the sensitivities Γ_r,max, Γ_z,max [N/T] "
