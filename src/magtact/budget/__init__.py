@@ -4,7 +4,6 @@ fabrication and the model's own error, each as a false force ΔF = J ΔB (docs/m
 from ._array import (
     crosstalk,
     magnets_field,
-    neighbour_changes,
     neighbour_offsets,
     smallest_pitch,
     worst_false_force,
@@ -22,9 +21,4 @@ from ._budget import (
 )
 from ._fabrication import linearised, monte_carlo, percentiles, responses, unit_context
 
-__all__ = [
-    "Budget", "BudgetFile", "BudgetRow", "budget_card_rows", "budget_json", "crosstalk",
-    "error_budget", "linearised", "magnets_field", "monte_carlo", "neighbour_changes",
-    "neighbour_offsets", "noise_given", "percentiles", "responses", "smallest_pitch",
-    "unit_context", "worst_false_force", "write_budget_outputs", "write_budgets",
-]
+__all__ = ["Budget", "budget_json", "error_budget", "write_budget_outputs"]

@@ -1,21 +1,18 @@
 """The sensor's own product: its field-to-force map, the firmware export and the calibration of a
 built unit from a few presses (docs/method.md §13)."""
 
-from ._fe import FEForces, PathHoldout, fe_forces, has_height, path_holdout
+from ._fe import FEForces, PathHoldout, fe_forces, path_holdout
 from ._firmware import (
     Approximation,
     FirmwareChoice,
     FrontierPoint,
-    approximation_json,
     c_header,
     firmware_approximation,
     load_approximation,
-    region_polygon,
     write_table_csv,
 )
 from ._map import (
     FLAG_NAMES,
-    FORCE_SOURCES,
     NO_INVERSE,
     NOT_UNIQUE,
     OK,
@@ -26,7 +23,6 @@ from ._map import (
     sensor_map,
 )
 from ._outputs import (
-    SUMMARY_FORMAT,
     Calibration,
     CalibrationSummary,
     ForceError,
@@ -41,7 +37,6 @@ from ._unit import (
     DEFAULT_FIT,
     PARAMETERS,
     PRESS_COLUMNS,
-    TOLERANCE,
     Presses,
     UnitCalibration,
     calibrate_unit,
@@ -51,14 +46,7 @@ from ._unit import (
 )
 
 __all__ = [
-    "DEFAULT_FIT", "FLAG_NAMES", "FORCE_SOURCES", "FEForces", "PathHoldout", "fe_forces",
-    "force_model_error", "force_source_for", "has_height", "path_holdout", "NOT_UNIQUE",
-    "NO_INVERSE", "OK", "OUTSIDE", "PARAMETERS",
-    "PRESS_COLUMNS", "SUMMARY_FORMAT", "TOLERANCE", "Approximation", "Calibration",
-    "CalibrationSummary", "FirmwareChoice", "ForceError", "FrontierPoint", "Presses",
-    "Reading", "SensorMap", "UnitCalibration", "UnitParameters", "approximation_json",
-    "c_header", "calibrate", "calibrate_unit", "error_grid", "fe_readings",
-    "firmware_approximation", "load_approximation", "read_presses", "region_polygon",
-    "round_trip_error", "sensor_map", "write_calibration_outputs", "write_presses",
-    "write_table_csv",
+    "Approximation", "Calibration", "Presses", "SensorMap", "UnitCalibration", "calibrate",
+    "calibrate_unit", "firmware_approximation", "load_approximation", "path_holdout",
+    "read_presses", "sensor_map", "write_calibration_outputs",
 ]

@@ -17,17 +17,13 @@ from ._range import (
     saturation_force,
 )
 from ._reading import (
-    N_T,
-    N_THETA,
-    READ_MARGIN,
     SensorGrid,
     exact_field_models,
     sensor_grid,
-    unit_magnet,
 )
 from ._setting import SettingChoice, setting_for, with_setting
 
-__all__ = ["N_T", "N_THETA", "READ_MARGIN", "ChipOption", "Saturation", "SensorGrid",
-           "SettingChoice", "check_rest_field", "chip_margin", "chip_options",
-           "exact_field_models", "field_ratio", "onset", "require_noise", "saturation",
-           "saturation_force", "sensor_grid", "setting_for", "unit_magnet", "with_setting"]
+__all__ = [
+    "ChipOption", "Saturation", "SensorGrid", "SettingChoice", "chip_options", "onset",
+    "saturation", "sensor_grid", "setting_for", "with_setting",
+]

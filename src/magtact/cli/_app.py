@@ -99,6 +99,7 @@ class _Group(TyperGroup):
                                   "process failed to start or died") from exc
 
 
+#: The ``magtact`` command line (typer); each command's module registers its command on it.
 app = typer.Typer(
     cls=_Group,
     name="magtact",

@@ -7,12 +7,10 @@ MODEL_VERSION = 1
 
 from ._exact import cel, cylinder_field, cylinder_field_dz  # noqa: E402
 from ._fe import FieldSolution, solve_fe, solve_field  # noqa: E402
-from ._hall import SOLVERS, hall_field, magnet_field  # noqa: E402
-from ._outputs import CSV_COLUMNS, field_grid, write_field_csv, write_field_outputs  # noqa: E402
+from ._hall import hall_field, magnet_field  # noqa: E402
+from ._outputs import CSV_COLUMNS, write_field_outputs  # noqa: E402
 
 __all__ = [
-    "CSV_COLUMNS", "MODEL_VERSION", "SOLVERS", "FieldSolution", "cel", "cylinder_field",
-    "cylinder_field_dz",
-    "field_grid", "hall_field", "magnet_field", "solve_fe", "solve_field", "write_field_csv",
+    "MODEL_VERSION", "FieldSolution", "cylinder_field", "hall_field", "solve_fe",
     "write_field_outputs",
 ]

@@ -6,10 +6,11 @@
 #: that give the same forces leave it alone, so cached paths stay valid.
 MODEL_VERSION = 2
 
-from ._model import SOLVERS, HalfBodyModel, Stepping, pardiso_available  # noqa: E402
+from ._model import SOLVERS, HalfBodyModel, Stepping  # noqa: E402
 from ._result import PathFailed, PathResult  # noqa: E402
 from ._simulate import build_model, simulate_path  # noqa: E402
 from ._vtu import write_vtu  # noqa: E402
 
-__all__ = ["MODEL_VERSION", "SOLVERS", "HalfBodyModel", "PathFailed", "PathResult", "Stepping",
-           "build_model", "pardiso_available", "simulate_path", "write_vtu"]
+__all__ = [
+    "MODEL_VERSION", "HalfBodyModel", "PathFailed", "PathResult", "build_model", "simulate_path",
+]

@@ -6,8 +6,8 @@ reduction to a curve over H (:func:`exact_reduction`), the decision rule (:func:
 :func:`compare` two designs; :func:`optimise` runs it all.
 """
 
-from ..chip import SettingChoice, chip_margin, setting_for, with_setting
-from ._box import BatchOptimum, BoxOptimum, batch_optimum, box_optimum
+from ..chip import chip_margin
+from ._box import BoxOptimum, box_optimum
 from ._conditioning import ShearBoundConditioning, shear_bound_conditioning
 from ._design import (
     DesignMaps,
@@ -27,7 +27,6 @@ from ._geometry import (
     GeometryOptimisation,
     describe,
     geometry_choice_json,
-    geometry_json,
     optimise_geometry,
     write_geometry_outputs,
 )
@@ -52,7 +51,6 @@ from ._pareto import (
     sweep,
 )
 from ._run import (
-    CAPTIONS,
     ChosenFile,
     FrontGapWarning,
     Optimisation,
@@ -70,7 +68,6 @@ from ._sensor import (
     SensorOptimisation,
     SensorPareto,
     SensorSpace,
-    evaluate_designs,
     exact_sensor_reduction,
     most_shear_within,
     optimise_sensor,
@@ -80,23 +77,9 @@ from ._sensor import (
 from ._setting import best_setting, sigma_objective
 
 __all__ = [
-    "WARN_GAP_SENSOR", "SensorDesign", "SensorGapWarning", "SensorOptimisation", "SensorPareto",
-    "SensorSpace",
-    "evaluate_designs",
-    "exact_sensor_reduction", "most_shear_within", "optimise_sensor", "sensor_nsga2",
-    "sensor_space",
-    "SettingChoice", "best_setting", "setting_for", "sigma_objective", "with_setting",
-    "DesignSet", "FrontGapWarning", "GeometricChoice", "GeometryOptimisation", "describe",
-    "geometry_choice_json", "geometry_json",
-    "optimise_geometry", "write_geometry_outputs",
-    "BatchOptimum", "BoxOptimum", "Choice", "Comparison", "DesignMaps", "DesignProblem",
-    "DesignResult",
-    "ForceConstraints", "HeightResult", "HeightTable", "InfeasibleError", "Optimisation",
-    "ParetoSet", "Reduction", "ShearBoundConditioning", "Timings", "as_responses",
-    "batch_optimum", "best_magnetisation", "box_optimum", "chip_margin", "choose", "compare",
-    "decision_index", "design_maps", "exact_reduction", "feasible_G", "force_constraints",
-    "front_gap", "heights_batch", "CAPTIONS", "ChosenFile", "design_file_definition",
-    "nondominated",
-    "optimise", "pareto_nsga2", "per_design",
-    "per_height", "per_heights", "shear_bound_conditioning", "sweep", "write_optimise_outputs",
+    "Comparison", "DesignProblem", "DesignResult", "ForceConstraints", "FrontGapWarning",
+    "GeometryOptimisation", "InfeasibleError", "Optimisation", "SensorDesign", "SensorGapWarning",
+    "SensorOptimisation", "box_optimum", "compare", "force_constraints", "optimise",
+    "optimise_geometry", "optimise_sensor", "per_design", "per_heights", "shear_bound_conditioning",
+    "sigma_objective", "write_optimise_outputs",
 ]

@@ -14,16 +14,15 @@ from ._catalogue import (
     size,
 )
 from ._chips import (
-    CHIP_FILES,
     MLX_FIELDS,
     ChipSetting,
     ChipTable,
     SettingError,
     SettingFigures,
     chip_table,
-    widest,
 )
 
-__all__ = ["CHIP_FILES", "GRADES", "MLX_FIELDS", "SILICONES", "SIZES", "ChipSetting",
-           "ChipTable", "Grade", "Relaxation", "SettingError", "SettingFigures", "Silicone", "Size",
-           "chip_table", "grade", "silicones_around", "size", "widest"]
+__all__ = [
+    "GRADES", "SILICONES", "SIZES", "ChipSetting", "ChipTable", "Grade", "Silicone", "Size",
+    "chip_table", "grade", "size",
+]

@@ -6,19 +6,11 @@ from ._compare import cell_text, comparison, publication_text, spread
 from ._file import (
     ComparisonRow,
     Conditioning,
-    DesignRow,
-    GammaZCurve,
     PublicationFile,
     SeedRecord,
-    SpreadRow,
     Sweep,
 )
 from ._run import SEED_GENERATIONS, Reproduction, reproduce
 from ._seeds import DEFINITIONS, count_branches, seed_study, trend
 
-__all__ = [
-    "DEFINITIONS", "ComparisonRow", "Conditioning", "DesignRow", "GammaZCurve",
-    "PublicationFile", "Reproduction", "SEED_GENERATIONS", "SeedRecord", "SpreadRow", "Sweep",
-    "cell_text", "comparison", "count_branches", "publication_text", "reference", "reproduce",
-    "seed_study", "spread", "trend",
-]
+__all__ = ["Reproduction", "reference", "reproduce"]

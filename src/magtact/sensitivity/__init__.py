@@ -2,7 +2,6 @@
 
 from ._check import compare_with_data, gamma_from_data
 from ._gamma import (
-    NAMES,
     PublishedResponsesAtH,
     Responses,
     ResponsesAtH,
@@ -13,6 +12,4 @@ from ._gamma import (
     through_displacement,
 )
 
-__all__ = ["NAMES", "PublishedResponsesAtH", "Responses", "ResponsesAtH", "compare_with_data",
-           "dF_dB", "force_noise", "gamma", "gamma_from_data", "row_norms",
-           "through_displacement"]
+__all__ = ["Responses", "compare_with_data", "dF_dB", "force_noise", "gamma"]

@@ -40,14 +40,6 @@ from ._rules import ROOM_C, check_field_mesh, check_holdout, check_parts, check_
 from ._units import LABEL, MU0, PHYSICAL, check_si, checked_si, from_si, kpa, mm, mt, to_si
 
 __all__ = [
-    "candidate_settings", "check_field_mesh", "check_holdout", "check_parts", "check_study",
-    "holdout_limit",
-    "setting_figures",
-    "ARRAY_LAYOUTS", "Array", "Environment", "Tolerances",
-    "DOE", "HALL_PRESETS", "LABEL", "MESH_DENSITIES", "MU0", "PRESETS", "Body", "Constraints",
-    "Design", "HallChip", "HallPreset", "Loading", "Magnet", "Magnetics", "Material", "Mechanics",
-    "PHYSICAL", "ROOM_C", "Requirements", "Sensitivity", "Study", "StudyError", "check_si",
-    "checked_si",
-    "from_si", "hall_chip", "kpa", "load_study", "magone", "magone_printed", "mm", "mt",
-    "study_from_dict", "to_si",
+    "PRESETS", "HallChip", "Study", "StudyError", "check_study", "checked_si", "from_si",
+    "hall_chip", "load_study", "study_from_dict", "to_si",
 ]

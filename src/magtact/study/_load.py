@@ -16,6 +16,7 @@ from ._model import GEOMETRY, SECTIONS, Study, key_of
 from ._rules import blamed, check_parts, check_physical, check_unit, unit_hint, written_keys
 from ._units import LABEL, bounds_text, from_si, to_si
 
+#: The built-in studies by name (``magtact.load(name)``, ``base = name``), each a study file.
 PRESETS = {"magone": "magone.toml", "magone-publication": "magone_publication.toml",
            "magone-printed": "magone_printed.toml"}
 

@@ -6,9 +6,7 @@ worst corner of the box and as a yield with its confidence interval, and the tol
 limits it (:func:`robust_verdict`)."""
 
 from ._box import (
-    FIELD_SCALE,
     INPUTS,
-    WORDS,
     Tolerance,
     ToleranceBox,
     corners,
@@ -19,13 +17,12 @@ from ._robust import (
     RobustVerdict,
     WorstFactors,
     robust_verdict,
-    sobol_units,
     worst_factors,
     yield_factors,
 )
 from ._units import DesignContext, design_context, unit_figures
 
-__all__ = ["FIELD_SCALE", "INPUTS", "WORDS", "DesignContext", "RobustRequirement",
-           "RobustVerdict", "Tolerance", "ToleranceBox", "WorstFactors", "corners",
-           "design_context", "robust_verdict", "sobol_units", "tolerance_box", "unit_figures",
-           "worst_factors", "yield_factors"]
+__all__ = [
+    "RobustVerdict", "ToleranceBox", "WorstFactors", "design_context", "robust_verdict",
+    "tolerance_box", "unit_figures", "worst_factors", "yield_factors",
+]

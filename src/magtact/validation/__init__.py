@@ -8,7 +8,6 @@ with a :class:`PathModel` (metamodels, direct simulation, samples or any functio
 from ._filter import FilterSettings, bandpass
 from ._io import (
     RESPONSES,
-    UNITS,
     Curve,
     DataError,
     Experiment,
@@ -20,14 +19,9 @@ from ._io import (
 from ._model import PathModel
 from ._outputs import output_stem, write_outputs
 from ._stats import MAX_GRID, N_GRID, ResponseStats, Validation, excluded_ranges, validate
-from ._synthetic import SYNTHETIC_DIR, SYNTHETIC_H, synthetic_files
+from ._synthetic import SYNTHETIC_H, synthetic_files
 
 __all__ = [
-    "MAX_GRID", "N_GRID", "RESPONSES", "SYNTHETIC_DIR", "SYNTHETIC_H", "UNITS", "Curve",
-    "DataError",
-    "Experiment",
-    "FilterSettings", "PathModel", "ResponseStats", "Validation", "bandpass",
-    "excluded_ranges", "output_stem", "read_cell", "read_experiment", "read_row",
-    "read_table_lines",
-    "synthetic_files", "validate", "write_outputs",
+    "DataError", "Experiment", "FilterSettings", "PathModel", "Validation", "read_experiment",
+    "validate", "write_outputs",
 ]
