@@ -273,3 +273,139 @@ def test_the_chip_has_one_home():
     for name, where in homes.items():
         assert len(where) == 1 and where[0].startswith("chip/"), (name, where)
     assert raisers == ["chip/_options.py"]
+
+
+# ---- chips are asked what they have, not compared by name -----------------------------------
+#: Comparisons a chip name on one side makes a name test.
+_EQUALITY = (ast.Eq, ast.NotEq, ast.In, ast.NotIn)
+#: Names that are also a magnet's grade or size: a chip's only where the other side is one.
+_SHARED = frozenset({"custom"})
+
+
+def chip_names() -> frozenset[str]:
+    """The names a study may give its chip (the choices of ``[hall] chip``: the chips with a
+    data file, the presets and "custom") and the names the chips' data files give them."""
+    import dataclasses
+
+    from magtact.parts import chip_part
+    from magtact.study import Study
+
+    hall = Study.__dataclass_fields__["hall"].default_factory
+    choices = next(f.metadata["choices"] for f in dataclasses.fields(hall) if f.name == "chip")
+    tables = [chip_part(n).table for n in choices]
+    return frozenset(choices) | {t.name for t in tables if t is not None} | _SHARED
+
+
+def _strings(node: ast.AST) -> set[str]:
+    """The strings of a constant, or of the constants in a tuple, list or set."""
+    items = node.elts if isinstance(node, ast.Tuple | ast.List | ast.Set) else [node]
+    return {e.value for e in items if isinstance(e, ast.Constant) and isinstance(e.value, str)}
+
+
+def _names_a_chip(const: ast.AST, other: ast.AST, names: frozenset[str]) -> bool:
+    found = _strings(const) & names
+    return bool(found - _SHARED) or bool(found) and bool(
+        re.search(r"chip|hall", ast.unparse(other), re.I))
+
+
+def chip_name_comparisons(source: str, names: frozenset[str]) -> list[int]:
+    """Lines of ``source`` that compare a value with a chip's name (``==``, ``!=``, ``in``,
+    ``not in``, or a ``match`` case) instead of asking the chip's part what it has."""
+    lines = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Compare):
+            sides = [node.left, *node.comparators]
+            for op, a, b in zip(node.ops, sides, sides[1:], strict=False):
+                if isinstance(op, _EQUALITY) and (_names_a_chip(a, b, names)
+                                                  or _names_a_chip(b, a, names)):
+                    lines.append(node.lineno)
+        elif isinstance(node, ast.Match):
+            lines += [v.lineno for case in node.cases for v in ast.walk(case.pattern)
+                      if isinstance(v, ast.MatchValue)
+                      and _names_a_chip(v.value, node.subject, names)]
+    return sorted(lines)
+
+
+def test_the_chip_name_scan_finds_name_comparisons():
+    names = frozenset({"MLX90393", "TLV493D", "TLE493D", "custom"})
+    found = chip_name_comparisons(
+        'if h.chip == "MLX90393":\n    pass\n'
+        'ok = x in ("TLV493D",)\n'
+        'flat = study.hall.chip not in ["custom", "TLE493D"]\n'
+        'match h.chip:\n    case "custom":\n        pass\n', names)
+    assert found == [1, 3, 4, 6]
+    assert chip_name_comparisons(
+        'grade = "no grade named" if p.grade == "custom" else p.grade\n'
+        'table = chip_table("MLX90393")\n'
+        'if part.custom and part.has_settings:\n    pass\n', names) == []
+
+
+def test_no_module_outside_the_chip_package_compares_chip_names():
+    """Chip identity is the chip part's (``magtact.parts.chip_part``: its table, setting
+    fields, rate data, tolerances, whether it is custom); code outside ``magtact.chip`` asks the
+    part instead of testing the study's chip name."""
+    names = chip_names()
+    assert {"MLX90393", "TLV493D", "custom", "Melexis MLX90393"} <= names
+    offenders = []
+    for path in _sources():
+        text = path.read_text("utf-8")
+        # only a source that spells a chip's name can compare with it: parse just those
+        if "chip" not in path.relative_to(PACKAGE).parts[:-1] and any(n in text for n in names):
+            offenders += [f"{path.relative_to(ROOT)}:{n}"
+                          for n in chip_name_comparisons(text, names)]
+    assert offenders == []
+
+
+# ---- the optimisation problems ----------------------------------------------------------------
+#: pymoo's problem classes.
+PYMOO_PROBLEMS = frozenset({"Problem", "ElementwiseProblem"})
+
+
+def pymoo_problem_classes(source: str) -> list[str]:
+    """Names of the classes in ``source`` that subclass a pymoo problem class (imported from
+    pymoo by name, or reached through an imported pymoo module)."""
+    tree = ast.parse(source)
+    classes, modules = set(), set()  # local names of pymoo's problem classes and modules
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "pymoo":
+            for a in node.names:
+                (classes if a.name in PYMOO_PROBLEMS else modules).add(a.asname or a.name)
+        elif isinstance(node, ast.Import):
+            modules |= {a.asname or a.name.split(".")[0] for a in node.names
+                        if a.name.split(".")[0] == "pymoo"}
+
+    def pymoo_problem(base: ast.AST) -> bool:
+        if isinstance(base, ast.Name):
+            return base.id in classes
+        if isinstance(base, ast.Attribute) and base.attr in PYMOO_PROBLEMS:
+            root = base.value
+            while isinstance(root, ast.Attribute):
+                root = root.value
+            return isinstance(root, ast.Name) and root.id in modules
+        return False
+
+    return [n.name for n in ast.walk(tree)
+            if isinstance(n, ast.ClassDef) and any(pymoo_problem(b) for b in n.bases)]
+
+
+def test_the_problem_scan_finds_pymoo_problems():
+    source = (
+        "from pymoo.core.problem import Problem, ElementwiseProblem as EP\n"
+        "import pymoo.core.problem\n"
+        "from pymoo.core import problem as pp\n"
+        "class A(Problem): pass\n"
+        "def f():\n    class B(EP): pass\n"
+        "class C(pymoo.core.problem.Problem): pass\n"
+        "class D(pp.ElementwiseProblem): pass\n"
+        "class E(object): pass\n")
+    assert sorted(pymoo_problem_classes(source)) == ["A", "B", "C", "D"]
+    assert pymoo_problem_classes("from mylib import Problem\nclass A(Problem): pass\n") == []
+
+
+def test_at_most_two_pymoo_problems():
+    """The sensor design problem and the publication's (H, G) problem; a single box is
+    optimised without one (SciPy's differential evolution in ``box_optimum``)."""
+    texts = {p: p.read_text("utf-8") for p in _sources()}
+    found = [f"{p.relative_to(ROOT)}: {c}" for p, text in texts.items() if "pymoo" in text
+             for c in pymoo_problem_classes(text)]
+    assert len(found) <= 2, found

@@ -8,9 +8,9 @@ Three methods:
 - :func:`batch_optimum` (many problems at once): the best point of a regular start grid (or
   given starts), refined by a vectorised projected Newton method with an active set. Used
   where thousands of heights are needed (NSGA-II, the exact reduction).
-- :func:`box_optimum` (one problem): a seeded genetic algorithm (pymoo ``GA``) finds the basin,
-  SciPy ``trust-constr`` with the exact gradient and Hessian refines it: the independent
-  reference the tests check the other two against.
+- :func:`box_optimum` (one problem): a seeded differential evolution (SciPy
+  ``differential_evolution``) finds the basin, SciPy ``trust-constr`` with the exact gradient
+  and Hessian refines it: the independent reference the tests check the other two against.
 
 A box side of zero width (a degenerate box, t_m = 0 or θ_m = 0) fixes that variable; the other is
 optimised alone, or the single point is evaluated.
@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import Bounds, minimize
+from scipy.optimize import Bounds, differential_evolution, minimize
 
 VARS: tuple[str, str] = ("t", "theta")
 
@@ -41,7 +41,7 @@ class BoxOptimum:
     value : float
         Response at the optimum (per unit G: N/Pa or N/(T·Pa)).
     start_t, start_theta, start_value : float
-        Best point of the genetic algorithm (the start of the refinement) and its value.
+        Best point of the differential evolution (the start of the refinement) and its value.
     iterations : int
         Trust-region iterations of the refinement (0 if nothing was free to optimise).
     kkt : float
@@ -81,7 +81,8 @@ def _projected_gradient(g, x, lo, hi):
 
 def box_optimum(fun: Fun, jac: Fun, hess: Fun, lo, hi, *, maximise: bool, population: int,
                 generations: int, seed: int, tol: float) -> BoxOptimum:
-    """Optimise ``fun`` over the box ``[lo, hi]`` in (t, θ): seeded GA start, trust-region finish.
+    """Optimise ``fun`` over the box ``[lo, hi]`` in (t, θ): seeded differential evolution
+    start, trust-region finish.
 
     Parameters
     ----------
@@ -92,7 +93,8 @@ def box_optimum(fun: Fun, jac: Fun, hess: Fun, lo, hi, *, maximise: bool, popula
     maximise : bool
         Maximise instead of minimise.
     population, generations, seed : int
-        Genetic algorithm size, number of generations and random seed.
+        Differential evolution's population (about; a multiple of the free variables), number
+        of generations and random seed.
     tol : float
         ``gtol``, ``xtol`` and ``barrier_tol`` of ``trust-constr``.
 
@@ -103,11 +105,12 @@ def box_optimum(fun: Fun, jac: Fun, hess: Fun, lo, hi, *, maximise: bool, popula
     Notes
     -----
     The refinement minimises φ(x) = s·f(x)/c with s = −1 to maximise and c the magnitude of f at
-    the GA point, so the tolerances are relative. The interior-point iterates of
+    the evolution's point, so the tolerances are relative. The interior-point iterates of
     ``trust-constr`` stop at the barrier's distance from an active bound (about 1e-7 here), so an
     active-set step finishes the job: variables that lean on a bound are held there and
     ``trust-exact`` (unconstrained trust region, exact Hessian) solves for the others, which
-    brings the projected gradient to ``tol``. The result is never worse than the GA start.
+    brings the projected gradient to ``tol``. The result is never worse than the evolution's
+    start.
     """
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     if lo.shape != (2,) or hi.shape != (2,) or np.any(hi < lo):
@@ -130,9 +133,9 @@ def box_optimum(fun: Fun, jac: Fun, hess: Fun, lo, hi, *, maximise: bool, popula
         v = float(fun(x[None])[0])
         return BoxOptimum(x[0], x[1], v, x[0], x[1], v, 0, 0.0, _active(x, lo, hi))
 
-    z_ga = _ga(phi_raw, lo[free], hi[free], population, generations, seed)
-    v_ga = float(sign * phi_raw(z_ga[None])[0])
-    scale = abs(v_ga) if v_ga != 0 and np.isfinite(v_ga) else 1.0
+    z0 = _evolution(phi_raw, lo[free], hi[free], population, generations, seed)
+    v0 = float(sign * phi_raw(z0[None])[0])
+    scale = abs(v0) if v0 != 0 and np.isfinite(v0) else 1.0
 
     def phi(z):
         return float(phi_raw(z[None])[0]) / scale
@@ -146,20 +149,20 @@ def box_optimum(fun: Fun, jac: Fun, hess: Fun, lo, hi, *, maximise: bool, popula
     with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore",
                                                 divide="ignore"):
         warnings.filterwarnings("ignore", message=".*delta_grad == 0.0.*")
-        res = minimize(phi, z_ga, method="trust-constr", jac=dphi, hess=d2phi,
+        res = minimize(phi, z0, method="trust-constr", jac=dphi, hess=d2phi,
                        bounds=Bounds(lo[free], hi[free], keep_feasible=True),
                        options={"gtol": tol, "xtol": tol, "barrier_tol": tol, "maxiter": 2000})
         z, nit = _active_set_finish(phi, dphi, d2phi, np.clip(res.x, lo[free], hi[free]),
                                     lo[free], hi[free], tol)
-    if not phi(z) <= phi(z_ga) + _ROUNDOFF * max(1.0, abs(phi(z_ga))):
-        z = z_ga
+    if not phi(z) <= phi(z0) + _ROUNDOFF * max(1.0, abs(phi(z0))):
+        z = z0
     x = full(z)[0]
     value = float(fun(x[None])[0])
     g = sign * np.asarray(jac(x[None]), float)[0]
     pg = _projected_gradient(g, x, lo, hi) * (hi - lo)
     kkt = float(np.max(np.abs(pg)) / max(abs(value), scale))
-    xs = full(z_ga)[0]
-    return BoxOptimum(float(x[0]), float(x[1]), value, float(xs[0]), float(xs[1]), v_ga,
+    xs = full(z0)[0]
+    return BoxOptimum(float(x[0]), float(x[1]), value, float(xs[0]), float(xs[1]), v0,
                       int(res.nit) + nit, kkt, _active(x, lo, hi))
 
 
@@ -236,23 +239,27 @@ def _newton_polish(phi, dphi, d2phi, z, face, lo, hi, steps: int = 3):
     return z
 
 
-def _ga(phi, lo, hi, population, generations, seed) -> np.ndarray:
-    """Best point of a seeded pymoo GA minimising ``phi`` (vectorised) over ``[lo, hi]``."""
-    from pymoo.algorithms.soo.nonconvex.ga import GA
-    from pymoo.core.problem import Problem
-    from pymoo.optimize import minimize as pymoo_minimize
+def _evolution(phi, lo, hi, population, generations, seed) -> np.ndarray:
+    """Best point of a seeded differential evolution minimising ``phi`` (vectorised) over
+    ``[lo, hi]``: about ``population`` members (rounded up to a multiple of the free
+    variables), ``generations`` generations, no early stop and no polish (the trust region
+    refines the point).
 
-    class _P(Problem):
-        def __init__(self):
-            super().__init__(n_var=lo.size, n_obj=1, xl=lo, xu=hi)
-
-        def _evaluate(self, x, out, *args, **kwargs):
-            out["F"] = phi(x)[:, None]
-
-    res = pymoo_minimize(_P(), GA(pop_size=population, eliminate_duplicates=False),
-                         ("n_gen", generations), seed=seed,
-                         verbose=False)
-    return np.atleast_1d(np.asarray(res.X, float))
+    The evolution runs on the box widened by a tenth of its width on each side and evaluates a
+    point outside at its projection onto the box, so that members land on a bound an optimum
+    lies on. SciPy's own bound handling redraws a member that leaves the box at random, never
+    on a bound, and from a start short of a bound along which the response is flat the
+    refinement stops short of the bound too.
+    """
+    n, margin = lo.size, 0.1 * (hi - lo)
+    with np.errstate(over="ignore", invalid="ignore"):
+        # ``seed`` rather than ``rng``: the oldest SciPy magtact supports has no ``rng``
+        res = differential_evolution(lambda z: phi(np.clip(z.T, lo, hi)),
+                                     list(zip(lo - margin, hi + margin, strict=True)),
+                                     popsize=max(1, -(-population // n)), maxiter=generations,
+                                     tol=0.0, atol=0.0, polish=False, seed=seed,
+                                     vectorized=True, updating="deferred")
+    return np.clip(np.atleast_1d(np.asarray(res.x, float)), lo, hi)
 
 
 # ---- many boxes at once -------------------------------------------------------------------------

@@ -15,14 +15,16 @@ from ._catalogue import (
 )
 from ._chips import (
     MLX_FIELDS,
+    ChipPart,
     ChipSetting,
     ChipTable,
     SettingError,
     SettingFigures,
+    chip_part,
     chip_table,
 )
 
 __all__ = [
-    "GRADES", "SILICONES", "SIZES", "ChipSetting", "ChipTable", "Grade", "Silicone", "Size",
-    "chip_table", "grade", "size",
+    "GRADES", "SILICONES", "SIZES", "ChipPart", "ChipSetting", "ChipTable", "Grade", "Silicone",
+    "Size", "chip_part", "chip_table", "grade", "size",
 ]

@@ -15,6 +15,10 @@ the datasheet it comes from. For the MLX90393 a setting is (GAIN_SEL, RES, OSR, 
 
 The noise of a reading adds the quantisation of its LSB q: σ = √(σ_a² + q²/12). A noise the
 user measured at the setting replaces the interval and is taken as the reading's total noise.
+
+What a chip the study names has (a setting table, setting fields, rate data, datasheet
+tolerances, or nothing: a custom chip) is :func:`chip_part`'s answer, read off the data files,
+so that callers ask the part instead of comparing chip names.
 """
 
 from __future__ import annotations
@@ -29,6 +33,8 @@ from .._errors import MagtactError
 
 #: Chips with a data file (the study's ``[hall] chip`` names).
 CHIP_FILES: dict[str, str] = {"MLX90393": "mlx90393.toml", "TLV493D": "tlv493d.toml"}
+#: The study's name of a chip of the user's own: no data, the study gives its noise and range.
+CUSTOM_CHIP = "custom"
 #: The MLX90393's setting fields, their datasheet names and allowed values.
 MLX_FIELDS: dict[str, tuple[str, int]] = {"gain_sel": ("GAIN_SEL", 8), "res": ("RES", 4),
                                           "osr": ("OSR", 4), "dig_filt": ("DIG_FILT", 8)}
@@ -113,7 +119,8 @@ class ChipTable:
             raise SettingError("chip", f"no table for {chip!r}; known: {', '.join(CHIP_FILES)}")
         self.chip = chip
         self.data = _data(chip)
-        self.programmable = chip == "MLX90393"
+        #: Whether the chip has settings to choose (its data file lists their fields).
+        self.programmable = bool(self.data.get("settings"))
 
     @property
     def name(self) -> str:
@@ -259,6 +266,61 @@ class ChipTable:
 def chip_table(chip: str) -> ChipTable:
     """The tables of ``chip`` (``"MLX90393"``, ``"TLV493D"``)."""
     return ChipTable(chip)
+
+
+@dataclass(frozen=True)
+class ChipPart:
+    """What a Hall chip the study may name has, read off its data file.
+
+    Attributes
+    ----------
+    name : str
+        The study's name of the chip (``[hall] chip``).
+    table : ChipTable or None
+        The chip's datasheet tables; None for a chip without a data file (a preset of the
+        study, which states its range only, or a custom chip).
+    custom : bool
+        A chip of the user's own: no data at all, the study gives its noise and range.
+    """
+
+    name: str
+    table: ChipTable | None
+    custom: bool
+
+    @property
+    def setting_fields(self) -> tuple[str, ...]:
+        """The setting fields the chip has (keys of :data:`MLX_FIELDS`), in datasheet order;
+        empty for a chip with one setting or no table."""
+        if self.table is None:
+            return ()
+        words = self.table.data.get("settings", ())
+        return tuple(k for k, (word, _) in MLX_FIELDS.items() if word in words)
+
+    @property
+    def has_settings(self) -> bool:
+        """Whether the chip has settings to choose (a table of them)."""
+        return self.table is not None and self.table.programmable
+
+    @property
+    def has_rate(self) -> bool:
+        """Whether the chip's data give its sample rate."""
+        if self.table is None:
+            return False
+        d = self.table.data
+        return "max_rate_Hz" in d or "max_rate_Hz" in d.get("conversion", {})
+
+    def tolerance(self) -> tuple[float, float, float, str] | None:
+        """The datasheet's sensitivity and offset bands (:meth:`ChipTable.tolerance`); None
+        where the chip has no data or its data give none."""
+        return None if self.table is None else self.table.tolerance()
+
+
+@cache
+def chip_part(name: str) -> ChipPart:
+    """The chip the study names ``name`` (``[hall] chip``): its tables where it has a data
+    file, whether it is a custom chip."""
+    return ChipPart(name, ChipTable(name) if name in CHIP_FILES else None,
+                    custom=name == CUSTOM_CHIP)
 
 
 def widest(table: ChipTable) -> tuple[float, float]:

@@ -119,8 +119,8 @@ def publication_section(folder: Path, run_definition: str | None) -> str:
 
 
 def saturation_argument() -> str:
-    """HTML paragraph: the publication's t = 1 against the MLX90393's saturation onset, with
-    the exact field of the publication's magnet (docs/method.md §10)."""
+    """HTML paragraph: the publication's t = 1 against its Hall chip's saturation onset (the
+    MLX90393's), with the exact field of the publication's magnet (docs/method.md §10)."""
     from ..metamodel import ExactField
     from ..parts import chip_table
     from ..study import load_study, mm, mt
@@ -129,21 +129,21 @@ def saturation_argument() -> str:
     H0 = s.design.H_original
     sat = abs(float(ExactField(s, "B_z").value(1.0, 0.0, H0)))
     rest = abs(float(ExactField(s, "B_z").value(0.0, 0.0, H0)))
-    mlx = chip_table("MLX90393")
+    chip = chip_table(s.hall.chip)
     t = np.linspace(0.0, 1.0, 1001)
-    t_on = float(t[np.argmax(np.abs(ExactField(s, "B_z").value(t, 0.0, H0)) > mlx.B_sat)])
+    t_on = float(t[np.argmax(np.abs(ExactField(s, "B_z").value(t, 0.0, H0)) > chip.B_sat)])
     return (
         "<p><b>Where the chip saturates.</b> The publication defines t = 1 by the Hall chip's "
         f"saturation, at a magnet–chip distance Δz_sat = {mm(s.loading.dz_sat):.3g} mm. The "
         f"exact field of its magnet (R_m {mm(s.magnet.R_m):.3g} mm, H_m "
         f"{mm(s.magnet.H_m):.3g} mm, M_z {s.magnet.M_z / 1e6:.3g} MA/m) is "
-        f"|B_z| = {mt(sat):.0f} mT there, far beyond the {mlx.name}'s saturation onset of "
-        f"{mt(mlx.B_sat):.0f} mT (its datasheet, Table 9), which the field already reaches "
+        f"|B_z| = {mt(sat):.0f} mT there, far beyond the {chip.name}'s saturation onset of "
+        f"{mt(chip.B_sat):.0f} mT (its datasheet, Table 9), which the field already reaches "
         f"at t = {t_on:.2f} of the original design (|B_z| = {mt(rest):.0f} mT at rest). Either the "
         f"sensor had a chip of about {mt(sat):.0f} mT range, or a weaker or more distant "
-        "magnet: with the MLX90393, the part of the loading path the publication optimises "
-        "over is read only up to the onset. magtact keeps the publication's t for the "
-        "comparison and reports where the chip saturates at the setting used (the design "
+        f"magnet: with the {s.hall.chip}, the part of the loading path the publication "
+        "optimises over is read only up to the onset. magtact keeps the publication's t for "
+        "the comparison and reports where the chip saturates at the setting used (the design "
         "card).</p>")
 
 

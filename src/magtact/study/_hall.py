@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from ..parts import MLX_FIELDS, ChipSetting, SettingError, SettingFigures, chip_table
+from ..parts import MLX_FIELDS, ChipSetting, SettingError, SettingFigures, chip_part, chip_table
 from ._errors import StudyError
 from ._model import Study
 
@@ -114,18 +114,19 @@ def check_hall(study: Study) -> None:
                                                "sensitivity (sensitivity.definition = "
                                                "'jacobian')")
     fixed = fixed_setting(study)
-    if h.chip not in ("MLX90393",):
-        for k in fixed:
+    part = chip_part(h.chip)
+    for k in fixed:
+        if k not in part.setting_fields:
             raise StudyError(f"hall.{k}", f"the {h.chip} has no {MLX_FIELDS[k][0]} setting; "
                                           "leave it at -1 (the MLX90393's only)")
-    if h.chip == "custom":
+    if part.custom:
         for k, v in (("noise_x", h.noise_x), ("noise_z", h.noise_z)):
             if not v > 0:
                 raise StudyError(f"hall.{k}_uT", "give the chip's RMS field noise (> 0): a "
                                                  "'custom' chip has no data")
-    if h.chip in ("custom", "TLE493D"):  # no rate data: the verdict says the rate is unknown
+    if not part.has_rate:  # the verdict says the rate is unknown
         return
-    table = chip_table(h.chip)
+    table = part.table
     for k, v in fixed.items():
         word, n = MLX_FIELDS[k]
         if v >= n:
@@ -170,7 +171,8 @@ def hall_chip(study: Study) -> HallChip:
         For a ``custom`` chip without a range (the range has no default).
     """
     h = study.hall
-    if h.chip in ("MLX90393", "TLV493D"):
+    table = chip_part(h.chip).table
+    if table is not None:
         cands = list(candidate_settings(study))
         if len(cands) == 1:
             fig = setting_figures(study, cands[0])
@@ -179,7 +181,6 @@ def hall_chip(study: Study) -> HallChip:
                             fig.words, fig.source + ("; figures given in the study replace the "
                                                      "chip data's" if own else ""),
                             figures=fig)
-        table = chip_table(h.chip)
         pairs = {(s.gain_sel, s.res) for s in cands}
         ranges = [tuple(min(table.output_limit(r) * v, table.B_sat) for v in table.lsb(g, r))
                   for g, r in pairs]

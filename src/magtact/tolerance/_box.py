@@ -107,7 +107,7 @@ def tolerance_box(study: Study) -> ToleranceBox:
     StudyError
         Naming ``tolerances.temperature_C`` for a range whose ends are reversed.
     """
-    from ..parts import chip_table, grade
+    from ..parts import chip_part, grade
 
     tol, m = study.tolerances, study.magnet
     k = tol.coverage
@@ -134,8 +134,7 @@ def tolerance_box(study: Study) -> ToleranceBox:
                             "tolerances.temperature_C (assumed working range)")
     gain, off_x, off_z, chip_source = tol.chip_sensitivity, tol.chip_offset_x, \
         tol.chip_offset_z, "tolerances.chip_*"
-    data = chip_table(study.hall.chip).tolerance() if study.hall.chip in (
-        "MLX90393", "TLV493D") else None
+    data = chip_part(study.hall.chip).tolerance()
     if data is not None:
         gain = gain or data[0]
         off_x, off_z = off_x or data[1], off_z or data[2]
