@@ -33,7 +33,7 @@ from ._stages import (
     optimise_figures,
     validation_figures,
 )
-from ._style import save, style
+from ._style import save, saved_in_background, style
 
 __all__ = [
     "budget_figures", "build_report", "calibration_figures", "field_figures", "fit_figures",
