@@ -285,6 +285,15 @@ def magone_design():
     return magtact.design()
 
 
+@pytest.fixture(scope="session")
+def magone_budgets(magone_design):
+    """``magtact.error_budgets(magone_design)``: a Monte-Carlo computation of a few seconds,
+    done once per test process for every test that shows or writes the card."""
+    import magtact
+
+    return magtact.error_budgets(magone_design)
+
+
 #: A ⌀3 × 1 mm N52 magnet asked for 3 N normal, 0.5 N shear at 200 Hz (the bundled data hold the
 #: 3 × 1 mm magnet; no body of H 3–7 mm, G 10–50 kPa carries 0.5 N of shear): a specification no
 #: design meets. A coarser sweep over H than the preset's keeps the tests short.

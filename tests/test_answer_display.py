@@ -22,7 +22,7 @@ ANSI = re.compile(r"\x1b\[[0-?]*[ -/]*[@-~]|\x1b\][^\x07]*\x07")
 
 # ---- every object a user gets ------------------------------------------------------------------
 @pytest.fixture(scope="module")
-def objects(magone_design, tmp_path_factory):
+def objects(magone_design, magone_budgets, tmp_path_factory):
     """Every public object of an answer, by name: the result and what it holds, an evaluation,
     a budget, a calibration, the sensor map, the study, a run's result and the answer to a
     specification no design meets."""
@@ -33,11 +33,11 @@ def objects(magone_design, tmp_path_factory):
 
     r = magone_design
     folder = tmp_path_factory.mktemp("run")
-    card = dict(r.card)
+    card = magtact.card(r, magone_budgets)
     run = RunResult(folder, folder / "report.html",
                     (StageRecord(key="field", title="Magnetic field", status="ok",
                                  message="3 files " + "x" * 200, wall_time_s=5.4),),
-                    44.2, answer=card)
+                    44.2, answer=dict(card))
     infeasible = Infeasible(
         (Requirement("normal", False, "reads 0–3 N normal without saturating",
                      "no: up to 9.05 N alone, not with 0.5 N shear", math.nan, "N"),
@@ -46,9 +46,9 @@ def objects(magone_design, tmp_path_factory):
         "shear", Relaxation("shear", 0.5, 0.323, "N", "requirements.F_r_N"), "why", "tiny")
     return {"result": r, "study": r.study, "chosen": r.chosen, "original": r.original,
             "parts": r.chosen.parts, "verdict": r.chosen.verdict,
-            "evaluation": r.evaluate(H_mm=4.0, G_kPa=30.0), "card": r.card,
-            "budget": r.budgets[0], "sensor": r.sensor, "force_map": magtact.force_map(r),
-            "calibration": r.calibrate(degrees=(8,), table_sizes=(16,)), "run": run,
+            "evaluation": r.evaluate(H_mm=4.0, G_kPa=30.0), "card": card,
+            "budget": magone_budgets[0], "sensor": r.sensor, "force_map": magtact.force_map(r),
+            "calibration": magtact.calibrate(r, degrees=(8,), table_sizes=(16,)), "run": run,
             "infeasible": infeasible}
 
 
@@ -175,10 +175,12 @@ def in_pty(args: list[str], columns: int = 80, lines: int = 24) -> tuple[str, in
 
 
 def test_the_last_screen_of_magtact_run_holds_the_verdict_with_margins_and_the_parts(
-        magone_design, tmp_path):
+        magone_design, magone_budgets, tmp_path):
+    from magtact import write_results_into
     from magtact.report import read_card
 
-    magone_design.write_into(tmp_path / "optimise", figures=False, budget=False)
+    write_results_into(magone_design, tmp_path / "optimise", figures=False, budget=False,
+                       budgets=magone_budgets)
     card = read_card(tmp_path / "optimise")
     script = tmp_path / "run.py"
     script.write_text(RUN_SCRIPT, encoding="utf-8")
@@ -209,15 +211,17 @@ def test_the_last_screen_of_magtact_run_holds_the_verdict_with_margins_and_the_p
 
 
 @pytest.mark.parametrize("quiet", [False, True])
-def test_quiet_leaves_out_the_progress_not_the_answer(magone_design, tmp_path, monkeypatch,
-                                                      quiet):
+def test_quiet_leaves_out_the_progress_not_the_answer(magone_design, magone_budgets, tmp_path,
+                                                      monkeypatch, quiet):
     from typer.testing import CliRunner
 
     import magtact.pipeline as pipeline
+    from magtact import write_results_into
     from magtact.cli import app
     from magtact.report import read_card
 
-    magone_design.write_into(tmp_path / "optimise", figures=False, budget=False)
+    write_results_into(magone_design, tmp_path / "optimise", figures=False, budget=False,
+                       budgets=magone_budgets)
 
     def run_study(study, out, *, log, **options):
         log("[1/7] Magnetic field ...")

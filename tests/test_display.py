@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+import magtact
 from magtact._display import MAX_LINES, Card, round_text, sig, significant_digits
 
 #: A decimal number as the displays write one (not a dotted version, not inside a word).
@@ -112,8 +113,8 @@ def test_result_prints_in_user_units(result):
     assert "Γ_r,max" in text and "Gamma_r" not in text
 
 
-def test_the_budget_prints_largest_first_in_mN(result):
-    b = result.budgets[0]
+def test_the_budget_prints_largest_first_in_mN(magone_budgets):
+    b = magone_budgets[0]
     text, html = str(b), b._repr_html_()
     check_block(text, html, ("mm", "kPa", "mN"))
     shown = []
@@ -127,7 +128,7 @@ def test_the_budget_prints_largest_first_in_mN(result):
 
 
 def test_the_calibration_prints_its_target_and_firmware(result):
-    cal = result.calibrate(degrees=(8,), table_sizes=(16,))
+    cal = magtact.calibrate(result, degrees=(8,), table_sizes=(16,))
     text, html = str(cal), cal._repr_html_()
     check_block(text, html, ("mm", "kPa", "mN"))
     assert f"{cal.firmware.chosen.bytes} bytes" in text
@@ -139,8 +140,8 @@ def test_the_calibration_prints_its_target_and_firmware(result):
     assert "shear angle θ [rad]" in labels and "largest error / $\\sigma_F$" in labels
 
 
-def test_the_result_card_leads_with_its_verdict_and_parts(result):
-    card = result.card
+def test_the_result_card_leads_with_its_verdict_and_parts(result, magone_budgets):
+    card = magtact.card(result, magone_budgets)
     text = str(card)
     assert isinstance(card, dict) and len(text.splitlines()) <= MAX_LINES
     if result.chosen.verdict is not None:
@@ -168,6 +169,6 @@ def test_the_card_prints_its_verdict_and_parts_first_in_25_lines():
 
 
 @pytest.mark.long
-def test_result_figures_include_the_budget_and_the_calibration(result):
-    figs = result.figures()
+def test_result_figures_include_the_budget_and_the_calibration(result, magone_budgets):
+    figs = magtact.figures(result, magone_budgets)
     assert {"budget_chosen", "calibration", "pareto_set"} <= set(figs)

@@ -1,18 +1,20 @@
-"""``magtact.Result`` is a record: the error budget, the calibration and the writing are
-functions over it (``magtact.error_budget``, ``calibrate``, ``write_results``,
-``write_results_into``), and its methods of the same work give the same answers and files."""
+"""``magtact.Result`` is a plain record: what is made of it are functions that take it first
+(``magtact.error_budget``, ``error_budgets``, ``calibrate``, ``card``, ``figures``,
+``write_results``, ``write_results_into``); the error budgets of a results folder are computed
+once, for its card and its ``budget.json``."""
 
 from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
 
 import magtact
 
-#: A small calibration (the function against the method, not the firmware's accuracy).
+#: A small calibration (the function's defaults, not the firmware's accuracy).
 SMALL_CALIBRATION = {"degrees": (4,), "table_sizes": (16,)}
+FUNCTIONS = ("error_budget", "error_budgets", "calibrate", "card", "figures", "write_results",
+             "write_results_into")
 
 
 @pytest.fixture(scope="module")
@@ -28,37 +30,29 @@ def test_the_functions_are_public_and_shadow_no_sub_package():
     import magtact.budget
     import magtact.calibration
 
-    for name in ("error_budget", "calibrate", "write_results", "write_results_into"):
+    for name in FUNCTIONS:
         assert name in magtact.__all__ and callable(getattr(magtact, name)), name
         assert getattr(magtact, name).__doc__.count("Parameters\n    ----------") == 1, name
     # the sub-packages keep their names: the budget's function is not called ``budget``
     assert magtact.budget.__name__ == "magtact.budget"
     assert magtact.calibration.__name__ == "magtact.calibration"
-    for method, function in (("budget", "error_budget"), ("calibrate", "calibrate"),
-                             ("write", "write_results"), ("write_into", "write_results_into")):
-        assert f"magtact.{function}(self" in getattr(magtact.Result, method).__doc__, method
+    # one way to each: the record has no member doing the functions' work
+    members = {"budget", "budgets", "calibrate", "card", "figures", "write", "write_into"}
+    assert not members & set(dir(magtact.Result))
 
 
-def test_the_budget_function_and_method_agree(result):
-    kwargs = {"noise": (1e-6, 1.5e-6)}
-    by_function = magtact.error_budget(result, result.original, **kwargs)
-    by_method = result.budget(result.original, **kwargs)
-    assert by_function.label == by_method.label == "original"
-    assert _doc(by_function) == _doc(by_method)
-    # the default design is the chosen one, and the cached budgets are the function's
-    chosen = magtact.error_budget(result, dataset=result.dataset)
-    assert chosen.label == "chosen"
-    assert _doc(chosen) == _doc(result.budgets[0])
+def test_the_budgets_are_the_budget_function_of_both_designs(result, magone_budgets):
+    chosen, original = magone_budgets
+    assert (chosen.label, original.label) == ("chosen", "original")
+    # the default design is the chosen one
+    assert _doc(magtact.error_budget(result, dataset=result.dataset)) == _doc(chosen)
+    given = magtact.error_budget(result, result.original, noise=(1e-6, 1.5e-6))
+    assert given.label == "original" and given.noise_source.startswith("given as")
 
 
-def test_the_calibrate_function_and_method_agree(result):
-    by_function = magtact.calibrate(result, **SMALL_CALIBRATION)
-    by_method = result.calibrate(**SMALL_CALIBRATION)
-    assert _doc(by_function) == _doc(by_method)
-    assert by_function.map.H == result.chosen.H and by_function.map.G == result.chosen.G
-    for key in ("err_r", "err_z"):
-        np.testing.assert_array_equal(by_function.grid[key], by_method.grid[key])
-    assert by_function.firmware.chosen.to_json() == by_method.firmware.chosen.to_json()
+def test_the_calibrate_function_calibrates_the_chosen_design(result):
+    cal = magtact.calibrate(result, **SMALL_CALIBRATION)
+    assert cal.map.H == result.chosen.H and cal.map.G == result.chosen.G
 
 
 def test_the_calibrate_function_refuses_a_geometry_range(result):
@@ -75,19 +69,29 @@ def _files(files, root) -> dict[str, bytes]:
     return {p.relative_to(root).as_posix(): p.read_bytes() for p in files}
 
 
-def test_write_function_and_method_write_the_same_files(result, tmp_path):
-    a, b = tmp_path / "function", tmp_path / "method"
-    by_function = _files(magtact.write_results(result, a, figures=False), a)
-    by_method = _files(result.write(b, figures=False), b)
-    assert by_function.keys() == by_method.keys()
-    assert {"card.json", "budget.json", "design.json", "chosen.json"} <= by_function.keys()
-    assert by_function == by_method
-    # into a folder already held: the same files
-    c, d = tmp_path / "into_function", tmp_path / "into_method"
+def test_a_results_folder_computes_its_budgets_once(result, magone_budgets, tmp_path,
+                                                  monkeypatch):
+    """Without ``budgets=``, writing a folder computes the two budgets once for the card and
+    ``budget.json``, and writes what a caller's budgets give; the card is ``magtact.card``."""
+    import magtact._outputs as outputs
+
+    calls = []
+    real = outputs.error_budget
+    monkeypatch.setattr(outputs, "error_budget", lambda *a, **k: calls.append(a) or real(*a, **k))
+    a, b = tmp_path / "computed", tmp_path / "given"
+    computed = _files(magtact.write_results(result, a, figures=False), a)
+    assert len(calls) == 2
+    given = _files(magtact.write_results(result, b, figures=False, budgets=magone_budgets), b)
+    assert len(calls) == 2
+    assert {"card.json", "budget.json", "design.json", "chosen.json"} <= computed.keys()
+    assert computed == given
+    card = json.loads(computed["card.json"])
+    assert card["rows"] == magtact.card(result, magone_budgets)["rows"]
+    # into a folder already held: the same files, budget.json only where asked
+    c = tmp_path / "into"
     c.mkdir()
-    d.mkdir()
-    into_function = _files(magtact.write_results_into(result, c, figures=False,
-                                                      budget=False), c)
-    into_method = _files(result.write_into(d, figures=False, budget=False), d)
-    assert into_function == into_method and "card.json" in into_function
-    assert "budget.json" not in into_function
+    into = _files(magtact.write_results_into(result, c, figures=False, budget=False,
+                                             budgets=magone_budgets), c)
+    assert len(calls) == 2
+    assert "budget.json" not in into and into == {k: v for k, v in given.items()
+                                                  if k in into}

@@ -24,6 +24,8 @@ from pathlib import Path
 
 import pytest
 
+import magtact
+
 ROOT = Path(__file__).resolve().parents[1]
 SCANNED = ("report", "cli")
 #: Files of a results folder that ``magtact.report`` writes (its own keys).
@@ -69,16 +71,18 @@ def scanned(key: str) -> bool:
 
 
 @pytest.fixture(scope="module")
-def written_keys(tmp_path_factory, magone_design) -> dict[str, set[str]]:
+def written_keys(tmp_path_factory, magone_design, magone_budgets) -> dict[str, set[str]]:
     """key → the files of other modules that write it."""
     from magtact._runfolder import RunManifest, StageRecord
 
     result = magone_design
     folder = tmp_path_factory.mktemp("written")
     docs = {p.name: json.loads(p.read_text(encoding="utf-8"))
-            for p in result.write_into(folder, figures=False, budget=True)
+            for p in magtact.write_results_into(result, folder, figures=False, budget=True,
+                                                budgets=magone_budgets)
             if p.suffix == ".json"}
-    docs["calibration.json"] = result.calibrate(degrees=(4,), table_sizes=(16,)).to_json()
+    docs["calibration.json"] = magtact.calibrate(result, degrees=(4,),
+                                                 table_sizes=(16,)).to_json()
     docs["run.json"] = RunManifest(
         "id", "study", "magtact run", "now", stages=[StageRecord("doe", "DOE", "ok", 1.0)],
         doe_source="bundled", wall_time_s=2.0, interrupted="KeyboardInterrupt",

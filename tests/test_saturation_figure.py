@@ -64,12 +64,14 @@ def test_the_saturation_figure_agrees_with_a_bisection_on_the_exact_field(magone
     assert a.saturation.F_z == pytest.approx(a.verdict.F_saturation, rel=1e-9)
 
 
-def test_every_file_and_display_states_the_same_saturation_figure(magone_design, tmp_path):
+def test_every_file_and_display_states_the_same_saturation_figure(magone_design, magone_budgets,
+                                                                  tmp_path):
+    import magtact
     from magtact import write_results_into
 
     r = magone_design
     figure = f"{r.chosen.verdict.F_saturation:.3g}"
-    write_results_into(r, tmp_path, figures=False, budget=False)
+    write_results_into(r, tmp_path, figures=False, budget=False, budgets=magone_budgets)
     card = json.loads((tmp_path / "card.json").read_text())
     sensor = json.loads((tmp_path / "sensor.json").read_text())
     chosen = json.loads((tmp_path / "chosen.json").read_text())
@@ -78,9 +80,10 @@ def test_every_file_and_display_states_the_same_saturation_figure(magone_design,
               "chosen.json": chosen["F_saturation_N"]}
     assert {k: f"{v:.3g}" for k, v in stated.items()} == dict.fromkeys(stated, figure)
     # the card's rows (the terminal's and the report's card) and the verdict's words
-    rows = " | ".join(" ; ".join(row) for row in r.card["rows"])
+    shown = magtact.card(r, magone_budgets)
+    rows = " | ".join(" ; ".join(row) for row in shown["rows"])
     assert f"F_z = {figure} N" in rows and f"saturates at {figure} N" in rows
-    assert f"saturates at {figure} N" in str(r.card)
+    assert f"saturates at {figure} N" in str(shown)
     assert f"saturates at {figure} N" in r.chosen.verdict["normal"].answer
 
 

@@ -147,11 +147,12 @@ def assert_worst_corner_reads(result, n_t=401):
     assert checked >= 3
 
 
-def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_card(result):
+def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_card(
+        result, magone_budgets):
     B = assert_reads_required_loads(result)
     a = result.chosen
     assert np.abs(B[1]).max() > 0.5 * a.chip.range_z  # it uses its range
-    rows = result.card["rows"]
+    rows = magtact.card(result, magone_budgets)["rows"]
     req = [r.statement for r in a.verdict.requirements]
     assert [r[0] for r in rows[:len(req)]] == req
     assert req[0] == "reads 0–5 N normal without saturating"

@@ -275,6 +275,43 @@ def test_the_chip_has_one_home():
     assert raisers == ["chip/_options.py"]
 
 
+def _result_module() -> Path:
+    """The module that defines ``magtact.Result`` (a class ``Result`` at its top level)."""
+    homes = [p for p in _sources()
+             if any(isinstance(n, ast.ClassDef) and n.name == "Result"
+                    for n in ast.parse(p.read_text("utf-8")).body)]
+    assert len(homes) == 1, homes
+    return homes[0]
+
+
+def test_the_result_is_a_plain_record():
+    """``magtact.Result`` holds what was computed and nothing the report makes of it: the
+    module that defines it imports no report code, not even inside a function nor through the
+    modules it imports, and the class caches no computation (the card, the error budgets and
+    the figures are functions of it: ``magtact.card``, ``error_budgets``, ``figures``)."""
+    path = _result_module()
+    module = _module_name(path)
+    direct = [f"{name} (line {line})" for name, line in _imports(path)
+              if name == "magtact.report" or name.startswith("magtact.report.")]
+    assert direct == [], f"{module} imports the report: {direct}"
+    graph, seen, todo = module_graph(), set(), [module]
+    while todo:  # every module it reaches, imports inside functions included
+        m = todo.pop()
+        if m not in seen:
+            seen.add(m)
+            todo += list(graph.get(m, {}))
+    assert not [m for m in seen if m == "magtact.report" or m.startswith("magtact.report.")]
+    tree = ast.parse(path.read_text("utf-8"))
+    cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Result")
+    members = {n.name: n for n in cls.body
+               if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)}
+    cached = [name for name, f in members.items() for d in f.decorator_list
+              if "cached_property" in ast.unparse(d)]
+    assert cached == [], f"Result caches {cached}"
+    assert "cached_property" not in path.read_text("utf-8")
+    assert not {"card", "budgets", "figures"} & members.keys()
+
+
 # ---- chips are asked what they have, not compared by name -----------------------------------
 #: Comparisons a chip name on one side makes a name test.
 _EQUALITY = (ast.Eq, ast.NotEq, ast.In, ast.NotIn)

@@ -3,13 +3,13 @@ card and the command line."""
 
 import math
 from dataclasses import replace
-from types import SimpleNamespace
 
 import pytest
 from typer.testing import CliRunner
 
 from magtact import MagtactError
 from magtact._front import Result
+from magtact._outputs import _extra_rows
 from magtact.cli import app
 from magtact.doe import check_design, domain_of, load_bundled
 from magtact.metamodel import (
@@ -125,8 +125,8 @@ def test_a_short_fit_is_poor_on_the_selection_and_the_card(short_fit):
     assert "poor fit" in sel.source
     rows = fit_quality_rows(sel.models, 2)
     assert len(rows) == 1 and len(rows[0]) == 3 and rows[0][1].startswith("poor fit")
-    # the card's rows after the answers' (Result.card, card.json) carry it
-    extra = Result._budget_rows(SimpleNamespace(models=sel.models, budgets=None))
+    # the card's rows after the answers' (magtact.card, card.json) carry it
+    extra = _extra_rows(sel.models, None)
     assert extra == rows
 
 

@@ -14,6 +14,7 @@ A :class:`Result` is a record; the work over it is done by functions that take i
     magtact.error_budget(result)            # the chosen design's error budget (mN)
     magtact.calibrate(result)               # its field-to-force map and firmware
     magtact.write_results(result, "design") # tables, card.json, budget.json, figures
+    magtact.card(result)                    # the design card; error_budgets, figures alike
 
 (``error_budget``, not ``budget``: ``magtact.budget`` is the error budget's sub-package.)
 
@@ -35,9 +36,8 @@ from ._front import (
     load,
     models_for,
     solve,
-    write_results,
-    write_results_into,
 )
+from ._outputs import card, error_budgets, figures, write_results, write_results_into
 from ._sensor import Sensor
 from .study import Study
 
@@ -57,6 +57,6 @@ def run(study: Study | str | None = None, out: str = "results", **options):
     return run_study(study, out, **options)
 
 
-__all__ = ["MagtactError", "Result", "Sensor", "Study", "__version__", "calibrate", "design",
-           "error_budget", "force_map", "load", "models_for", "run", "solve", "write_results",
-           "write_results_into"]
+__all__ = ["MagtactError", "Result", "Sensor", "Study", "__version__", "calibrate", "card",
+           "design", "error_budget", "error_budgets", "figures", "force_map", "load",
+           "models_for", "run", "solve", "write_results", "write_results_into"]

@@ -279,8 +279,8 @@ def answer_title(a) -> str:
 
 def result_rows(result) -> tuple[str, list[tuple[str, str]]]:
     """Title and rows of a :class:`magtact.Result`: the chosen design's answer, the original
-    design, the constraints (and the largest error-budget row where the budgets are computed
-    already: showing a result computes nothing)."""
+    design and the constraints (showing a result computes nothing: its error budgets are
+    :func:`magtact.error_budgets`)."""
     c = result.constraints
     rows = answer_rows(result.chosen)
     rows[0] = ("chosen design", rows[0][1])
@@ -290,12 +290,6 @@ def result_rows(result) -> tuple[str, list[tuple[str, str]]]:
               else mN(o.resolution.sigma_z_worst)),
              ("force constraints", f"F_r,min ≤ {N(c.F_r_c)}, F_z,max ≥ {N(c.F_z_c)}"),
              ("active constraints", ", ".join(result.active_constraints) or "none")]
-    budgets = result.__dict__.get("budgets")  # a cached property, computed or not
-    if budgets:
-        top = budgets[0].largest(1)
-        if top:
-            rows.append(("largest budget row", f"{top[0].name} ({top[0].component}): "
-                                               f"{mN(top[0].worst)} worst"))
     title = f"magtact result: {result.study.name}"
     if result.chosen.verdict is not None:
         title += f"; chosen design: {verdict_title(result.chosen.verdict.to_json())}"
@@ -448,7 +442,7 @@ def study_rows(study) -> tuple[str, list[tuple[str, str]]]:
 
 
 class Card(dict):
-    """The design card (:attr:`magtact.Result.card`): a dict (``header``, ``rows`` and, where
+    """The design card (:func:`magtact.card`): a dict (``header``, ``rows`` and, where
     the card has them, ``verdict`` and ``parts``) that prints as a few lines and shows as a
     table in a notebook."""
 

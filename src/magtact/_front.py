@@ -4,36 +4,32 @@
 shipped fit, a data set, or a folder of model files) and runs :func:`solve`, the only path from
 models and a study to a :class:`Result`: the optimisation (over (H, G[, M_z]) or with geometric
 design variables), the decision, and the designer's answer for the chosen and the original
-design. ``magtact run``, ``magtact optimise`` and the Python API all go through it.
+design. ``magtact run``, ``magtact optimise`` and the Python API all go through it. The work
+over a result that needs none of the report is here too (:func:`error_budget`,
+:func:`calibrate`, :func:`force_map`); the record itself is ``magtact._result``, what the report
+makes of it ``magtact._outputs``.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, fields
-from functools import cached_property
+from dataclasses import fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from . import _answers
 from ._errors import MagtactError
+from ._result import Result, _answer
 from ._sensor import Sensor
-from .study import Study, checked_si, from_si, load_study
+from .study import Study, load_study
 
 if TYPE_CHECKING:
-    from matplotlib.figure import Figure
-
     from .budget import Budget
     from .calibration import Calibration, SensorMap
     from .designer import DesignAnswer
     from .metamodel import ModelSet
-    from .optimise import (
-        ForceConstraints,
-        GeometryOptimisation,
-        Optimisation,
-        SensorOptimisation,
-    )
+    from .optimise import ForceConstraints
 
 
 def load(source: str | Path | None = None, **sections: dict) -> Study:
@@ -79,276 +75,6 @@ def load(source: str | Path | None = None, **sections: dict) -> Study:
     return study_from_dict(data, "keyword settings")
 
 
-#: User unit of each design variable (the study-file key is the name plus ``_<unit>``).
-UNITS = {"H": "mm", "G": "kPa", "M_z": "A_per_m", "R_m": "mm", "H_m": "mm", "R": "mm",
-         "standoff": "mm"}
-
-
-@dataclass(frozen=True)
-class Result:
-    """The answer for one study (:func:`design`, :func:`solve`): a record of what was
-    computed. The work over it is done by functions that take it first (:func:`error_budget`,
-    :func:`calibrate`, :func:`write_results`, :func:`write_results_into`); its methods
-    ``budget``, ``calibrate``, ``write`` and ``write_into`` are the same functions.
-
-    Attributes
-    ----------
-    study : Study
-    models : ModelSet
-        B_r, B_z, f_r, f_z: the closed-form models every number comes from.
-    models_source : str
-        Where the models came from, in words (the shipped fit, fitted now, a folder).
-    optimisation : Optimisation or GeometryOptimisation
-        Everything the optimisation computed: maps, both Pareto sets, the decision on each,
-        timings (:class:`magtact.optimise.Optimisation`; with geometric design variables
-        :class:`magtact.optimise.GeometryOptimisation`).
-    chosen, original : DesignAnswer
-        The designer's answer (extrema, resolution with the study's Hall chip, saturation) for
-        the design the decision rule picks and for the study's original design.
-    variables : dict of float
-        The chosen design's variables [SI] by name (``H``, ``G``, and ``M_z``, ``R_m``,
-        ``H_m``, ``R`` where they are design variables); :attr:`chosen_design` in user units.
-    dataset : xarray.Dataset or None
-        The DOE data set the models were fitted to, where known (its per-path mesh error
-        enters the error budget).
-
-    Examples
-    --------
-    >>> import magtact
-    >>> result = magtact.design("magone")                          # doctest: +SKIP
-    >>> result.chosen_design                                        # doctest: +SKIP
-    {'H_mm': 3.0, 'G_kPa': 22.57...}
-    >>> result.evaluate(H_mm=4.0, G_kPa=30.0).design.Gamma_z_max   # doctest: +SKIP
-    >>> magtact.error_budget(result)                                # doctest: +SKIP
-    """
-
-    study: Study
-    models: ModelSet
-    models_source: str
-    optimisation: Optimisation | GeometryOptimisation
-    chosen: DesignAnswer
-    original: DesignAnswer
-    variables: dict[str, float]
-    dataset: object = None
-    #: The sensor problem's answer (the whole sensor; None for the publication's problem).
-    sensor_design: SensorOptimisation | None = None
-    #: The chosen sensor: its body, magnet and chip (:class:`magtact.Sensor`), the one
-    #: :func:`calibrate` and :func:`error_budget` act on by default.
-    sensor: Sensor | None = None
-
-    @property
-    def constraints(self) -> ForceConstraints:
-        """The force constraints the design meets (F_r,c, F_z,c [N])."""
-        return self.optimisation.constraints
-
-    @property
-    def active_constraints(self) -> tuple[str, ...]:
-        """``"F_r"`` and/or ``"F_z"``: constraints the chosen design meets with (almost) no
-        margin (within ``optimise.active_rtol`` of the limit)."""
-        d = self.chosen.design
-        return self.constraints.active(d.F_r_min, d.F_z_max, self.study.optimise.active_rtol)
-
-    @property
-    def pareto(self):
-        """NSGA-II's Pareto set (:class:`magtact.optimise.ParetoSet`, or ``DesignSet`` over
-        the geometric design variables)."""
-        return self.optimisation.pareto
-
-    @property
-    def chosen_design(self) -> dict[str, float]:
-        """The chosen design's variables in user units (``H_mm``, ``G_kPa`` ...)."""
-        return {f"{k}_{UNITS[k]}": float(from_si(v, UNITS[k])) for k, v in self.variables.items()}
-
-    @property
-    def card(self) -> dict:
-        """The design card: ``header`` and ``rows`` (words and units) for the chosen and the
-        original design (:func:`magtact.report.card_rows`)."""
-        from .report import card_rows
-
-        header, rows = card_rows([self.chosen, self.original], self.constraints,
-                                 rtol=self.study.optimise.active_rtol)
-        from ._display import Card
-        from .report import parts_list
-
-        doc = {"header": header, "rows": rows + self._budget_rows()}
-        if self.chosen.verdict is not None:  # the verdict and the parts lead, as in card.json
-            doc = {"verdict": self.chosen.verdict.to_json(),
-                   "parts": parts_list(self.chosen)} | doc
-        return Card(doc)
-
-    @cached_property
-    def budgets(self) -> tuple[Budget, Budget] | None:
-        """The error budgets of the chosen and the original design (:func:`error_budget`, with
-        the data set's mesh error); None over geometric design variables (a budget belongs to one
-        geometry)."""
-        if self.study.geometric_variables:
-            return None
-        return tuple(error_budget(self, a, dataset=self.dataset)
-                     for a in (self.chosen, self.original))
-
-    def _budget_rows(self) -> list[list[str]]:
-        from .budget import budget_card_rows
-        from .metamodel import fit_quality_rows  # a poor fit is said on the card
-
-        return fit_quality_rows(self.models, 2) + (
-            [] if self.budgets is None else budget_card_rows(self.budgets))
-
-    def of(self, answer: DesignAnswer) -> tuple[ModelSet, Study]:
-        """The models and the study of a design's answer: its magnet, the chip's standoff and
-        setting (in the sensor problem, with the exact field at that standoff)."""
-        study = self.study if answer.study is None else answer.study
-        if study.optimise.problem == "sensor" and not study.geometric_variables:
-            from .chip import exact_field_models
-
-            return exact_field_models(self.models, study), study
-        return self.models, study
-
-    def evaluate(self, *, H_mm: float, G_kPa: float, M_z_A_per_m: float | None = None,
-                 label: str = "design", grade: str | None = None,
-                 standoff_mm: float | None = None, robust: bool = False,
-                 **geometry_mm: float) -> DesignAnswer:
-        """The designer's answer for any design, given in user units.
-
-        Parameters
-        ----------
-        H_mm, G_kPa : float
-            Base height [mm] and shear modulus [kPa].
-        M_z_A_per_m : float, optional
-            Magnetisation [A/m]; default the magnet's own.
-        label : str
-            Name of the design in the answer.
-        grade : str, optional
-            The magnet's grade (a catalogue name, sets M_z); default the study's magnet.
-        standoff_mm : float, optional
-            The chip's distance below the body [mm]; default ``[hall] standoff_mm``.
-        robust : bool
-            Also the verdict over the built units (``answer.robust``: each requirement at
-            the worst corner of ``[tolerances]`` and as a yield,
-            :func:`magtact.tolerance.robust_verdict`; about 2 s).
-        **geometry_mm : float
-            ``R_m_mm``, ``H_m_mm``, ``R_mm`` where the study has them as design variables
-            (default: the study's own value).
-
-        Returns
-        -------
-        DesignAnswer
-            Its ``verdict`` says which requirements the design meets, with margins; its
-            ``design`` has the force extrema and whether the force constraints hold.
-
-        Raises
-        ------
-        MagtactError
-            For a value out of its physical range or an unknown or fixed geometric variable.
-        """
-        values = {"H": checked_si(H_mm, "mm", "H_mm"), "G": checked_si(G_kPa, "kPa", "G_kPa")}
-        if M_z_A_per_m is not None:
-            values["M_z"] = checked_si(M_z_A_per_m, "A_per_m", "M_z_A_per_m")
-            # the study file's rule: a grade sets M_z, and an M_z also given must agree
-            from .study import check_parts
-
-            part = grade if grade is not None or self.study.M_z_variable else \
-                self.study.magnet.grade
-            if part is not None:
-                check_parts(part, "custom", {"M_z": values["M_z"]},
-                            {"M_z": "M_z_A_per_m", "grade": "grade"})
-        own = self.study.geometry()
-        for key, v in geometry_mm.items():
-            name = key.removesuffix("_mm")
-            if name not in own:
-                known = ", ".join(f"{k}_mm" for k in own) or "none (R_m, H_m and R are fixed)"
-                raise MagtactError(f"{key}: not a geometric design variable of study "
-                                   f"{self.study.name!r}; its geometric design variables: "
-                                   f"{known}")
-            own[name] = checked_si(v, "mm", key)
-        from .doe import check_design  # no answer outside the data's domain
-
-        check_design(self.study, values["H"], self.dataset, **own)
-        study = self.study
-        if grade is not None or standoff_mm is not None:
-            study = _with_parts(study, grade, standoff_mm)
-        a = _answer(self.models, study, values | own, label)
-        return with_robust(self, a) if robust else a
-
-    def budget(self, answer: DesignAnswer | None = None, *, dataset=None,
-               seeds: dict | None = None, noise: tuple[float, float] | None = None) -> Budget:
-        """Same as ``magtact.error_budget(self, answer, ...)`` (:func:`error_budget`)."""
-        return error_budget(self, answer, dataset=dataset, seeds=seeds, noise=noise)
-
-    def evaluate_sensor(self, sensor: Sensor, label: str = "sensor") -> DesignAnswer:
-        """The designer's answer for a whole sensor (:class:`magtact.Sensor`, e.g.
-        ``result.sensor.changed(grade="N42")``): its H and G with its magnet, chip setting,
-        standoff and silicone, with this result's models.
-
-        Raises
-        ------
-        MagtactError
-            For a sensor whose body radius, magnet size or chip are not the study's (those
-            need models of their own), or a design outside the data's domain.
-        """
-        from .doe import check_design
-
-        names = self.study.geometric_variables
-        geometry = {k: getattr(sensor, k) for k in names}
-        study = sensor.into(self.study, free=names)
-        check_design(self.study, sensor.H, self.dataset, **geometry)
-        return _answer(self.models, study, {"H": sensor.H, "G": sensor.G} | geometry, label)
-
-    def calibrate(self, answer: DesignAnswer | None = None, *, presses=None,
-                  noise: tuple[float, float] | None = None, **options) -> Calibration:
-        """Same as ``magtact.calibrate(self, answer, ...)`` (:func:`calibrate`)."""
-        return calibrate(self, answer, presses=presses, noise=noise, **options)
-
-    def figures(self) -> dict[str, Figure]:
-        """The optimisation's figures, the error budget of the chosen design and its
-        calibration's error (where the study has one geometry) as matplotlib figures, by name
-        (computing the budgets and the calibration if not done yet)."""
-        from .report import calibration_figure, draw_budget, optimise_figure_objects
-
-        figs = dict(optimise_figure_objects(self.optimisation))
-        if self.budgets is not None:
-            from .budget import budget_json
-
-            figs["budget_chosen"] = draw_budget(budget_json(self.budgets[0]))
-            figs["calibration"] = calibration_figure(calibrate(self))
-        return figs
-
-    def write(self, out: str | Path, figures: bool = True, budget: bool = True) -> list[Path]:
-        """Same as ``magtact.write_results(self, out, ...)`` (:func:`write_results`)."""
-        return write_results(self, out, figures=figures, budget=budget)
-
-    def write_into(self, out: str | Path, figures: bool = True, budget: bool = True,
-                   explorer: bool = False) -> list[Path]:
-        """Same as ``magtact.write_results_into(self, out, ...)``
-        (:func:`write_results_into`)."""
-        return write_results_into(self, out, figures=figures, budget=budget,
-                                  explorer=explorer)
-
-    def __str__(self) -> str:
-        """A few lines in mN, N, mm and kPa (3 significant figures)."""
-        from ._display import result_rows, text_block
-
-        return text_block(*result_rows(self))
-
-    def _repr_html_(self) -> str:
-        from ._display import html_block, result_rows
-
-        return html_block(*result_rows(self))
-
-
-def with_robust(result: Result, answer: DesignAnswer) -> DesignAnswer:
-    """``answer`` with its verdict over the built units (``answer.robust``,
-    :func:`magtact.tolerance.robust_verdict`: each requirement at the worst corner of the
-    study's ``[tolerances]`` and as a yield with its confidence interval)."""
-    from dataclasses import replace
-
-    from .tolerance import robust_verdict
-
-    if answer.robust is not None or answer.verdict is None or answer.study is None:
-        return answer
-    models, _ = result.of(answer)
-    return replace(answer, robust=robust_verdict(models, answer))
-
-
 def error_budget(result: Result, answer: DesignAnswer | None = None, *, dataset=None,
                  seeds: dict | None = None, noise: tuple[float, float] | None = None
                  ) -> Budget:
@@ -383,8 +109,8 @@ def error_budget(result: Result, answer: DesignAnswer | None = None, *, dataset=
 
     See Also
     --------
-    Result.budget : the same, as a method.
-    Result.budgets : the budgets of the chosen and the original design, with the data set.
+    magtact.error_budgets : the budgets of the chosen and the original design, with the data
+        set.
 
     Examples
     --------
@@ -438,10 +164,6 @@ def calibrate(result: Result, answer: DesignAnswer | None = None, *, presses=Non
         For a study with geometric design variables, an unknown noise, presses that do not
         identify the parameters.
 
-    See Also
-    --------
-    Result.calibrate : the same, as a method.
-
     Examples
     --------
     >>> import magtact
@@ -457,112 +179,6 @@ def calibrate(result: Result, answer: DesignAnswer | None = None, *, presses=Non
     models, study = result.of(a)
     return calibration_of(models, study, a.H, a.G, a.design.M_z, noise=noise,
                           presses=presses, chip=a.chip, dataset=result.dataset, **options)
-
-
-def write_results(result: Result, out: str | Path, *, figures: bool = True,
-                  budget: bool = True) -> list[Path]:
-    """Write a result into the results folder ``out``: the optimisation's tables, the design
-    card (``card.json``), the error budgets (``budget.json``) and the figures.
-
-    ``out`` has the rules of ``magtact`` commands (docs/method.md §14): its lock is held while
-    writing, the files appear only once all are complete, and a file there that magtact did
-    not write is never replaced.
-
-    Parameters
-    ----------
-    result : Result
-    out : path
-        The results folder (made if missing).
-    figures : bool
-        Draw the figures (PNG and SVG).
-    budget : bool
-        Write ``budget.json`` (where the study has one geometry).
-
-    Returns
-    -------
-    list of Path
-        The files written.
-
-    Raises
-    ------
-    MagtactError
-        If another process is writing ``out``, or an output would replace a file that is
-        not magtact's (the message names the files).
-
-    See Also
-    --------
-    write_results_into : the same into a folder the caller already holds.
-    Result.write : the same, as a method.
-
-    Examples
-    --------
-    >>> import magtact
-    >>> magtact.write_results(magtact.design(), "design")         # doctest: +SKIP
-    """
-    from ._runfolder import command_outputs
-
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    with command_outputs(out, "magtact.Result.write") as o:
-        files = write_results_into(result, o.folder, figures=figures, budget=budget)
-    return [o.final(p) for p in files]
-
-
-def write_results_into(result: Result, out: str | Path, *, figures: bool = True,
-                       budget: bool = True, explorer: bool = False) -> list[Path]:
-    """:func:`write_results` straight into ``out``, for a caller that already holds the
-    folder (a command's or a run's staging folder): no lock, no check of what is there.
-
-    Parameters
-    ----------
-    result : Result
-    out : path
-        The folder (it must exist).
-    figures, budget : bool
-        As :func:`write_results`.
-    explorer : bool
-        Also the report's design explorer (``explorer.json``, a grid of
-        ``result.evaluate``).
-
-    Returns
-    -------
-    list of Path
-        The files written.
-
-    See Also
-    --------
-    Result.write_into : the same, as a method.
-    """
-    from .budget import write_budgets
-    from .optimise import write_geometry_outputs, write_optimise_outputs
-    from .report import (
-        budget_figures,
-        fig_geometry_pareto,
-        optimise_figures,
-        write_card,
-        write_explorer,
-    )
-
-    out = Path(out)
-    if result.study.geometric_variables:
-        files = write_geometry_outputs(result.optimisation, out,
-                                       figures=fig_geometry_pareto if figures else None)
-    else:
-        files = write_optimise_outputs(result.optimisation, result.models, out,
-                                       figures=optimise_figures if figures else None)
-    if result.sensor_design is not None:  # the whole sensor is the chosen design
-        written = result.sensor_design.write(out, result.chosen.design)
-        files = [f for f in files if f.name != "chosen.json"] + written
-    files.append(write_card([result.chosen, result.original], out, result.constraints,
-                            rtol=result.study.optimise.active_rtol, study=result.study,
-                            extra_rows=result._budget_rows()))
-    grid = write_explorer(result, out) if explorer else None  # for the report's explorer
-    if grid is not None:
-        files.append(grid)
-    if budget and result.budgets is not None:
-        files.append(write_budgets(result.budgets, result.study, out,
-                                   figures=budget_figures if figures else None))
-    return files
 
 
 def _answer_of(result: Result, answer: DesignAnswer | Sensor | None) -> DesignAnswer:
@@ -595,31 +211,6 @@ def force_map(result: Result, answer: DesignAnswer | Sensor | None = None) -> Se
     else:
         models, study = result.of(a)
     return sensor_map(models, study, a.H, a.G, a.design.M_z, design=a.design)
-
-
-def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str
-            ) -> DesignAnswer:
-    """The designer's answer for a design given by its variables [SI] (at its geometry; in
-    the sensor problem with the exact field of its magnet at its standoff)."""
-    from .designer import answer
-
-    geometry = {k: values[k] for k in study.geometric_variables if k in values}
-    if geometry:
-        models, study = models.at(**geometry), study.at(**geometry)
-    elif study.optimise.problem == "sensor":
-        from .chip import exact_field_models
-
-        models = exact_field_models(models, study)
-    return answer(models, study, values["H"], values["G"], label, values.get("M_z"))
-
-
-def _with_parts(study: Study, grade: str | None, standoff_mm: float | None) -> Study:
-    """``study`` with the magnet of ``grade`` and the chip at ``standoff_mm``."""
-    from ._sensor import with_parts
-
-    standoff = (None if standoff_mm is None
-                else checked_si(standoff_mm, "mm", "standoff_mm", bounds=(0.0, 20e-3)))
-    return with_parts(study, grade=grade, standoff=standoff)
 
 
 def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None = None, *,

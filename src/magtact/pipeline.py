@@ -29,7 +29,8 @@ from pathlib import Path
 from ._display import mN, sig
 from ._errors import MagtactError, MissingFileError
 from ._files import write_text
-from ._front import solve
+from ._front import calibrate, solve
+from ._outputs import error_budgets, write_results_into
 from ._runfolder import (
     RunLock,
     RunManifest,
@@ -108,6 +109,9 @@ class _Context:
     infeasible: object = None
     #: The design card of the run (its verdict and parts), for the caller.
     card: dict | None = None
+    #: The error budgets of the chosen and the original design (:func:`magtact.error_budgets`),
+    #: computed once for the design card and written by the budget stage.
+    budgets: object = None
 
 
 def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: bool = False,
@@ -358,7 +362,9 @@ def _stage_optimise(ctx: _Context, rec: StageRecord) -> str:
         else:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     # the budget is a stage of its own; the explorer's grid is for the report
-    result.write_into(ctx.folder / "optimise", budget=False, explorer=True)
+    ctx.budgets = error_budgets(result)
+    write_results_into(result, ctx.folder / "optimise", budget=False, explorer=True,
+                       budgets=ctx.budgets)
     ctx.result = result
     ctx.card = _card_of(ctx.folder / "optimise")
     if ctx.study.geometric_variables:
@@ -387,7 +393,7 @@ def _stage_budget(ctx: _Context, rec: StageRecord) -> str:
     from .budget import write_budgets
     from .report import budget_figures
 
-    budgets = result.budgets  # computed for the design card
+    budgets = ctx.budgets if ctx.budgets is not None else error_budgets(result)
     write_budgets(budgets, ctx.study, ctx.folder / "budget", figures=budget_figures)
     top = budgets[0].largest(1)[0]
     return f"largest row of the chosen design: {top.name} ({top.component}), {mN(top.worst)} worst"
@@ -404,7 +410,7 @@ def _stage_calibration(ctx: _Context, rec: StageRecord) -> str:
     from .calibration import write_calibration_outputs
     from .report import calibration_figures
 
-    cal = result.calibrate(**RUN_CALIBRATION)
+    cal = calibrate(result, **RUN_CALIBRATION)
     write_calibration_outputs(cal, ctx.folder / "calibration", figures=calibration_figures)
     a = cal.firmware.chosen
     if not cal.firmware.reached:

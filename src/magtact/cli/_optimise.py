@@ -15,7 +15,7 @@ from .._errors import MagtactError
 from ..study import Study, checked_si, from_si
 from ._app import ModelsOpt, OutOpt, StudyArg, app, console, get_study, outputs, renamed, tables
 
-#: Files ``magtact optimise`` always writes (:meth:`magtact.Result.write`).
+#: Files ``magtact optimise`` always writes (:func:`magtact.write_results`).
 OPTIMISE_OUTPUTS = ("design.json", "pareto.csv", "reduction.csv", "maps.csv", "card.json",
                     "chosen.json", "sensor.json")
 
@@ -68,7 +68,7 @@ def optimise_command(
     Writes OUT/design.json, pareto.csv, reduction.csv, maps.csv, card.json and the figures
     (OUT/geometry.json and its figure with geometric design variables).
     """
-    from .. import solve
+    from .. import card, error_budgets, solve, write_results_into
     from ..designer import check_rest_field
     from ..optimise import force_constraints
 
@@ -85,9 +85,10 @@ def optimise_command(
         constraints = force_constraints(m, s, F_r_c=Frc, F_z_c=Fzc, reference=reference)
         with console.status("optimising"):
             result = solve(m, s, constraints, models_source=source)
-        result.write_into(o.folder)
+        budgets = error_budgets(result)  # once, for card.json, budget.json and the card shown
+        write_results_into(result, o.folder, budgets=budgets)
     print_choice(result)
-    print_card(result.card)
+    print_card(card(result, budgets))
     console.print(f"written to {o.out}", highlight=False)
 
 

@@ -61,7 +61,7 @@ def draw_calibration(fig, cal) -> list:
 
 def calibration_figure(cal):
     """The calibration figure of a :class:`magtact.calibration.Calibration` as a
-    :class:`matplotlib.figure.Figure` (for notebooks: :meth:`magtact.Result.figures`)."""
+    :class:`matplotlib.figure.Figure` (for notebooks: :func:`magtact.figures`)."""
     with style():
         fig, _ = subplots(1, 1, figsize=(10.0, 3.4))
         fig.clear()
