@@ -207,11 +207,32 @@ def run_study(study: Study, out: str | Path, *, recompute: bool = False, refit: 
 def _run_stages(ctx: _Context, run_id: str, manifest: RunManifest, start: float
                 ) -> list[StageRecord]:
     """Run the stages into ``ctx.folder``, recording each in its ``run.json`` as it ends."""
-    folder, log = ctx.folder, ctx.log
+    from .report import saved_in_background
+
+    folder = ctx.folder
     (folder / "study.toml").write_text(ctx.study.to_toml(), encoding="utf-8")
     manifest.write(folder)
+    # each stage's figures are written by a worker process while the next stages compute
+    with saved_in_background() as saver:
+        records = _each_stage(ctx, run_id, manifest, start, saver)
+        failed = saver.finish()
+    for rec in records:
+        if rec.key in failed:
+            rec.status = "failed"
+            rec.message = "; ".join([rec.message, "figures not written: "
+                                     + "; ".join(failed[rec.key])]).lstrip("; ")
+    if failed:
+        manifest.stages = list(records)
+        manifest.write(folder)
+    return records
+
+
+def _each_stage(ctx: _Context, run_id: str, manifest: RunManifest, start: float, saver
+                ) -> list[StageRecord]:
+    folder, log = ctx.folder, ctx.log
     records = []
     for n, (key, title, fn) in enumerate(STAGES, start=1):
+        saver.tag = key
         rec = StageRecord(key=key, title=title)
         log(f"[{n}/{len(STAGES)}] {title} ...")
         t0 = time.perf_counter()

@@ -569,7 +569,7 @@ class Choice:
     Attributes
     ----------
     design : DesignResult
-        Re-evaluated with the per-design method (GA + trust region).
+        Re-evaluated with the per-design method (grid, multistart trust region).
     index : int
         Its position in the set it was chosen from.
     constraints : ForceConstraints

@@ -211,7 +211,7 @@ def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definit
     models = fit.model_set(study)
     R = Responses(models)
     d = study.design
-    # batched per-height extrema (projected Newton, checked against the GA + trust-region
+    # batched per-height extrema (projected Newton, checked against an evolution + trust-region
     # method in the tests): the seed study needs many designs, not the last digit of each
     H_fab = min(max(published.H_FABRICATED, d.H[0]), d.H[1])  # within the study's bounds
     designs = heights_batch(R, [d.H_original, H_fab], study)

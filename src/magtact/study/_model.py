@@ -349,11 +349,12 @@ class Optimise:
     """Design optimisation (docs/method.md §7): per-design extrema, maps, NSGA-II, reduction."""
 
     population: int = setting(200, integer=True, minimum=4, maximum=100_000,
-                              doc="population of the per-design GA and of NSGA-II")
+                              doc="population of NSGA-II and of box_optimum's evolution")
     seed: int = setting(0, integer=True, minimum=0, maximum=2**32 - 1,
-                      doc="random seed of every GA run")
+                      doc="random seed of every evolutionary run (NSGA-II, box_optimum)")
     ga_generations: int = setting(15, integer=True, minimum=1, maximum=10_000,
-                                  doc="GA generations before the trust-region refinement")
+                                  doc="generations of box_optimum's evolution before its "
+                                      "trust-region refinement")
     nsga2_generations: int = setting(100, integer=True, minimum=1, maximum=10_000,
                                      doc="NSGA-II generations")
     tol: float = setting(1e-12, positive=True, bounds=(1e-16, 0.1),
