@@ -9,7 +9,9 @@ meaningful when the machine's speed drifts), each a fresh process from start to 
 records per run the wall time, the CPU time (user + system of the process and the processes it
 waited for) and the load averages before and after. Writes ``bench/results/calibrate_speed.json``
 with the medians and the ratio calibrate / run of the medians and of each pair; the target is a
-ratio of at most 0.5.
+ratio of at most 0.5. Both commands compute their answer (the answers cache off). Each pair is
+followed by the designer's order, ``magtact run`` then ``magtact calibrate`` with one answers
+cache, whose calibrate is recorded as ``calibrate_after_run``.
 """
 
 from __future__ import annotations
@@ -37,14 +39,14 @@ def _cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def timed(args: list[str], folder: Path) -> dict:
-    """Wall and CPU seconds of one process, its exit status and the load around it."""
+def timed(args: list[str], folder: Path, cache: str = "off") -> dict:
+    """Wall and CPU seconds of one process, its exit status and the load around it; ``cache``:
+    the answers cache folder (``"off"``: the command computes its answer)."""
     shutil.rmtree(folder, ignore_errors=True)
     load_before = os.getloadavg()
     cpu0, t0 = _cpu(), time.perf_counter()
-    # each command computes its answer (not one kept by the run before it: magtact._answers)
     proc = subprocess.run([*args, "--out", str(folder)], capture_output=True, text=True,
-                          env=dict(os.environ, MAGTACT_CACHE_DIR="off"))
+                          env=dict(os.environ, MAGTACT_CACHE_DIR=cache))
     wall, cpu = time.perf_counter() - t0, _cpu() - cpu0
     return {"wall_s": wall, "cpu_s": cpu, "exit_status": proc.returncode,
             "load_average_before": list(load_before), "load_average_after": list(os.getloadavg()),
@@ -58,6 +60,7 @@ def main() -> None:
     exe = shutil.which("magtact") or sys.exit("magtact is not on PATH")
     commands = {"run": [exe, "run"], "calibrate": [exe, "calibrate"]}
     runs: dict[str, list[dict]] = {k: [] for k in commands}
+    after: list[dict] = []  # the designer's order: run, then calibrate, one answers cache
     with tempfile.TemporaryDirectory(prefix="magtact-bench-calibrate-") as tmp:
         for k in range(opts.pairs):
             for name, args in commands.items():
@@ -66,6 +69,12 @@ def main() -> None:
                 print(f"{name} {k + 1}/{opts.pairs}: {r['wall_s']:.1f} s wall, "
                       f"{r['cpu_s']:.1f} s CPU, exit {r['exit_status']}, load "
                       f"{r['load_average_before'][0]:.2f}", flush=True)
+            cache = str(Path(tmp) / f"answers{k}")
+            first = timed(commands["run"], Path(tmp) / f"run_cached{k}", cache)
+            r = timed(commands["calibrate"], Path(tmp) / f"calibrate_after{k}", cache)
+            after.append(r | {"run_before_exit_status": first["exit_status"]})
+            print(f"calibrate after run {k + 1}/{opts.pairs}: {r['wall_s']:.1f} s wall",
+                  flush=True)
     median = {name: {key: statistics.median(r[key] for r in rs) for key in ("wall_s", "cpu_s")}
               for name, rs in runs.items()}
     pairs = [{key: c[key] / r[key] for key in ("wall_s", "cpu_s")}
@@ -80,6 +89,13 @@ def main() -> None:
         "commands": {name: " ".join(["magtact", *args[1:], "--out", "DIR"])
                      for name, args in commands.items()},
         "runs": runs, "median": median, "ratio_of_medians": ratio,
+        "calibrate_after_run": {
+            "what": "magtact calibrate right after magtact run with one answers cache "
+                    "(MAGTACT_CACHE_DIR): the run's answer is kept, the calibration computed",
+            "runs": after,
+            "median_wall_s": statistics.median(r["wall_s"] for r in after),
+            "ratio_to_run_median_wall": statistics.median(r["wall_s"] for r in after)
+            / median["run"]["wall_s"]},
         "ratio_per_pair": pairs, "target_ratio": TARGET,
         "target_met": {key: v <= TARGET for key, v in ratio.items()},
         "all_exit_0": all(r["exit_status"] == 0 for rs in runs.values() for r in rs),

@@ -13,6 +13,7 @@ Steps (each writes its part of ``bench/results/sizes.json``)::
     python bench/bench_sizes.py status       # paths cached of the 144, their solver time
     python bench/bench_sizes.py ship 3x2     # a finished size's data set and fit, shipped
     python bench/bench_sizes.py surrogate    # models across sizes, held-out sizes measured
+    python bench/bench_sizes.py surrogate --cached --models rbf,kriging   # before the DOE ends
 
 ``doe --first`` solves the named sizes' paths first (one sub-DOE each, through the same cache),
 then runs ``magtact doe`` on the whole study, which finds them cached.
@@ -372,11 +373,51 @@ def _errors(pred: np.ndarray, table: dict, name: str) -> dict:
             "range": span, "points": int(y.size)}
 
 
-def surrogate(models: list[str]) -> None:
+def cached_table() -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """The points of every path the cache holds, size by size (nothing is solved: a path not
+    cached yet is left out), as :func:`sizes_table`; and the paths held per size."""
+    import itertools
+
+    from magtact import study as mstudy
+    from magtact.doe._cache import JobCache
+    from magtact.doe._dataset import assemble
+    from magtact.doe._jobs import plan
+    from magtact.magnetics import hall_field
+    from magtact.mechanics import simulate_path
+
+    study = mstudy.load_study(STUDY)
+    cache = JobCache(CACHE)
+    levels = study.geometry_levels
+    parts, held = [], {}
+    for values in itertools.product(*levels.values()):
+        geometry = dict(zip(levels, (float(v) for v in values), strict=True))
+        sub = study.at(**geometry)
+        field_job, jobs = plan(sub, simulate_path, hall_field)
+        found = {j.key: e for j in jobs if (e := cache.get("path", j.key)) is not None}
+        held[_label(geometry["R_m"], geometry["H_m"])] = f"{len(found)}/{len(jobs)}"
+        if not found:
+            continue
+        ds = assemble(sub, field_job, None, jobs, found, {})
+        points = _points(ds, ("t", "theta", "H"))
+        points["R_m"] = np.full_like(points["t"], geometry["R_m"])
+        points["H_m"] = np.full_like(points["t"], geometry["H_m"])
+        parts.append(points)
+    table = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    keep = np.isfinite(table["f_r"]) & np.isfinite(table["f_z"])
+    return {k: v[keep] for k, v in table.items()}, held
+
+
+def surrogate(models: list[str], cached: bool = False) -> None:
+    """Fit each model on every size but :data:`HELD_OUT` and measure it on those (``cached``:
+    on the paths the cache holds now, before the DOE's data set exists)."""
     import xarray as xr
 
-    with xr.open_dataset(_doe_file()) as ds:
-        table = sizes_table(ds.load())
+    held_paths = None
+    if cached:
+        table, held_paths = cached_table()
+    else:
+        with xr.open_dataset(_doe_file()) as ds:
+            table = sizes_table(ds.load())
     held = np.zeros(table["t"].shape, bool)
     for R_m, H_m in HELD_OUT:
         held |= np.isclose(table["R_m"], R_m) & np.isclose(table["H_m"], H_m)
@@ -392,6 +433,9 @@ def surrogate(models: list[str]) -> None:
               "held_out_sizes": [_label(*s) for s in HELD_OUT],
               "error_measure": "largest |error| over a size's points / that size's range "
                                "(and the root-mean-square error / range)",
+              "data": ("the paths the job cache held (per size)" if cached
+                       else str(_doe_file().relative_to(ROOT))),
+              "paths_per_size": held_paths,
               "models": {}}
     X = _features(train)
     for model_name in models:
@@ -427,6 +471,8 @@ def main(argv=None) -> None:
     sh.add_argument("sizes", help="finished sizes to ship, e.g. 3x2,5x2")
     s = sub.add_parser("surrogate")
     s.add_argument("--models", default="rbf,kriging,gp")
+    s.add_argument("--cached", action="store_true",
+                   help="fit on the paths the cache holds now (before the DOE ends)")
     args = ap.parse_args(argv)
     if args.step == "doe":
         doe(args.workers, [x for x in args.first.split(",") if x])
@@ -435,7 +481,7 @@ def main(argv=None) -> None:
     elif args.step == "ship":
         ship(args.sizes.split(","))
     else:
-        surrogate(args.models.split(","))
+        surrogate(args.models.split(","), cached=args.cached)
 
 
 if __name__ == "__main__":

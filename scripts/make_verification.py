@@ -574,7 +574,8 @@ def broad_section(r: Results) -> list[str]:
                 "the fit leaves the missing levels out:", ""]
         stalled_s = d["path_job_wall_time_s_sum"] - c["path_job_wall_time_s_sum"]
         out += [f"Those {len(failed)} paths took {stalled_s / 60:.0f} min more, and the whole "
-                f"run {d['wall_time_s'] / 60:.0f} min with {d['workers']} workers (every finished path from the cache).", ""]
+                f"run {d['wall_time_s'] / 60:.0f} min with {d['workers']} workers (every "
+                "finished path from the cache).", ""]
         out += table(["magnet [mm]", "θ [rad]", "H [mm]", "last level kept"],
                      [[f"{f['D_mm']:.3g} × {f['H_m_mm']:.3g}", f"{f['theta_rad']:.3g}",
                        f"{f['H_mm']:.3g}", f"t = {f['t_reached']:.3g}"] for f in failed])
@@ -838,6 +839,11 @@ def robust_section(r: Results) -> list[str]:
                 f"CPU, calibrate {m['calibrate']['wall_s']:.0f} s / {m['calibrate']['cpu_s']:.0f} "
                 f"s: ratio {c['ratio_of_medians']['wall_s']:.2f} (wall), "
                 f"{c['ratio_of_medians']['cpu_s']:.2f} (CPU); both pay the same design solve."]
+        a = c.get("calibrate_after_run")
+        if a:
+            out[-1] += (f" In the designer's order (`magtact run`, then `magtact calibrate` with "
+                        f"one answers cache: the run's answer kept) calibrate takes "
+                        f"{a['median_wall_s']:.1f} s, ratio {a['ratio_to_run_median_wall']:.2f}.")
     return out + [""]
 
 
@@ -879,9 +885,27 @@ def sizes_section(r: Results) -> list[str]:
                 "from the cache and its own (t, θ, H) fit, held-out paths):", ""]
         out += table(["size [mm]", "f_z held-out max error / range",
                       "f_r held-out max error / range", "fit [s]", "shipped data set"], rows)
-    out += ["The surrogate across sizes (`bench_sizes.py surrogate`: kriging, radial basis and "
-            "the GP fit over (t, θ, H, R_m, H_m), measured on held-out sizes and on the bundled "
-            "MagOne data) waits for the DOE's interior sizes."]
+    sg = d.get("surrogate")
+    if not sg:
+        out += ["The surrogate across sizes (`bench_sizes.py surrogate`: kriging, radial basis "
+                "and the GP fit over (t, θ, H, R_m, H_m), measured on held-out sizes and on the "
+                "bundled MagOne data) waits for the DOE's interior sizes."]
+        return out + [""]
+    data = sg.get("data", "the DOE's data set")
+    out += [f"**Surrogates across sizes** (`{sg['command']}`), fitted on "
+            f"{sg['training_points']} points of {len(sg['training_sizes'])} sizes ("
+            + ", ".join(sg["training_sizes"]) + f"; data: {data}) and measured on sizes "
+            "they never saw: largest |error| over a size's points as a fraction of its force "
+            "range (the targets: 2 % for f_z, 5 % for f_r).", ""]
+    rows = []
+    for model, entry in sg["models"].items():
+        checks = [k for k, v in entry["f_z"].items() if isinstance(v, dict)]
+        for check in checks:
+            rows.append([model, check, pct(entry["f_z"][check]["max_error_of_range"], 2),
+                         pct(entry["f_r"][check]["max_error_of_range"], 2),
+                         f"{entry['f_z']['fit_s'] + entry['f_r']['fit_s']:.0f}"])
+    out += table(["model", "held-out data", "f_z max error / range", "f_r max error / range",
+                  "fit [s]"], rows)
     return out + [""]
 
 

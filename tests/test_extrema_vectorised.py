@@ -158,3 +158,17 @@ def test_field_derivatives_from_the_identities_match_finite_differences():
             lo = np.clip(x - d, 0, None)
             fd = (f.value(*(x + d)) - f.value(*lo)) / (x + d - lo)[i]
             np.testing.assert_allclose(g[:, i], fd, rtol=1e-5, atol=1e-6 * scale[i])
+
+
+def test_the_force_extrema_are_those_of_the_whole_per_height_problem(shipped_models):
+    """The stable box and the force range without the sensitivities' maxima: the same solves,
+    so the same numbers to the last bit."""
+    from magtact.optimise import force_extrema
+
+    H = np.array([3.0e-3, 4.4e-3, 7.0e-3])
+    whole = per_heights(shipped_models, H, STUDY)
+    got = force_extrema(shipped_models, H, STUDY)
+    want = [[h.t_m for h in whole], [h.theta_m for h in whole],
+            [h.f_r_min.value for h in whole], [h.f_z_max.value for h in whole]]
+    for a, b in zip(got, want, strict=True):
+        assert np.array_equal(a, np.array(b))

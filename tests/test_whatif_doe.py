@@ -57,3 +57,26 @@ def test_a_failed_path_of_one_magnet_is_named_with_that_magnet(tmp_path, monkeyp
     assert len(labels) == 2 and labels[0].endswith("R_m=1.5 mm") and labels[1].endswith(
         "R_m=3 mm")
     assert "R_m=3 mm: RuntimeError" in info.value.dataset.attrs["failed_jobs"]
+
+
+def test_the_outline_of_a_bundled_data_set_tells_what_it_describes_as_the_whole_one():
+    """The bundled data sets are told apart by their coordinates and attributes alone (read
+    without xarray's decoding); the differences are those of the data sets read whole."""
+    from magtact.doe._dataset import (
+        BUNDLED_NAMES,
+        _outline,
+        bundled_path,
+        differences,
+        load_bundled,
+    )
+    from magtact.study import load_study, study_from_dict
+
+    studies = [load_study("magone"),
+               study_from_dict({"base": "magone", "magnet": {"R_m_mm": 3.0, "H_m_mm": 3.0},
+                                "design": {"H_mm": [4.0, 10.0], "H_original_mm": 5.0}})]
+    names = [n for n in BUNDLED_NAMES if bundled_path(n).is_file()]
+    assert len(names) >= 2
+    for name in names:
+        whole, outline = load_bundled(name), _outline(name)
+        for study in studies:
+            assert differences(outline, study) == differences(whole, study), name

@@ -392,6 +392,21 @@ def _holds(ds) -> str:
             f"{_mm_range((float(H.min()), float(H.max())))} mm")
 
 
+def _outline(name: str) -> xr.Dataset:
+    """A bundled data set's coordinates and attributes, what :func:`differences` and
+    :func:`_holds` read, its arrays left unread (only the data set that describes a study is
+    read whole)."""
+    import h5py  # the netCDF-4 file's HDF5 layer: opening it through xarray costs 20 times more
+
+    path = bundled_path(name)
+    if not path.is_file():
+        return load_bundled(name)  # its error names the missing file
+    with h5py.File(path, "r") as f:
+        coords = {k: f[k][()] for k in (*DIMS, *GEOMETRY_NAMES) if k in f}
+        attrs = {k: v.decode() if isinstance(v, bytes) else v for k, v in f.attrs.items()}
+    return xr.Dataset(coords=coords, attrs=attrs)
+
+
 def bundled_for(study, advice: str | None = None):
     """The bundled data set that describes ``study`` (:func:`differences`), rescaled exactly to
     its G levels and magnetisation (:func:`rescaled_for`): the MagOne data set, else the broad
@@ -410,13 +425,14 @@ def bundled_for(study, advice: str | None = None):
         path = bundled_path(name)
         if not path.is_file() and name != BUNDLED_NAME:
             continue
-        ds = load_bundled(name)
+        ds = _outline(name)
         diff = differences(ds, study)
         if not diff:
-            return rescaled_for(ds, study)
+            return rescaled_for(load_bundled(name), study)
         if closest is None or len(diff) < len(closest[1]):  # the data set nearest the study
             closest = (name, diff)
-        held.append(_holds(ds))
+        held.append(ds)
+    held = [_holds(ds) for ds in held]
     name, diff = closest
     shown = "; ".join(diff[1:6]) + (f"; and {len(diff) - 6} more" if len(diff) > 6 else "")
     raise MagtactError(

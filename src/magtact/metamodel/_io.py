@@ -26,7 +26,7 @@ from .._files import UnreadableFile, file_problem, read_text_capped
 from ._field_force import FIELD_SYMBOLS, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
-from ._symbols import GEOMETRY, PQ_TO_TTH, TTH
+from ._symbols import GEOMETRY, PQH, TTH
 
 FORMAT = "magtact-metamodel/1"
 EXACT_FORMAT = "magtact-exact-field/1"
@@ -97,7 +97,9 @@ def _check_agree(expr, expr_pq, source, n: int = 16) -> None:
     gg = [rng.uniform(1e-3, 8e-3, n) for _ in geo]  # magnet and body dimensions [m]
     with np.errstate(all="ignore"):
         a = sp.lambdify(TTH + geo, expr, "numpy")(tt, th, hh, *gg)
-        b = sp.lambdify(TTH + geo, expr_pq.subs(PQ_TO_TTH), "numpy")(tt, th, hh, *gg)
+        # the feature form at p = t, q = t tan θ, mapped in numbers (a symbolic substitution
+        # costs more than both evaluations together)
+        b = sp.lambdify(PQH + geo, expr_pq, "numpy")(tt, tt * np.tan(th), hh, *gg)
     a, b = np.broadcast_to(a, (n,)), np.broadcast_to(b, (n,))
     ok = np.isfinite(a) & np.isfinite(b)
     if not ok.any():

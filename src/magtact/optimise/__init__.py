@@ -16,6 +16,7 @@ from ._design import (
     HeightTable,
     as_responses,
     design_maps,
+    force_extrema,
     heights_batch,
     per_design,
     per_height,

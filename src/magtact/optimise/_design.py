@@ -300,11 +300,22 @@ def heights_batch(models: Responses | ModelSet, H, study: Study,
                        *locs, conv, {k: np.array(v) for k, v in geo.items()})
 
 
+def force_extrema(models: Responses | ModelSet, H, study: Study
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(t_m, θ_m, f_r,min, f_z,max) per unit G at every height of ``H`` [m]: the forces' part
+    of :func:`per_heights` (the same solves, the sensitivities' maxima left out), for work
+    that needs the stable box and the force range only."""
+    H = np.atleast_1d(np.asarray(H, dtype=float))
+    fr, (fz,) = _extrema(as_responses(models), H, {}, study, starts=STARTS, maximised=("f_z",))
+    return fr.t, fr.theta, fr.value, fz.value
+
+
 def _extrema(R: Responses, H: np.ndarray, geo: dict, study: Study,
              warm: HeightTable | None = None, coarse_start: bool = True, maxiter: int = 100,
-             starts: int = 1) -> tuple[BatchOptimum, list[BatchOptimum]]:
+             starts: int = 1, maximised: tuple[str, ...] = MAXIMISED
+             ) -> tuple[BatchOptimum, list[BatchOptimum]]:
     """The two steps of the per-height problem for every height of ``H`` at once: the minimum
-    of f_r (its location the stable box) and the maxima of ``MAXIMISED`` over the box. Without
+    of f_r (its location the stable box) and the maxima of ``maximised`` over the box. Without
     ``warm``, each problem starts from its ``start_t × start_theta`` grid (the ``starts`` best
     local optima of it); with it, see :func:`heights_batch`."""
     o = study.optimise
@@ -352,7 +363,7 @@ def _extrema(R: Responses, H: np.ndarray, geo: dict, study: Study,
     fr = solve("f_r", lo, hi, False, warm_starts[0])
     box = np.stack([fr.t, fr.theta], axis=1)
     res = [solve(name, lo, box, True, s)
-           for name, s in zip(MAXIMISED, warm_starts[1:], strict=True)]
+           for name, s in zip(MAXIMISED, warm_starts[1:], strict=True) if name in maximised]
     return fr, res
 
 

@@ -66,22 +66,17 @@ class DesignContext:
 def design_context(models: ModelSet, answer, box: ToleranceBox) -> DesignContext:
     """The context of a designer's answer (:class:`magtact.designer.DesignAnswer`) with the
     models of its study (in the sensor problem, with the exact field)."""
-    from ..optimise import per_heights
+    from ..optimise import force_extrema
 
     study, d, v = answer.study, answer.design, answer.verdict
     dH = box.inputs[box.index("H")]
     H_nodes = np.array([d.H + dH.low, d.H, d.H + dH.high]) if dH.high > dH.low \
         else np.array([d.H])
-    heights = per_heights(models, H_nodes, study)
-    H_nodes = np.array([h.H for h in heights])
     sigma = float("nan") if v is None else max(v.sigma_r, v.sigma_z)
     return DesignContext(models, study, d.H, d.G, study.magnet.M_z,
                          (answer.chip.range_x, answer.chip.range_z), study.requirements.F_z,
                          study.requirements.F_r, sigma, H_nodes,
-                         np.array([h.t_m for h in heights]),
-                         np.array([h.theta_m for h in heights]),
-                         np.array([h.f_r_min.value for h in heights]),
-                         np.array([h.f_z_max.value for h in heights]))
+                         *force_extrema(models, H_nodes, study))
 
 
 def unit_figures(ctx: DesignContext, box: ToleranceBox, X: np.ndarray) -> dict[str, np.ndarray]:
