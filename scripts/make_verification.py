@@ -898,14 +898,20 @@ def sizes_section(r: Results) -> list[str]:
             "they never saw: largest |error| over a size's points as a fraction of its force "
             "range (the targets: 2 % for f_z, 5 % for f_r).", ""]
     rows = []
+
+    def cell(entry, name, check):
+        e = entry.get(name, {}).get(check)
+        return pct(e["max_error_of_range"], 2) if e else "not measured"
+
     for model, entry in sg["models"].items():
-        checks = [k for k, v in entry["f_z"].items() if isinstance(v, dict)]
+        checks = list(dict.fromkeys(k for name in ("f_z", "f_r") for k, v in
+                                    entry.get(name, {}).items() if isinstance(v, dict)))
+        fit = " + ".join(f"{entry[n]['fit_s']:.0f}" for n in ("f_z", "f_r") if n in entry)
         for check in checks:
-            rows.append([model, check, pct(entry["f_z"][check]["max_error_of_range"], 2),
-                         pct(entry["f_r"][check]["max_error_of_range"], 2),
-                         f"{entry['f_z']['fit_s'] + entry['f_r']['fit_s']:.0f}"])
+            rows.append([model, check, cell(entry, "f_z", check), cell(entry, "f_r", check),
+                         fit])
     out += table(["model", "held-out data", "f_z max error / range", "f_r max error / range",
-                  "fit [s]"], rows)
+                  "fit f_z + f_r [s]"], rows)
     return out + [""]
 
 

@@ -37,8 +37,7 @@ def test_pipeline_says_the_disagreement_in_the_report(monkeypatch, tmp_path):
     from magtact import pipeline
 
     class FakeResult:
-        def write_into(self, folder, budget=True, explorer=False):
-            return []
+        pass
 
     def fake_solve(models, study, constraints=None, models_source="", dataset=None):
         warnings.warn("NSGA-II's Pareto set lies 0.3 (relative) from the exact reduction's "
@@ -46,6 +45,8 @@ def test_pipeline_says_the_disagreement_in_the_report(monkeypatch, tmp_path):
         return FakeResult()
 
     monkeypatch.setattr(pipeline, "solve", fake_solve)
+    monkeypatch.setattr(pipeline, "error_budgets", lambda result: None)
+    monkeypatch.setattr(pipeline, "write_results_into", lambda result, folder, **kw: [])
     ctx = pipeline._Context(study=load_study(None), folder=tmp_path, recompute=False,
                             refit=False, data=None, cache=None, workers=None,
                             log=lambda m: None, models=object())
