@@ -25,8 +25,8 @@ at 5 levels and 5 theta levels: an independent DOE at other H and theta levels).
 largest |error| over the points of a size as a fraction of that size's force range. Models:
 
 - ``kriging``: SMT's ordinary kriging (squared-exponential correlation, constant trend) in the
-  features (p, q, H, R_m, H_m) = (t, t tan theta, ...) scaled to [0, 1], with the data mirrored to
-  -theta for f_r (F_r is odd in theta: the mirror makes the model vanish on the axis);
+  features (p, q, H, R_m, H_m) = (t, t tan theta, ...) scaled to [0, 1]; f_r (odd in theta) as
+  q times a kriging of f_r / q over (p, q^2, H, R_m, H_m);
 - ``rbf``: SciPy's thin-plate-spline radial basis interpolation in the same scaled features
   (the simplest interpolator, a floor any model must beat);
 - ``gp``: magtact's genetic-programming fit (:func:`magtact.metamodel` ``fit_response``) with
@@ -241,15 +241,31 @@ def _unique(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fit_kriging(X, y, name):
+    """SMT's ordinary kriging. f_r is odd in q: it is kriged as f_r / q over (p, q², H, R_m,
+    H_m) on the points with q > 0 and predicted as q times that (zero on the axis, exactly),
+    which keeps the system as small as f_z's (mirroring the points would double it and cost
+    eight times the time)."""
     from smt.surrogate_models import KRG
 
-    X, y = _unique(*_mirror(X, y, name))
+    odd = name == "f_r"
+
+    def features(Z):
+        return np.column_stack([Z[:, 0], Z[:, 1] ** 2, Z[:, 2:]]) if odd else Z
+
+    if odd:
+        keep = X[:, 1] > 0
+        X, y = X[keep], y[keep] / X[keep, 1]
+    X, y = _unique(features(X), y)
     scale = Scaled(X)
     model = KRG(print_global=False, corr="squar_exp", poly="constant", n_start=1, seed=0,
                 nugget=1e-10)
     model.set_training_values(scale(X), y)
     model.train()
-    return lambda Z: model.predict_values(scale(Z)).ravel()
+
+    def predict(Z):
+        g = model.predict_values(scale(features(Z))).ravel()
+        return Z[:, 1] * g if odd else g
+    return predict
 
 
 def fit_rbf(X, y, name):
@@ -460,8 +476,16 @@ def surrogate(models: list[str], cached: bool = False,
             print(model_name, name, {k: round(v["max_error_of_range"], 4)
                                      for k, v in entry[name].items() if isinstance(v, dict)},
                   f"{fit_s:.1f} s", flush=True)
-            # each response as it is measured: a kriging fit takes tens of minutes
-            result["models"][model_name] = entry
+            # each response as it is measured (a kriging fit takes tens of minutes), merged
+            # with what another process measured meanwhile on the same data
+            now = json.loads(OUT.read_text()).get("surrogate", {}) if OUT.is_file() else {}
+            if all(now.get(k) == result[k] for k in ("training_sizes", "training_points",
+                                                     "data")):
+                for m, e in now.get("models", {}).items():
+                    result["models"].setdefault(m, {})
+                    for r, v in e.items():
+                        result["models"][m].setdefault(r, v)
+            result["models"].setdefault(model_name, {}).update(entry)
             _update("surrogate", result)
 
 

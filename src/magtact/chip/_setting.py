@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..metamodel import ExactField, ModelSet
-from ..parts import ChipSetting, SettingFigures
+from ..parts import ChipSetting, SettingFigures, chip_part
 from ..sensitivity import dF_dB
 from ..study import Study, candidate_settings, setting_figures
 
@@ -65,7 +65,7 @@ def setting_for(models: ModelSet, study: Study, design) -> SettingChoice | None:
     """The best chip setting for a design whose extrema are computed (``design``: a
     :class:`magtact.optimise.DesignResult`; see the module notes), or None for a chip without
     a setting table."""
-    if study.hall.chip not in ("MLX90393", "TLV493D"):
+    if chip_part(study.hall.chip).table is None:
         return None
     if design.M_z is not None:
         study = replace(study, magnet=replace(study.magnet, M_z=float(design.M_z)))
