@@ -170,7 +170,7 @@ def per_heights(models: Responses | ModelSet, H, study: Study) -> tuple[HeightRe
     Step 1 minimises f_r over [0, 1] × [0, θ_max] → (t_m, θ_m). Step 2 maximises f_z, γ_r, γ_z over
     [0, t_m] × [0, θ_m]; a side of zero width (degenerate box) fixes that variable, and the
     single point (0, 0) is simply evaluated. Each problem, for all heights at once:
-    :func:`magtact.optimise.multistart_optimum` on a ``start_t × start_theta`` grid over its
+    ``multistart_optimum`` (``optimise/_box.py``) on a ``start_t × start_theta`` grid over its
     box, the ``STARTS`` best local optima of the grid refined by projected Newton steps with
     the exact gradient and Hessian to the relative tolerance ``tol``.
     """

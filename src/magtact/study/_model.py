@@ -46,9 +46,9 @@ def key_of(f) -> str:
 
 
 #: Named mesh densities of the structural half body, coarse to fine (cells per direction in
-#: :data:`magtact.geometry.DENSITIES`). "accurate" has twice the default's cells in z and
-#: radially, "fine" twice the default's cells in every direction (the reference of
-#: bench/results/mechanics_convergence_H*.json).
+#: ``DENSITIES`` of ``magtact/geometry/_body_mesh.py``). "accurate" has twice the default's
+#: cells in z and radially, "fine" twice the default's cells in every direction (the reference
+#: of bench/results/mechanics_convergence_H*.json).
 MESH_DENSITIES = ("coarse", "default", "accurate", "fine")
 
 @dataclass(frozen=True)
