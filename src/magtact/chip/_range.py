@@ -259,17 +259,16 @@ def saturation_force(study: Study, models: ModelSet, H: float, G: float, chip: H
     return float("inf") if s.F_z is None else s.F_z
 
 
-def _weakest(study: Study) -> Study:
-    """``study`` with its sensor problem's weakest field: the lowest grade, the largest
-    standoff."""
+def _weakest(study: Study) -> tuple[float, float]:
+    """(M_z [A/m], standoff [m]) of the sensor problem's weakest field: the lowest grade, the
+    largest standoff."""
     from ..parts import grade
     from ..study import MU0
 
     d = study.design
     M_z = min((grade(g).M_z(MU0)[0] for g in d.grades), default=study.magnet.M_z)
     standoff = d.standoff[1] if d.standoff[1] > 0 else study.hall.standoff
-    return replace(study, magnet=replace(study.magnet, M_z=M_z),
-                   hall=replace(study.hall, standoff=standoff))
+    return float(M_z), float(standoff)
 
 
 def check_rest_field(study: Study) -> None:
@@ -283,14 +282,14 @@ def check_rest_field(study: Study) -> None:
     StudyError
         Naming ``hall.range_x_mT`` or ``hall.range_z_mT``.
     """
+    M_z, s = study.magnet.M_z, study.hall.standoff
     if study.optimise.problem == "sensor" and not study.geometric_variables:
-        study = _weakest(study)
+        M_z, s = _weakest(study)
     chip = hall_chip(study)
     H = study.design.H[1]
-    s = study.hall.standoff
     below = f", the chip {mm(s):.3g} mm below the body" if s > 0 else ""
     for axis, name in (("x", "B_r"), ("z", "B_z")):
-        b = abs(float(ExactField(study, name).value(0.0, 0.0, H)))
+        b = abs(float(ExactField(study, name, s, M_z).value(0.0, 0.0, H)))
         limit = chip.range_x if axis == "x" else chip.range_z
         if b > limit:
             raise StudyError(f"hall.range_{axis}_mT",

@@ -35,20 +35,15 @@ N_T, N_THETA = 31, 7
 READ_MARGIN = 0.02
 
 
-def exact_field_models(models: ModelSet, study: Study, standoff=None) -> ModelSet:
+def exact_field_models(models: ModelSet, study: Study, standoff=None,
+                       M_z: float | None = None) -> ModelSet:
     """``models`` with the exact field of ``study``'s magnet and chip position as B_r, B_z
     (the field models fitted to a DOE hold at its chip position only); ``standoff`` [m]: the
     chip's standoff instead of the study's, an array broadcasting against the evaluation
-    points for a standoff per point (:class:`magtact.metamodel.ExactField`)."""
-    return replace(models, B_r=ExactField(study, "B_r", standoff),
-                   B_z=ExactField(study, "B_z", standoff))
-
-
-def unit_magnet(study: Study, standoff: float | None = None) -> Study:
-    """``study`` with a magnetisation of 1 A/m (the field per unit M_z) and, if given, the
-    chip's standoff [m]."""
-    hall = study.hall if standoff is None else replace(study.hall, standoff=float(standoff))
-    return replace(study, magnet=replace(study.magnet, M_z=1.0), hall=hall)
+    points for a standoff per point; ``M_z`` [A/m]: the magnet's magnetisation instead of the
+    study's (:class:`magtact.metamodel.ExactField`)."""
+    return replace(models, B_r=ExactField(study, "B_r", standoff, M_z),
+                   B_z=ExactField(study, "B_z", standoff, M_z))
 
 
 @dataclass(frozen=True)
@@ -198,9 +193,9 @@ def _grid(models, study, H, t_m, theta_m, standoff, n) -> SensorGrid:
     TH = u * theta_m[:, None, None] + 0.0 * s
     HH = np.broadcast_to(H[:, None, None], T.shape)
     if standoff is not None and np.ndim(standoff) > 0:
-        unit = exact_field_models(models, unit_magnet(study), standoff[:, None, None])
+        unit = exact_field_models(models, study, standoff[:, None, None], M_z=1.0)
     else:
-        unit = exact_field_models(models, unit_magnet(study, standoff))
+        unit = exact_field_models(models, study, standoff, M_z=1.0)
     f_r, f_z = unit.forces(T, TH, HH, 1.0)
     j = dF_dB(unit, T, TH, HH, 1.0)
     b_x, b_z = unit.fields(T, TH, HH)

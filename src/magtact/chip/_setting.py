@@ -67,13 +67,11 @@ def setting_for(models: ModelSet, study: Study, design) -> SettingChoice | None:
     a setting table."""
     if chip_part(study.hall.chip).table is None:
         return None
-    if design.M_z is not None:
-        study = replace(study, magnet=replace(study.magnet, M_z=float(design.M_z)))
     H, G = design.H, design.G
     T, TH = np.meshgrid(np.linspace(0.0, design.t_m, N_GRID),
                         np.linspace(0.0, design.theta_m, N_GRID), indexing="ij")
-    bx = np.abs(ExactField(study, "B_r").value(T, TH, H))  # (t, θ)
-    bz = np.abs(ExactField(study, "B_z").value(T, TH, H))
+    bx = np.abs(ExactField(study, "B_r", M_z=design.M_z).value(T, TH, H))  # (t, θ)
+    bz = np.abs(ExactField(study, "B_z", M_z=design.M_z).value(T, TH, H))
     Bx_t, Bz_t = bx.max(axis=1), bz.max(axis=1)  # per load level
     Bx, Bz = float(Bx_t.max()), float(Bz_t.max())
     J = dF_dB(models, T, TH, H, G).reshape(-1, 2, 2) / design.field_scale

@@ -46,14 +46,17 @@ def shear_displacement(u_z, theta):
     return -np.asarray(u_z, dtype=float) * np.tan(np.asarray(theta, dtype=float))
 
 
-def hall_from_magnet_centre(study: Study, u_r, u_z, H) -> tuple[np.ndarray, np.ndarray]:
+def hall_from_magnet_centre(study: Study, u_r, u_z, H, standoff=None
+                            ) -> tuple[np.ndarray, np.ndarray]:
     """Position (x, z) [m] of the Hall point relative to the displaced magnet's centre.
 
     x is along the shear direction: the magnet has moved by +u_r, so the Hall point sits at
     x = −u_r; z = −(height of the magnet centre above the Hall point). The chip's standoff
-    below the body (``[hall] standoff_mm``) adds to that height; the loading path, defined by
-    the body's compression, does not change with it.
+    below the body (``standoff`` [m], default the study's ``[hall] standoff_mm``: a design's
+    own chip position is given, never put into the study) adds to that height; the loading
+    path, defined by the body's compression, does not change with it.
     """
     z_low, z_high = magnet_span(study, H)
-    centre = 0.5 * (z_low + z_high) + np.asarray(u_z) + study.hall.standoff
+    standoff = study.hall.standoff if standoff is None else standoff
+    centre = 0.5 * (z_low + z_high) + np.asarray(u_z) + standoff
     return -np.asarray(u_r), -centre

@@ -113,6 +113,9 @@ class ExactField:
         The chip's standoff [m] instead of the study's: an array that broadcasts against the
         ``t, theta`` arrays of the calls puts each point's chip at its own standoff (many chip
         positions in one evaluation).
+    M_z : float, optional
+        The magnet's axial magnetisation [A/m] instead of the study's (a design's magnet; 1.0
+        gives the field per unit magnetisation).
 
     Notes
     -----
@@ -122,28 +125,27 @@ class ExactField:
 
     units = "T"
 
-    def __init__(self, study: Study, name: str, standoff=None):
+    def __init__(self, study: Study, name: str, standoff=None, M_z: float | None = None):
         if name not in ("B_r", "B_z"):
             raise ValueError(f"ExactField name must be 'B_r' or 'B_z', got {name!r}")
         from ..geometry import hall_from_magnet_centre, loading_path
 
-        self.study, self.name = study, name
+        self.study, self.name, self.standoff = study, name, standoff
+        self.M_z = study.magnet.M_z if M_z is None else float(M_z)
         self.geometry = tuple(k for k in ("R_m", "H_m") if k in study.geometric_variables)
         self.a0, self.a1, self.a2 = _coefficients(
             lambda s, h: float(loading_path(s, 1.0, 0.0, h)[1]), study)
 
-        def hall(sub):
-            return _coefficients(lambda s, h: float(hall_from_magnet_centre(s, 0.0, 0.0, h)[1]),
-                                 sub)
+        def hall(standoff=None):
+            return _coefficients(lambda s, h: float(
+                hall_from_magnet_centre(s, 0.0, 0.0, h, standoff)[1]), study)
 
-        self.z0, self.z1, self.z2 = hall(study)
+        self.z0, self.z1, self.z2 = hall()
         if standoff is not None:  # the Hall point's height at each standoff
-            from dataclasses import replace
-
             levels, where = np.unique(np.asarray(standoff, float), return_inverse=True)
             z0 = np.empty(levels.size)
             for i, v in enumerate(levels):
-                c0, c1, c2 = hall(replace(study, hall=replace(study.hall, standoff=float(v))))
+                c0, c1, c2 = hall(float(v))
                 if not np.allclose((c1, c2), (self.z1, self.z2), rtol=1e-9, atol=1e-12):
                     raise ValueError("the Hall point's height is not the study's shifted by "
                                      "the standoff")
@@ -156,7 +158,8 @@ class ExactField:
         (``study.at(**geometry)``); a model of (t, θ, H) alone."""
         geometry_values(self.name, self.geometry, geometry)
         return ExactField(self.study.at(**{k: v for k, v in geometry.items()
-                                           if k in self.study.geometric_variables}), self.name)
+                                           if k in self.study.geometric_variables}), self.name,
+                          self.standoff, self.M_z)
 
     @cached_property
     def _W(self):
@@ -169,7 +172,7 @@ class ExactField:
         given = dict(zip(self.geometry, geometry_values(self.name, self.geometry, geometry),
                          strict=True))
         return (np.asarray(given.get("R_m", m.R_m), dtype=float),
-                np.asarray(given.get("H_m", m.H_m), dtype=float), m.M_z)
+                np.asarray(given.get("H_m", m.H_m), dtype=float), self.M_z)
 
     def _field(self, X, Z, magnet):
         R_m, H_m, M_z = magnet
