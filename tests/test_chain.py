@@ -133,14 +133,15 @@ def test_geometric_design_equals_the_pipeline_and_reads_within_the_chip(tmp_path
     exceed: the front door (models read back from their files) and the pipeline choose the
     same design, and every design of NSGA-II's set reads within the range over its stable
     region, as the exact front does."""
-    from magtact import pipeline
+    from magtact import Sensor, pipeline
     from magtact.designer import answer
     from magtact.optimise import chip_margin, per_design
 
     s, _, folder = _geo_study(tmp_path, chip_range=True)
     models = radius_models(s)
     R_hi, H_lo = 3e-3, s.design.H[0]  # the widest magnet, closest to the chip
-    strong = answer(models.at(R_m=R_hi), s.at(R_m=R_hi), H_lo, 20e3).saturation
+    at = s.at(R_m=R_hi)
+    strong = answer(models.at(R_m=R_hi), at, Sensor.of_study(at, H_lo, 20e3)).saturation
     limit = 0.8 * max(strong.B_max_x, strong.B_max_z)
     s = replace(s, hall=replace(s.hall, range_x=limit, range_z=limit))
     assert chip_margin(s.at(R_m=R_hi), [H_lo], [1.0], [s.loading.theta_max])[0] > 0

@@ -86,8 +86,8 @@ def test_the_chosen_sensor_is_the_chosen_answers(magone_design):
     assert s.setting == r.chosen.chip.figures.setting
     assert (s.R, s.R_m, s.H_m, s.silicone) == (r.study.body.R, r.study.magnet.R_m,
                                                r.study.magnet.H_m, r.study.material.silicone)
-    # the sensor put back into the study gives the chosen answer's study
-    assert s.into(r.study) == r.chosen.study
+    # the chosen answer is for this sensor, a design of the study as it was given
+    assert r.chosen.sensor == s and r.chosen.study == r.study
     with pytest.raises(AttributeError):
         s.H = 1.0  # a frozen value
 
@@ -102,9 +102,9 @@ def test_a_changed_sensor_changes_only_what_is_named(magone_design):
     with pytest.raises(MagtactError, match="grade: .*N99"):
         s.changed(grade="N99")
     with pytest.raises(MagtactError, match="silicone: 'Ecoflex 99' is not in the catalogue"):
-        s.changed(silicone="Ecoflex 99").into(magone_design.study)
+        s.changed(silicone="Ecoflex 99").check(magone_design.study)
     with pytest.raises(MagtactError, match="magnet radius"):
-        replace(s, R_m=1e-3).into(magone_design.study)
+        replace(s, R_m=1e-3).check(magone_design.study)
 
 
 def test_calibrate_command_is_the_api_call(magone_design, cli, tmp_path):

@@ -101,11 +101,12 @@ def test_with_the_chip_the_reduction_is_the_closed_form_and_nsga2_agrees(models,
 
 
 def test_card_names_the_magnetisation(models, study):
+    from magtact import Sensor
     from magtact.designer import answer
     from magtact.report import card_rows
 
-    a = answer(models, study, H0, G0, "chosen", 1.3e6)
-    b = answer(models, study, H0, G0, "original")
+    a = answer(models, study, Sensor.of_study(study, H0, G0, 1.3e6), "chosen", 1.3e6)
+    b = answer(models, study, Sensor.of_study(study, H0, G0), "original")
     rows = {r[0]: r[1:] for r in card_rows([a, b])[1]}
     assert rows["magnetisation M_z (magnet grade)"] == ["1.3 MA/m", "the magnet's own"]
     # the stronger magnet's field reaches the chip's range sooner

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import G_ORIGINAL, H_ORIGINAL
+from magtact import Sensor
 from magtact.designer import answer, hall_chip
 from magtact.sensitivity import dF_dB, force_noise, gamma
 from magtact.study import StudyError, load_study, study_from_dict
@@ -82,7 +83,7 @@ def test_tolerant_design_is_the_closed_form(models, study):
 
 def test_resolution_and_range_of_a_design(models, study):
     s = _hall(study, noise_x=1e-6, noise_z=2e-6)
-    a = answer(models, s, H0, G0, "original")
+    a = answer(models, s, Sensor.of_study(s, H0, G0), "original")
     r = a.resolution
     J0 = dF_dB(models, 0.0, 0.0, H0, G0)
     assert r.sigma_r_0 == pytest.approx(np.hypot(J0[0, 0] * 1e-6, J0[0, 1] * 2e-6), rel=1e-12)
@@ -97,7 +98,7 @@ def test_a_strong_field_saturates_the_chip_with_t_and_force_named(models, study)
 
     strong = _hall(study, chip="custom", noise_x=1e-6, noise_z=1e-6, range_x=0.08,
                    range_z=0.08)
-    a = answer(models, strong, H0, G0)
+    a = answer(models, strong, Sensor.of_study(strong, H0, G0))
     s = a.saturation
     assert s.saturates and 0 < s.t < 1 and s.axis == "z"
     bz = abs(float(ExactField(strong, "B_z").value(s.t, s.theta, H0)))
@@ -105,14 +106,14 @@ def test_a_strong_field_saturates_the_chip_with_t_and_force_named(models, study)
     assert abs(float(ExactField(strong, "B_z").value(s.t - 1 / 200, s.theta, H0))) <= 0.08
     assert s.F_z == pytest.approx(float(models.forces(s.t, s.theta, H0, G0)[1]))
     wide = _hall(strong, range_x=1.0, range_z=1.0)
-    assert not answer(models, wide, H0, G0).saturation.saturates
+    assert not answer(models, wide, Sensor.of_study(wide, H0, G0)).saturation.saturates
 
 
 def test_card_asks_for_the_noise_the_preset_lacks(models, study):
     from magtact.report import card_rows
 
     tle = _hall(study, chip="TLE493D")  # the TLE493D's sources state no noise
-    a = answer(models, tle, H0, G0, "original")
+    a = answer(models, tle, Sensor.of_study(tle, H0, G0), "original")
     assert a.resolution is None and hall_chip(tle).missing == ("hall.noise_x_uT",
                                                                "hall.noise_z_uT")
     header, rows = card_rows([a])
@@ -138,7 +139,7 @@ def test_a_range_below_the_field_at_rest(models, study):
     from magtact.designer import check_rest_field
 
     low = _hall(study, chip="custom", noise_x=1e-6, noise_z=1e-6, range_x=0.1, range_z=0.03)
-    s = answer(models, low, H0, G0).saturation
+    s = answer(models, low, Sensor.of_study(low, H0, G0)).saturation
     assert s.saturates and s.t == 0.0 and s.axis == "z"
     check_rest_field(low)  # the tallest designs still read below 30 mT at rest
     tiny = _hall(low, range_z=1e-3)
@@ -189,8 +190,9 @@ def test_chip_range_as_a_constraint_moves_the_design_to_where_the_chip_reads(mod
     assert chip_margin(s, free.H, free.t_m, free.theta_m)[0] > 0 >= chip_margin(
         s, bound.H, bound.t_m, bound.theta_m)[0] - 1e-3
     # the card's saturation scan says the same of the chosen design's stable region
-    a = answer(models, s, bound.H, bound.G)
-    assert not a.saturation.in_region and answer(models, s, free.H, free.G).saturation.in_region
+    a = answer(models, s, Sensor.of_study(s, bound.H, bound.G))
+    assert not a.saturation.in_region
+    assert answer(models, s, Sensor.of_study(s, free.H, free.G)).saturation.in_region
     pareto = pareto_nsga2(R, s, c, table)
     assert front_gap(pareto, red) < 0.01
     assert (np.interp(pareto.H, table.H, m) <= 0).all()
@@ -229,7 +231,8 @@ def test_card_shows_the_seed_spread_of_a_reproduce_run_of_the_same_study(tmp_pat
     from magtact.publication._run import _finite
     from magtact.report import read_card, write_card
 
-    answers = [answer(models, study, H0, G0, "chosen"), answer(models, study, H0, G0, "orig")]
+    sensor = Sensor.of_study(study, H0, G0)
+    answers = [answer(models, study, sensor, "chosen"), answer(models, study, sensor, "orig")]
     write_card(answers, tmp_path / "optimise", study=study)
     rows = read_card(tmp_path / "optimise")["rows"]
     assert rows[-1][0] == "seed spread of the answer" and "magtact reproduce" in rows[-1][1]

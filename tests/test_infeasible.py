@@ -66,8 +66,9 @@ def test_the_relaxation_makes_the_specification_feasible(tiny):
     relaxed = study_with(relax.relaxed)
     table = sweep(models, relaxed)  # the geometry is the same for every F_r
     _, red = reduced(relaxed)
-    sensor = red.apply(relaxed)
-    verdict = answer(exact_field_models(models, sensor), sensor, red.H, red.G).verdict
+    sensor = red.sensor(relaxed)
+    verdict = answer(exact_field_models(models, relaxed, sensor.standoff, sensor.M_z), relaxed,
+                     sensor).verdict
     assert verdict.met, str(verdict)
     assert verdict["shear"].margin >= 0
     # and it is the smallest change (to 3 significant figures): 1 % beyond it no sensor's

@@ -97,10 +97,11 @@ def test_a_setting_that_is_not_permitted_is_refused():
 @pytest.fixture(scope="module")
 def fast_answer(models, study):
     """The original design's answer at GAIN_SEL 7, RES 0, OSR 0, DIG_FILT 2."""
+    from magtact import Sensor
     from magtact.designer import answer
 
-    return answer(models, _hall(study, gain_sel=7, res=0, osr=0, dig_filt=2), H0, G0,
-                  "original")
+    fast = _hall(study, gain_sel=7, res=0, osr=0, dig_filt=2)
+    return answer(models, fast, Sensor.of_study(fast, H0, G0), "original")
 
 
 def test_force_noise_is_J_sigma_J_with_the_settings_noise_and_quantisation(models, fast_answer):

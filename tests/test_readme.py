@@ -99,14 +99,15 @@ def test_readme_magone_table_is_the_benchmarks_result():
 def test_readme_magone_card_rows_are_what_the_designer_answers(models):
     """The README's resolution, chip and silicone rows: the designer's answer for the two
     designs of the table, on the shipped models."""
+    from magtact import Sensor
     from magtact.designer import answer
     from magtact.study import load_study
 
     bench = json.loads((ROOT / "bench" / "results" / "optimise.json").read_text())
     c = bench["default_constraints"]
     s = load_study("magone-publication")
-    chosen = answer(models, s, c["H_mm"] * 1e-3, c["G_kPa"] * 1e3)
-    original = answer(models, s, 3e-3, 29.4e3)
+    chosen = answer(models, s, Sensor.of_study(s, c["H_mm"] * 1e-3, c["G_kPa"] * 1e3))
+    original = answer(models, s, Sensor.of_study(s, 3e-3, 29.4e3))
     table = _readme_table()
     for cell, a in zip(table["resolution σ_Fr / σ_Fz (1 σ, worst over the stable region)"],
                        (chosen, original), strict=True):

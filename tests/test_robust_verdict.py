@@ -54,7 +54,7 @@ def at_threshold(models, a, box, share=0.4):
 
 def test_the_yield_of_a_uniform_remanence_is_its_probability_below_the_threshold(chosen):
     models, a = chosen
-    box = only_remanence(tolerance_box(a.study))
+    box = only_remanence(tolerance_box(a.study, a.sensor.grade))
     b = box.inputs[0]
     g = grade(a.parts.grade)  # the grade's catalogue range, e.g. N40: 1.25-1.28 T
     assert b.distribution == "uniform" and (b.low, b.high) == pytest.approx(
@@ -69,12 +69,13 @@ def test_the_yield_of_a_uniform_remanence_is_its_probability_below_the_threshold
 
 def test_the_yield_of_a_normal_remanence_is_its_probability_below_the_threshold(chosen):
     models, a = chosen
-    custom = replace(a.study, magnet=replace(a.study.magnet, grade="custom"))
-    box = only_remanence(tolerance_box(custom))
+    custom = replace(a, sensor=replace(a.sensor, grade="custom"))  # a magnet of no grade
+    tol = a.study.tolerances
+    box = only_remanence(tolerance_box(a.study, "custom"))
     b = box.inputs[0]
-    assert b.distribution == "normal" and b.sigma == custom.tolerances.remanence
-    answer, k = at_threshold(models, replace(a, study=custom), box)
-    c = custom.tolerances.coverage  # truncated at ± c σ
+    assert b.distribution == "normal" and b.sigma == tol.remanence
+    answer, k = at_threshold(models, custom, box)
+    c = tol.coverage  # truncated at ± c σ
     z = (k - 1.0) / b.sigma
     exact = (stats.norm.cdf(z) - stats.norm.cdf(-c)) / (stats.norm.cdf(c) - stats.norm.cdf(-c))
     r = robust_verdict(models, answer, box)["normal"]
@@ -83,7 +84,7 @@ def test_the_yield_of_a_normal_remanence_is_its_probability_below_the_threshold(
 
 def test_the_nominal_unit_is_the_nominal_verdict(chosen):
     models, a = chosen
-    box = tolerance_box(a.study)
+    box = tolerance_box(a.study, a.sensor.grade)
     fig = unit_figures(design_context(models, a, box), box, box.nominal[None, :])
     v = a.verdict
     assert fig["F_sat"][0] == pytest.approx(v.F_saturation, rel=1e-3)
@@ -106,7 +107,7 @@ def test_no_sampled_unit_is_worse_than_the_worst_corner(chosen):
 
 def test_the_box_cites_its_sources_and_refuses_a_reversed_temperature_range(chosen):
     _, a = chosen
-    box = tolerance_box(a.study)
+    box = tolerance_box(a.study, a.sensor.grade)
     assert box.names == INPUTS
     chip = box.inputs[box.index("chip_sensitivity")]
     assert chip.high == pytest.approx(0.03) and "Table 9" in chip.source  # MLX90393 SENSTHD

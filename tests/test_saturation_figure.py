@@ -14,11 +14,11 @@ from magtact.chip import onset
 from magtact.study import MU0
 
 
-def magpylib_ratio(study, H, range_x, range_z):
+def magpylib_ratio(study, sensor, H, range_x, range_z):
     """max(|B_x| / range_x, |B_z| / range_z) at the chip for loads (t, θ), from docs/method.md
     §1 with magpylib: the magnet's centre Δz0 = H + H_g − H_m above the base ("covered"),
-    moved by u_z = t (Δz_sat + H_m − H − H_g) and u_r = −u_z tan θ, the chip ``standoff``
-    below the base."""
+    moved by u_z = t (Δz_sat + H_m − H − H_g) and u_r = −u_z tan θ, the chip the sensor's
+    standoff below the base, its magnet's M_z."""
     magpy = pytest.importorskip("magpylib")
     m, b = study.magnet, study.body
     assert m.placement == "covered"
@@ -27,10 +27,10 @@ def magpylib_ratio(study, H, range_x, range_z):
         t, theta = np.broadcast_arrays(np.asarray(t, float), np.asarray(theta, float))
         u_z = t * (study.loading.dz_sat + m.H_m - H - b.H_g)
         u_r = -u_z * np.tan(theta)
-        centre = H + b.H_g - m.H_m + u_z + study.hall.standoff
+        centre = H + b.H_g - m.H_m + u_z + sensor.standoff
         pos = np.stack([u_r.ravel(), np.zeros(t.size), centre.ravel()], axis=-1)
         magnet = magpy.magnet.Cylinder(dimension=(2 * m.R_m, m.H_m),
-                                       polarization=(0, 0, MU0 * m.M_z), position=pos)
+                                       polarization=(0, 0, MU0 * sensor.M_z), position=pos)
         B = np.atleast_2d(magnet.getB((0.0, 0.0, 0.0)))
         return np.maximum(np.abs(B[:, 0]) / range_x, np.abs(B[:, 2]) / range_z).reshape(t.shape)
     return ratio
@@ -40,7 +40,7 @@ def bisection_figure(models, a, n_theta=61):
     """The smallest normal force at which the chip leaves its range, over ``n_theta`` paths of
     the stable region: per path a scan of 401 levels, then 60 plain bisection steps."""
     d, study = a.design, a.study
-    ratio = magpylib_ratio(study, d.H, a.chip.range_x, a.chip.range_z)
+    ratio = magpylib_ratio(study, a.sensor, d.H, a.chip.range_x, a.chip.range_z)
     th = np.linspace(0.0, d.theta_m, n_theta)
     t = np.linspace(0.0, d.t_m, 401)
     over = ratio(t[:, None] + 0 * th, th + 0 * t[:, None]) > 1
@@ -58,7 +58,7 @@ def bisection_figure(models, a, n_theta=61):
 
 def test_the_saturation_figure_agrees_with_a_bisection_on_the_exact_field(magone_design):
     a = magone_design.chosen
-    models, _ = magone_design.of(a)
+    models, _, _ = magone_design.of(a)
     reference = bisection_figure(models, a)
     assert a.verdict.F_saturation == pytest.approx(reference, rel=5e-3)
     assert a.saturation.F_z == pytest.approx(a.verdict.F_saturation, rel=1e-9)
@@ -115,15 +115,16 @@ def test_the_saturation_of_another_modulus_is_the_forces_scaled_by_it(magone_des
     from magtact.chip._range import _unit_saturation
 
     a = magone_design.chosen
-    models, _ = magone_design.of(a)
+    models, _, _ = magone_design.of(a)
     d, study = a.design, a.study
-    s1 = saturation(study, models, d.H, d.G, a.chip, d.t_m, d.theta_m)
-    s2 = saturation(study, models, d.H, 2.5 * d.G, a.chip, d.t_m, d.theta_m)
+    place = {"M_z": a.sensor.M_z, "standoff": a.sensor.standoff}
+    s1 = saturation(study, models, d.H, d.G, a.chip, d.t_m, d.theta_m, **place)
+    s2 = saturation(study, models, d.H, 2.5 * d.G, a.chip, d.t_m, d.theta_m, **place)
     assert (s2.t, s2.theta, s2.axis) == (s1.t, s1.theta, s1.axis)
     assert s2.F_z == pytest.approx(2.5 * s1.F_z, rel=1e-14)
     assert s2.F_r == pytest.approx(2.5 * s1.F_r, rel=1e-14)
     _unit_saturation.cache_clear()
-    fresh = saturation(study, models, d.H, 2.5 * d.G, a.chip, d.t_m, d.theta_m)
+    fresh = saturation(study, models, d.H, 2.5 * d.G, a.chip, d.t_m, d.theta_m, **place)
     assert fresh == s2
     # against the models' own forces at G where the chip leaves its range
     F_r, F_z = models.forces(s2.t, s2.theta, d.H, 2.5 * d.G)

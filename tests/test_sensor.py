@@ -35,19 +35,19 @@ def result(magone_design):
     return magone_design
 
 
-def field_magpylib(study, H, t, theta):
+def field_magpylib(study, sensor, H, t, theta):
     """(B_x, B_z) [T] at the chip from docs/method.md §1 with magpylib: the magnet's centre
     Δz0 = H + H_g − H_m above the body's base, moved by u_z = t (Δz_sat + H_m − H − H_g) and
-    u_r = −u_z tan θ; the chip ``[hall] standoff`` below the base."""
+    u_r = −u_z tan θ; the chip the sensor's standoff below the base, its magnet's M_z."""
     magpy = pytest.importorskip("magpylib")
     m, b = study.magnet, study.body
     u_z = t * (study.loading.dz_sat + m.H_m - H - b.H_g)
     u_r = -u_z * np.tan(theta)
-    centre = H + b.H_g - m.H_m + u_z + study.hall.standoff
+    centre = H + b.H_g - m.H_m + u_z + sensor.standoff
     out = np.empty((2, t.size))
     for i in range(t.size):
         magnet = magpy.magnet.Cylinder(dimension=(2 * m.R_m, m.H_m),
-                                       polarization=(0, 0, MU0 * m.M_z),
+                                       polarization=(0, 0, MU0 * sensor.M_z),
                                        position=(u_r[i], 0.0, centre[i]))
         B = magnet.getB((0.0, 0.0, 0.0))
         out[:, i] = B[0], B[2]
@@ -65,7 +65,7 @@ def assert_reads_required_loads(result, n=(60, 15)):
     _, F_z = result.models.forces(T, TH, d.H, d.G)
     keep = F_z <= study.requirements.F_z
     assert keep.sum() > 0.3 * keep.size  # the required loads are a good part of the region
-    B = field_magpylib(study, d.H, T[keep], TH[keep])
+    B = field_magpylib(study, a.sensor, d.H, T[keep], TH[keep])
     assert np.abs(B[0]).max() <= a.chip.range_x and np.abs(B[1]).max() <= a.chip.range_z
     return B
 
@@ -82,7 +82,7 @@ def assert_shear_line_holds_on_the_chip(result, n=(201, 41)):
     t = np.linspace(0.0, d.t_m, n[0])
     T, TH = (v.ravel() for v in np.meshgrid(t, th, indexing="ij"))
     F_r, F_z = (np.asarray(f).reshape(n) for f in result.models.forces(T, TH, d.H, d.G))
-    B = field_magpylib(study, d.H, T, TH).reshape(2, *n)
+    B = field_magpylib(study, a.sensor, d.H, T, TH).reshape(2, *n)
     out = (np.abs(B[0]) > a.chip.range_x) | (np.abs(B[1]) > a.chip.range_z)
     before = np.cumsum(out, axis=0) == 0  # the loads before the chip leaves its range
     read = np.abs(F_r[before & (F_z <= req.F_z)]).max()
@@ -117,9 +117,9 @@ def assert_worst_corner_reads(result, n_t=401):
     c = w.corner
     m, b = study.magnet, study.body
     alpha = grade(a.parts.grade).alpha
-    M = m.M_z * c["B_r"] * (1 + alpha * (c["temperature"] - 20.0))
+    M = a.sensor.M_z * c["B_r"] * (1 + alpha * (c["temperature"] - 20.0))
     H = d.H + c["H"]
-    standoff = max(study.hall.standoff + c["standoff"], 0.0)
+    standoff = max(a.sensor.standoff + c["standoff"], 0.0)
     gain, off = 1 + c["chip_sensitivity"], c["chip_offset"] * np.array(MLX_OFFSET)
     ds = bundled_for(study)
     Hs = ds["H"].values
@@ -168,7 +168,7 @@ def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_c
     # the parts: a catalogue grade, a standoff in its levels, a setting fast enough
     s = result.sensor_design.choice
     assert s.grade in result.study.design.grades and a.parts.grade == s.grade
-    assert a.study.magnet.M_z == pytest.approx(
+    assert a.sensor.M_z == pytest.approx(
         magtact.parts.grade(s.grade).M_z(MU0)[0], rel=1e-12)
     assert 0 <= s.standoff <= 3e-3 + 1e-12 and a.standoff == s.standoff
     assert a.chip.figures.rate >= 100 and s.feasible
@@ -237,7 +237,8 @@ def test_a_design_on_the_constraint_boundary_meets_it(result):
     from magtact.designer import verdict
 
     a = result.chosen
-    study = result.sensor_design.choice.apply(result.study)
+    study = result.study
+    place = {"M_z": a.sensor.M_z, "standoff": a.sensor.standoff}
     req = study.requirements
     chip = a.chip
     class At:  # the chosen design with one force replaced
@@ -248,10 +249,10 @@ def test_a_design_on_the_constraint_boundary_meets_it(result):
             return self.forces[name] if name in self.forces else getattr(a.design, name)
 
     for F_z_max, met in ((req.F_z * (1 - 1e-8), True), (req.F_z * (1 - 1e-3), False)):
-        v = verdict(result.models, study, At(F_z_max=F_z_max), chip)
+        v = verdict(result.models, study, At(F_z_max=F_z_max), chip, **place)
         assert v["normal"].met is met, v["normal"].text
     for F_r_min, stable in ((-req.F_r * (1 - 1e-8), True), (-req.F_r * (1 - 1e-3), False)):
-        v = verdict(result.models, study, At(F_r_min=F_r_min), chip)
+        v = verdict(result.models, study, At(F_r_min=F_r_min), chip, **place)
         assert ("turns unstable" not in v["shear"].answer) is stable, v["shear"].text
 
 

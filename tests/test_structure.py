@@ -259,7 +259,7 @@ def test_the_chip_has_one_home():
 
     src = Path(magtact.__file__).parent
     wanted = ("setting_for", "chip_margin", "saturation", "check_rest_field", "require_noise",
-              "chip_options", "with_setting")
+              "chip_options")
     homes = {name: [] for name in wanted}
     raisers = []
     for path in src.rglob("*.py"):
@@ -390,6 +390,55 @@ def test_no_module_outside_the_chip_package_compares_chip_names():
         if "chip" not in path.relative_to(PACKAGE).parts[:-1] and any(n in text for n in names):
             offenders += [f"{path.relative_to(ROOT)}:{n}"
                           for n in chip_name_comparisons(text, names)]
+    assert offenders == []
+
+
+# ---- a design's parts travel as a sensor -----------------------------------------------------
+#: The study's sections that hold the parts a design chooses (magnet, chip, silicone).
+PART_SECTIONS = frozenset({"magnet", "hall", "material"})
+
+
+def part_replacements(source: str) -> list[int]:
+    """Lines of ``source`` that build a study with other parts: a ``replace`` call that sets a
+    part section (``replace(study, magnet=...)``) or changes one (``replace(study.hall,
+    standoff=...)``)."""
+    lines = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.Call):
+            continue
+        f = node.func
+        name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else ""
+        if name != "replace" or not node.args:
+            continue
+        first = node.args[0]
+        if any(k.arg in PART_SECTIONS for k in node.keywords) or (
+                isinstance(first, ast.Attribute) and first.attr in PART_SECTIONS):
+            lines.append(node.lineno)
+    return sorted(lines)
+
+
+def test_the_part_scan_finds_a_study_with_other_parts():
+    found = part_replacements(
+        "s = replace(study, magnet=replace(study.magnet, M_z=1.0))\n"
+        "t = dataclasses.replace(s, hall=h)\n"
+        "u = replace(study, requirements=r)\n"
+        "v = replace(sensor, grade='N42', standoff=1e-3)\n")
+    assert found == [1, 1, 2]
+
+
+def test_no_module_changes_a_study_to_carry_a_designs_parts():
+    """The study describes the problem; a design's magnet, chip setting and standoff and
+    silicone travel as a :class:`magtact.Sensor` beside it (``Sensor.of_study`` for the study's
+    own). Only ``magtact.study`` builds studies from their sections (loading a file, and
+    ``Study.at``, the problem at fixed values of its geometric design variables, whose models
+    are bound alike)."""
+    offenders = []
+    for path in _sources():
+        if path.relative_to(PACKAGE).parts[0] == "study":
+            continue
+        text = path.read_text("utf-8")
+        if "replace" in text:
+            offenders += [f"{path.relative_to(ROOT)}:{n}" for n in part_replacements(text)]
     assert offenders == []
 
 

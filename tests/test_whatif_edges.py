@@ -62,6 +62,7 @@ def test_the_domain_is_the_design_range_within_the_data(ds):
 
 @pytest.mark.parametrize("H_mm", [100.0, 12.0])
 def test_every_python_entry_point_refuses(result, ds, H_mm):
+    from magtact import Sensor
     from magtact.budget import error_budget
     from magtact.calibration import calibrate, sensor_map
     from magtact.designer import answer
@@ -69,7 +70,7 @@ def test_every_python_entry_point_refuses(result, ds, H_mm):
 
     H = H_mm * 1e-3
     calls = [lambda: result.evaluate(H_mm=H_mm, G_kPa=29.4),
-             lambda: answer(result.models, result.study, H, 29.4e3),
+             lambda: answer(result.models, result.study, Sensor.of_study(result.study, H, 29.4e3)),
              lambda: error_budget(result.models, result.study, H, 29.4e3, dataset=ds),
              lambda: sensor_map(result.models, result.study, H, 29.4e3),
              lambda: calibrate(result.models, result.study, H, 29.4e3, noise=(1e-7, 1e-7)),

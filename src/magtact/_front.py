@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 from . import _answers
 from ._errors import MagtactError
-from ._result import Result, _answer
+from ._result import Result, _answer, _exact_models
 from ._sensor import Sensor
 from .study import Study, load_study
 
@@ -124,10 +124,10 @@ def error_budget(result: Result, answer: DesignAnswer | None = None, *, dataset=
     from .budget import noise_given
 
     a = _answer_of(result, answer)
-    models, study = result.of(a)
+    models, study, sensor = result.of(a)
     chip, said = (a.chip, None) if noise is None else noise_given(a.chip, noise)
     b = budget_of(models, study, a.H, a.G, a.design.M_z, label=a.label, design=a.design,
-                  dataset=dataset, seeds=seeds, chip=chip)
+                  dataset=dataset, seeds=seeds, chip=chip, sensor=sensor)
     return b if said is None else replace(b, noise_source=said)
 
 
@@ -176,9 +176,10 @@ def calibrate(result: Result, answer: DesignAnswer | None = None, *, presses=Non
         raise MagtactError("a calibration belongs to one geometry: fix the geometric "
                            "design variables (study.at(...)) with models fitted to it")
     a = _answer_of(result, answer)
-    models, study = result.of(a)
+    models, study, sensor = result.of(a)
     return calibration_of(models, study, a.H, a.G, a.design.M_z, noise=noise,
-                          presses=presses, chip=a.chip, dataset=result.dataset, **options)
+                          presses=presses, chip=a.chip, dataset=result.dataset,
+                          sensor=sensor, **options)
 
 
 def _answer_of(result: Result, answer: DesignAnswer | Sensor | None) -> DesignAnswer:
@@ -209,8 +210,9 @@ def force_map(result: Result, answer: DesignAnswer | Sensor | None = None) -> Se
     if geometry and answer is None:
         models, study = result.models.at(**geometry), result.study.at(**geometry)
     else:
-        models, study = result.of(a)
-    return sensor_map(models, study, a.H, a.G, a.design.M_z, design=a.design)
+        models, study, _ = result.of(a)
+    return sensor_map(models, study, a.H, a.G, a.design.M_z, design=a.design,
+                      sensor=a.sensor)
 
 
 def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None = None, *,
@@ -289,10 +291,18 @@ def _solve(models: ModelSet, study: Study, constraints: ForceConstraints, sensor
         d = opt.choice.design
         values = {"H": d.H, "G": d.G} | ({} if d.M_z is None else {"M_z": d.M_z})
     original = {"H": study.design.H_original, "G": study.design.G_original} | own
-    chosen = _answer(models, study, values, "chosen")
+    chosen = _values_answer(models, study, values, "chosen")
     return Result(study, models, models_source, opt, chosen,
-                  _answer(models, study, original, "original"), values, dataset,
-                  sensor=Sensor.of(chosen))
+                  _values_answer(models, study, original, "original"), values, dataset,
+                  sensor=chosen.sensor)
+
+
+def _values_answer(models: ModelSet, study: Study, values: dict[str, float], label: str):
+    """The answer for a design given by its variables [SI] (H, G, and M_z and the geometric
+    ones where the study has them) with the study's own parts."""
+    geometry = {k: values[k] for k in study.geometric_variables if k in values}
+    sensor = Sensor.of_study(study, values["H"], values["G"], values.get("M_z"), **geometry)
+    return _answer(models, study, sensor, label, values.get("M_z"))
 
 
 def _infeasible(models: ModelSet, study: Study, constraints, message: str) -> Exception:
@@ -327,24 +337,23 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
     # where no sensor's loads within the normal force include the shear, the later solves ask
     # without it at once (the verdict says no)
     within = not c.F_r_within < study.requirements.F_r * (1.0 - 1e-9)
-    chosen = _answer(models, c.apply(study), {"H": c.H, "G": c.G}, "chosen")
+    chosen = _answer(models, study, c.sensor(study), "chosen")
     sensor, chosen, problem = _for_every_unit(models, study, table, constraints, sensor, chosen,
                                               within)
     # NSGA-II's cross-check on the problem solved last, its reduction reused
     checked = optimise_sensor(models, study, table, *problem, reduction=sensor,
                               shear_within=within)
     if checked.choice != sensor.choice:
-        chosen = _robust(models, _answer(models, checked.choice.apply(study),
-                                         {"H": checked.choice.H, "G": checked.choice.G},
+        chosen = _robust(models, _answer(models, study, checked.choice.sensor(study),
                                          "chosen"))
     sensor = checked
     c = sensor.choice
     sensor = _root_found_saturation(models, study, sensor, chosen.verdict.F_saturation)
-    original = _answer(models, study, {"H": study.design.H_original,
-                                       "G": study.design.G_original}, "original")
+    original = _values_answer(models, study, {"H": study.design.H_original,
+                                              "G": study.design.G_original}, "original")
     values = {"H": c.H, "G": c.G, "M_z": c.M_z, "standoff": c.standoff}
     return Result(study, models, models_source, opt, chosen, original, values, dataset,
-                  sensor, Sensor.of(chosen))
+                  sensor, chosen.sensor)
 
 
 #: Solves of the sensor problem at the worst corner at most (each calibrates the worst
@@ -371,7 +380,6 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     """
     from dataclasses import replace
 
-    from .chip import exact_field_models
     from .optimise import InfeasibleError, optimise_sensor
     from .tolerance import worst_factors, yield_factors
 
@@ -385,7 +393,7 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
         normal, shear = chosen.robust["normal"], chosen.robust["shear"]
         if normal.met and shear.met:
             break
-        m = exact_field_models(models, chosen.study)
+        m = _exact_models(models, study, chosen.sensor, None)
         w = worst_factors(m, chosen) if target <= 0 else yield_factors(m, chosen, target)
         force = min(w.force, k)
         # where the worst corner falls short of the shear: the body asked for the shear over
@@ -413,7 +421,7 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
             break
         sensor, problem = worst, (at_worst, w.field, w.read)
         c = sensor.choice
-        chosen = _robust(models, _answer(models, c.apply(study), {"H": c.H, "G": c.G},
+        chosen = _robust(models, _answer(models, study, c.sensor(study),
                                          "chosen"))
     return sensor, chosen, problem
 
@@ -422,11 +430,10 @@ def _robust(models: ModelSet, answer):
     """``answer`` with its robust verdict (:func:`magtact.tolerance.robust_verdict`)."""
     from dataclasses import replace
 
-    from .chip import exact_field_models
     from .tolerance import robust_verdict
 
-    return replace(answer, robust=robust_verdict(exact_field_models(models, answer.study),
-                                                 answer))
+    return replace(answer, robust=robust_verdict(
+        _exact_models(models, answer.study, answer.sensor, answer.design.M_z), answer))
 
 
 def _root_found_saturation(models: ModelSet, study: Study, sensor, F_chosen: float):
@@ -435,17 +442,18 @@ def _root_found_saturation(models: ModelSet, study: Study, sensor, F_chosen: flo
     saturated level of the optimiser's grid: one figure in every file."""
     from dataclasses import replace
 
-    from .chip import exact_field_models, saturation_force
+    from .chip import saturation_force
     from .optimise import per_design
     from .study import hall_chip
 
     def figure(d):
         if d == sensor.choice:
             return F_chosen
-        s = d.apply(study)
-        m = exact_field_models(models, s)
-        box = per_design(m, d.H, d.G, s)
-        return saturation_force(s, m, d.H, d.G, hall_chip(s), box.t_m, box.theta_m)
+        built = d.sensor(study)
+        m = _exact_models(models, study, built, None)
+        box = per_design(m, d.H, d.G, study)
+        return saturation_force(study, m, d.H, d.G, hall_chip(study, built.setting),
+                                box.t_m, box.theta_m, M_z=built.M_z, standoff=built.standoff)
 
     red = sensor.reduction_choice
     return replace(sensor, choice=replace(sensor.choice, F_saturation=F_chosen),

@@ -8,7 +8,7 @@ result need none of the report's code.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from ._errors import MagtactError
@@ -124,15 +124,14 @@ class Result:
         """The chosen design's variables in user units (``H_mm``, ``G_kPa`` ...)."""
         return {f"{k}_{UNITS[k]}": float(from_si(v, UNITS[k])) for k, v in self.variables.items()}
 
-    def of(self, answer: DesignAnswer) -> tuple[ModelSet, Study]:
-        """The models and the study of a design's answer: its magnet, the chip's standoff and
-        setting (in the sensor problem, with the exact field at that standoff)."""
+    def of(self, answer: DesignAnswer) -> tuple[ModelSet, Study, Sensor]:
+        """The models, the study and the sensor of a design's answer (in the sensor problem
+        the models hold the exact field of the sensor's magnet at its standoff)."""
         study = self.study if answer.study is None else answer.study
+        sensor = answer.sensor
         if study.optimise.problem == "sensor" and not study.geometric_variables:
-            from .chip import exact_field_models
-
-            return exact_field_models(self.models, study), study
-        return self.models, study
+            return _exact_models(self.models, study, sensor, answer.design.M_z), study, sensor
+        return self.models, study, sensor
 
     def evaluate(self, *, H_mm: float, G_kPa: float, M_z_A_per_m: float | None = None,
                  label: str = "design", grade: str | None = None,
@@ -194,10 +193,15 @@ class Result:
         from .doe import check_design  # no answer outside the data's domain
 
         check_design(self.study, values["H"], self.dataset, **own)
-        study = self.study
+        sensor = Sensor.of_study(self.study, values["H"], values["G"], values.get("M_z"),
+                                 **own)
         if grade is not None or standoff_mm is not None:
-            study = _with_parts(study, grade, standoff_mm)
-        a = _answer(self.models, study, values | own, label)
+            sensor = sensor.changed(grade=grade, standoff=None if standoff_mm is None else
+                                    checked_si(standoff_mm, "mm", "standoff_mm",
+                                               bounds=(0.0, 20e-3)))
+            if grade is not None and "M_z" in values:  # the M_z given, checked against it
+                sensor = replace(sensor, M_z=values["M_z"])
+        a = _answer(self.models, self.study, sensor, label, values.get("M_z"))
         return with_robust(self, a) if robust else a
 
     def evaluate_sensor(self, sensor: Sensor, label: str = "sensor") -> DesignAnswer:
@@ -215,9 +219,9 @@ class Result:
 
         names = self.study.geometric_variables
         geometry = {k: getattr(sensor, k) for k in names}
-        study = sensor.into(self.study, free=names)
+        sensor.check(self.study, free=names)
         check_design(self.study, sensor.H, self.dataset, **geometry)
-        return _answer(self.models, study, {"H": sensor.H, "G": sensor.G} | geometry, label)
+        return _answer(self.models, self.study, sensor, label)
 
     def __str__(self) -> str:
         """A few lines in mN, N, mm and kPa (3 significant figures)."""
@@ -239,32 +243,33 @@ def with_robust(result: Result, answer: DesignAnswer) -> DesignAnswer:
 
     from .tolerance import robust_verdict
 
-    if answer.robust is not None or answer.verdict is None or answer.study is None:
+    if answer.robust is not None or answer.verdict is None or answer.sensor is None:
         return answer
-    models, _ = result.of(answer)
+    models, _, _ = result.of(answer)
     return replace(answer, robust=robust_verdict(models, answer))
 
 
-def _answer(models: ModelSet, study: Study, values: dict[str, float], label: str
-            ) -> DesignAnswer:
-    """The designer's answer for a design given by its variables [SI] (at its geometry; in
-    the sensor problem with the exact field of its magnet at its standoff)."""
+def _answer(models: ModelSet, study: Study, sensor: Sensor, label: str,
+            M_z: float | None = None) -> DesignAnswer:
+    """The designer's answer for ``sensor``, a design of ``study`` (at its geometry; in the
+    sensor problem with the exact field of its magnet at its standoff); ``M_z``: as
+    :func:`magtact.designer.answer`."""
     from .designer import answer
 
-    geometry = {k: values[k] for k in study.geometric_variables if k in values}
+    geometry = {k: getattr(sensor, k) for k in study.geometric_variables}
     if geometry:
         models, study = models.at(**geometry), study.at(**geometry)
     elif study.optimise.problem == "sensor":
-        from .chip import exact_field_models
-
-        models = exact_field_models(models, study)
-    return answer(models, study, values["H"], values["G"], label, values.get("M_z"))
+        models = _exact_models(models, study, sensor, M_z)
+    return answer(models, study, sensor, label, M_z)
 
 
-def _with_parts(study: Study, grade: str | None, standoff_mm: float | None) -> Study:
-    """``study`` with the magnet of ``grade`` and the chip at ``standoff_mm``."""
-    from ._sensor import with_parts
+def _exact_models(models: ModelSet, study: Study, sensor: Sensor, M_z: float | None
+                  ) -> ModelSet:
+    """``models`` with the exact field of ``sensor``'s magnet at its standoff; where ``M_z``
+    scales the field (a design variable), the field of the study's magnet, which the
+    evaluation scales by M_z over the study's."""
+    from .chip import exact_field_models
 
-    standoff = (None if standoff_mm is None
-                else checked_si(standoff_mm, "mm", "standoff_mm", bounds=(0.0, 20e-3)))
-    return with_parts(study, grade=grade, standoff=standoff)
+    return exact_field_models(models, study, sensor.standoff,
+                              sensor.M_z if M_z is None else None)

@@ -5,8 +5,9 @@ height, radius, silicone and shear modulus, the magnet's size, grade and magneti
 Hall chip's part, setting and distance below the body. ``Result.sensor`` is the chosen one;
 :func:`magtact.calibrate`, :func:`magtact.error_budget` and ``Result.evaluate_sensor`` take one.
 
-The lower functions of magtact still read a design's parts from a study; :meth:`Sensor.into`
-and :func:`with_parts` are the one place where a sensor's parts are put into one.
+The study describes the problem (requirements, ranges, catalogue, loading, tolerances) and the
+parts it starts from; a design's parts travel as a sensor beside it, never inside a modified
+study (:meth:`Sensor.of_study` gives the study's own parts at a design).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from ._errors import MagtactError
-from .parts import ChipSetting
+from .parts import SILICONES, ChipSetting
 from .study import MU0, Study, from_si
 
 #: The chip setting fields in the order of the MLX90393's datasheet.
@@ -66,18 +67,18 @@ class Sensor:
     standoff: float
 
     @classmethod
-    def of(cls, answer) -> Sensor:
-        """The sensor of a designer's answer (:class:`magtact.designer.DesignAnswer`): its
-        design (H, G) and the parts of the study it was answered with."""
-        s = answer.study
-        if s is None:
-            raise MagtactError(f"the answer {answer.label!r} holds no study: its parts are "
-                               "not known")
-        figures = answer.chip.figures
-        M_z = s.magnet.M_z if answer.design.M_z is None else float(answer.design.M_z)
-        return cls(float(answer.H), float(answer.G), s.body.R, s.material.silicone,
-                   s.magnet.R_m, s.magnet.H_m, s.magnet.grade, float(M_z), s.hall.chip,
-                   None if figures is None else figures.setting, s.hall.standoff)
+    def of_study(cls, study: Study, H: float, G: float, M_z: float | None = None,
+                 **geometry: float) -> Sensor:
+        """The sensor of design (H [m], G [Pa]) with ``study``'s own parts: its magnet (of
+        magnetisation ``M_z`` [A/m] where given), silicone, chip at the study's standoff and
+        setting (None: the study's ``[hall]`` setting, or one picked per design), and the
+        values [m] of its geometric design variables given in ``geometry`` (``R``, ``R_m``,
+        ``H_m``)."""
+        m, b = study.magnet, study.body
+        return cls(float(H), float(G), float(geometry.get("R", b.R)), study.material.silicone,
+                   float(geometry.get("R_m", m.R_m)), float(geometry.get("H_m", m.H_m)),
+                   m.grade, float(m.M_z if M_z is None else M_z), study.hall.chip, None,
+                   float(study.hall.standoff))
 
     def changed(self, *, H: float | None = None, G: float | None = None,
                 grade: str | None = None, standoff: float | None = None,
@@ -93,16 +94,15 @@ class Sensor:
                 out = replace(out, **{name: value})
         return out
 
-    def into(self, study: Study, free: tuple[str, ...] = ()) -> Study:
-        """``study`` with this sensor's parts: the magnet's grade and M_z, the chip's standoff
-        and setting, the silicone (:func:`with_parts`). ``free``: the study's geometric design
-        variables (``R``, ``R_m``, ``H_m``), which the sensor may set.
+    def check(self, study: Study, free: tuple[str, ...] = ()) -> None:
+        """Refuse a sensor that ``study``'s models cannot answer for: a body radius, magnet
+        size or chip other than the study's (``free``: its geometric design variables, which
+        the sensor may set), or a silicone the catalogue does not hold.
 
         Raises
         ------
         MagtactError
-            If the sensor's body radius, magnet size or chip are not the study's (those need
-            models of their own).
+            Naming the part and the study's own.
         """
         for name, what, mine, own in (("R", "body radius", self.R, study.body.R),
                                       ("R_m", "magnet radius", self.R_m, study.magnet.R_m),
@@ -114,8 +114,9 @@ class Sensor:
         if self.chip != study.hall.chip:
             raise MagtactError(f"the sensor's chip {self.chip} is not study {study.name!r}'s "
                                f"({study.hall.chip})")
-        return with_parts(study, grade=self.grade, M_z=self.M_z, standoff=self.standoff,
-                          setting=self.setting, silicone=self.silicone)
+        if self.silicone != "none" and self.silicone not in SILICONES:
+            raise MagtactError(f"silicone: {self.silicone!r} is not in the catalogue; the "
+                               f"silicones: {', '.join(SILICONES)}")
 
     def to_json(self) -> dict:
         """The sensor in user units, each key naming its unit."""
@@ -166,34 +167,3 @@ def grade_M_z(grade: str) -> float:
         return float(catalogue_grade(grade).M_z(MU0)[0])
     except KeyError as exc:
         raise MagtactError(f"grade: {exc.args[0]}") from None
-
-
-def with_parts(study: Study, *, grade: str | None = None, M_z: float | None = None,
-               standoff: float | None = None, setting: ChipSetting | None = None,
-               silicone: str | None = None) -> Study:
-    """``study`` with a design's parts (SI; None keeps the study's): the magnet's grade and
-    M_z (a grade alone sets M_z from the catalogue), the chip's standoff and setting (fixed
-    in ``[hall]``), the silicone.
-
-    Raises
-    ------
-    MagtactError
-        For a grade or a silicone that is not in the catalogue.
-    """
-    magnet, hall, material = study.magnet, study.hall, study.material
-    if grade is not None:
-        magnet = replace(magnet, grade=grade, M_z=grade_M_z(grade) if M_z is None else M_z)
-    elif M_z is not None:
-        magnet = replace(magnet, M_z=float(M_z))
-    if standoff is not None:
-        hall = replace(hall, standoff=float(standoff))
-    if setting is not None and setting.gain_sel is not None:
-        hall = replace(hall, **{k: int(getattr(setting, k)) for k in SETTING_FIELDS})
-    if silicone is not None:
-        from .parts import SILICONES
-
-        if silicone != "none" and silicone not in SILICONES:
-            raise MagtactError(f"silicone: {silicone!r} is not in the catalogue; the "
-                               f"silicones: {', '.join(SILICONES)}")
-        material = replace(material, silicone=silicone)
-    return replace(study, magnet=magnet, hall=hall, material=material)

@@ -71,7 +71,8 @@ def magnets_field(study: Study, centres, M_z: float | None = None) -> np.ndarray
 
 
 def neighbour_changes(study: Study, H: float, t_m: float, theta_m: float, offsets,
-                      M_z: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+                      M_z: float | None = None, standoff: float | None = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
     """Change of the field at this chip when neighbours are loaded through their stable region.
 
     Every neighbour is the same design, loaded at (t, θ) ∈ [0, t_m] × [0, θ_m] (an N_T × N_THETA
@@ -90,14 +91,14 @@ def neighbour_changes(study: Study, H: float, t_m: float, theta_m: float, offset
     th = np.linspace(0.0, theta_m, N_THETA)
     T, TH = (a.ravel() for a in np.meshgrid(t, th, indexing="ij"))
     u_r, u_z = loading_path(study, T, TH, H)
-    _, z = hall_from_magnet_centre(study, u_r, u_z, H)  # z = −(height of the centre)
+    _, z = hall_from_magnet_centre(study, u_r, u_z, H, standoff)  # −(height of the centre)
     phi = np.linspace(0.0, 2 * np.pi, N_PHI, endpoint=False)
     # centres (state, φ, neighbour, 3)
     cx = offsets[None, None, :, 0] + (u_r[:, None] * np.cos(phi))[:, :, None]
     cy = offsets[None, None, :, 1] + (u_r[:, None] * np.sin(phi))[:, :, None]
     cz = np.broadcast_to((-z)[:, None, None], cx.shape)
     centres = np.stack([cx, cy, cz], axis=-1)
-    _, z0 = hall_from_magnet_centre(study, 0.0, 0.0, H)
+    _, z0 = hall_from_magnet_centre(study, 0.0, 0.0, H, standoff)
     rest = np.concatenate([offsets, np.full((len(offsets), 1), -float(z0))], axis=1)
     B_rest = magnets_field(study, rest[:, None, :], M_z)  # (n, 3), each magnet alone
     each = magnets_field(study, centres[..., None, :], M_z) - B_rest  # (state, φ, n, 3)
@@ -133,22 +134,25 @@ def _front(a: np.ndarray) -> np.ndarray:
 
 
 def crosstalk(study: Study, H: float, t_m: float, theta_m: float, J: np.ndarray, pitch: float,
-              layout: str, rings: int, M_z: float | None = None) -> dict:
+              layout: str, rings: int, M_z: float | None = None,
+              standoff: float | None = None) -> dict:
     """Worst false force [N] per component (F_r, F_z) from loaded neighbours at ``pitch``.
 
-    ``J``: this taxel's Jacobians (..., 2, 2) [N/T] (at rest, or over its stable region).
+    ``J``: this taxel's Jacobians (..., 2, 2) [N/T] (at rest, or over its stable region);
+    ``M_z`` [A/m], ``standoff`` [m]: the design's magnet and chip position (default the
+    study's).
     Returns ``{"one": (F_r, F_z), "all": (F_r, F_z), "worst": (F_r, F_z)}``: one neighbour
     loaded, all loaded alike, and the larger of the two.
     """
     offsets = neighbour_offsets(layout, rings, pitch)
-    one, all_ = neighbour_changes(study, H, t_m, theta_m, offsets, M_z)
+    one, all_ = neighbour_changes(study, H, t_m, theta_m, offsets, M_z, standoff)
     f_one, f_all = worst_false_force(J, one), worst_false_force(J, all_)
     return {"one": f_one, "all": f_all, "worst": np.maximum(f_one, f_all)}
 
 
 def smallest_pitch(study: Study, H: float, t_m: float, theta_m: float, J: np.ndarray,
                    limit, layout: str, rings: int, M_z: float | None = None,
-                   rtol: float = 1e-4) -> float:
+                   rtol: float = 1e-4, standoff: float | None = None) -> float:
     """Smallest pitch [m] ≥ the body's diameter 2R at which the neighbours' worst false force
     stays at or below ``limit`` = (F_r, F_z) [N] in both components.
 
@@ -159,7 +163,7 @@ def smallest_pitch(study: Study, H: float, t_m: float, theta_m: float, J: np.nda
 
     def ok(p):
         return bool(np.all(crosstalk(study, H, t_m, theta_m, J, p, layout, rings,
-                                     M_z)["worst"] <= limit))
+                                     M_z, standoff)["worst"] <= limit))
 
     lo = 2 * study.body.R
     if ok(lo):

@@ -16,7 +16,7 @@ import numpy as np
 
 from .._errors import MagtactError
 from .._files import json_dict, json_list, json_number, json_text
-from .._sensor import with_parts
+from .._sensor import Sensor
 from ..designer import HallChip, hall_chip, resolution
 from ..doe import check_design
 from ..magnetics import hall_field
@@ -264,7 +264,7 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
                  *, label: str = "design", design: DesignResult | None = None,
                  noise: tuple[float, float] | None = None, dataset=None,
                  seeds: dict | None = None, samples: int | None = None,
-                 chip: HallChip | None = None) -> Budget:
+                 chip: HallChip | None = None, sensor: Sensor | None = None) -> Budget:
     """The error budget of design (H [m], G [Pa][, M_z [A/m]]) (docs/method.md §12).
 
     Parameters
@@ -287,6 +287,9 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     chip : HallChip, optional
         The chip at the setting the design's answer uses (:attr:`DesignAnswer.chip`); default
         the study's ``[hall]`` chip.
+    sensor : Sensor, optional
+        The design's parts: its magnet's magnetisation and the chip's standoff
+        (:attr:`DesignAnswer.sensor`); default the study's own.
 
     Returns
     -------
@@ -326,7 +329,9 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     if design is None:
         design = per_design(models, H, G, study, M_z)
     scale = design.field_scale
-    s_M = study if M_z is None else with_parts(study, M_z=M_z)  # the design's magnet
+    if sensor is None:
+        sensor = Sensor.of_study(study, H, G, M_z)
+    place = {"M_z": sensor.M_z, "standoff": sensor.standoff}  # the design's magnet and chip
     rows: list[BudgetRow] = []
     not_modelled = ["the elastomer's mechanical coupling between taxels (only their fields "
                     "are superposed)",
@@ -359,8 +364,8 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
                         np.linspace(0.0, design.theta_m, N_BOX), indexing="ij")
     J = dF_dB(models, T, TH, H, G) / scale  # (N, N, 2, 2)
     J0 = dF_dB(models, 0.0, 0.0, H, G) / scale
-    B = np.stack(hall_field(s_M, T, TH, H, solver="exact"), axis=-1)  # (N, N, 2)
-    B0 = np.array([float(v) for v in hall_field(s_M, 0.0, 0.0, H, solver="exact")])
+    B = np.stack(hall_field(study, T, TH, H, solver="exact", **place), axis=-1)  # (N, N, 2)
+    B0 = np.array([float(v) for v in hall_field(study, 0.0, 0.0, H, solver="exact", **place)])
 
     def through(dB_grid, dB_rest):
         worst = np.abs(np.einsum("...ij,...j->...i", J, dB_grid)).reshape(-1, 2).max(axis=0)
@@ -405,11 +410,10 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
 
     # ---- neighbours ------------------------------------------------------------------------
     pitch = arr.pitch if arr.pitch > 0 else 2 * study.body.R
-    M_eff = None if M_z is None else float(M_z)
     ct0 = _array.crosstalk(study, H, design.t_m, design.theta_m, J0, pitch, arr.layout,
-                           arr.rings, M_eff)
+                           arr.rings, **place)
     ctw = _array.crosstalk(study, H, design.t_m, design.theta_m, J, pitch, arr.layout,
-                           arr.rings, M_eff)
+                           arr.rings, **place)
     rows += _rows(f"neighbours loaded, pitch {mm(pitch):.3g} mm ({arr.layout}, {arr.rings} "
                   f"ring{'s' if arr.rings > 1 else ''})", "neighbours", ct0["worst"],
                   ctw["worst"],
@@ -421,7 +425,7 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     smallest = None
     if res is not None:
         smallest = _array.smallest_pitch(study, H, design.t_m, design.theta_m, J,
-                                         (res[2], res[3]), arr.layout, arr.rings, M_eff)
+                                         (res[2], res[3]), arr.layout, arr.rings, **place)
     array_info = {"layout": arr.layout, "rings": arr.rings, "pitch": pitch,
                   "pitch_given": arr.pitch > 0, "smallest_pitch": smallest,
                   "criterion": "the worst crosstalk (one neighbour or all loaded alike, over "
@@ -433,8 +437,9 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     # ---- fabrication -----------------------------------------------------------------------
     tol = study.tolerances
     n = tol.samples if samples is None else int(samples)
-    unit = _fabrication.unit_context(models, study, H, G, float(M_z or study.magnet.M_z),
-                                     (design.F_r_min, design.F_z_max), noise_used)
+    unit = _fabrication.unit_context(models, study, H, G, sensor.M_z,
+                                     (design.F_r_min, design.F_z_max), noise_used,
+                                     sensor.standoff)
     mc = _fabrication.monte_carlo(lambda e: _fabrication.responses(unit, e),
                                   len(_fabrication.INPUTS), n, tol.seed)
     pct = _fabrication.percentiles(mc)

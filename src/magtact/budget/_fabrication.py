@@ -49,14 +49,18 @@ class Unit:
     F_range: tuple[float, float]
     #: Field noise (σ_x, σ_z) [T] or None.
     noise: tuple[float, float] | None
+    #: The chip's standoff [m] (None: the study's).
+    standoff: float | None = None
 
 
 def unit_context(models: ModelSet, study: Study, H: float, G: float, M_z: float,
-                 F_range, noise) -> Unit:
-    """The nominal design's data for :func:`responses`."""
+                 F_range, noise, standoff: float | None = None) -> Unit:
+    """The nominal design's data for :func:`responses` (``standoff`` [m]: the design's chip
+    position, default the study's)."""
     dF = np.stack([np.asarray(models[k].jet(0.0, 0.0, H, 1)[1], dtype=float)
                    for k in ("f_r", "f_z")])
-    return Unit(study, float(H), float(G), float(M_z), G * dF, tuple(F_range), noise)
+    return Unit(study, float(H), float(G), float(M_z), G * dF, tuple(F_range), noise,
+                standoff)
 
 
 def field_derivatives(u: Unit, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -67,7 +71,7 @@ def field_derivatives(u: Unit, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     s, m = u.study, u.study.magnet
     n = len(x)
-    _, z0 = hall_from_magnet_centre(s, 0.0, 0.0, u.H)
+    _, z0 = hall_from_magnet_centre(s, 0.0, 0.0, u.H, u.standoff)
     centre = np.array([0.0, 0.0, -float(z0)])
     # the magnet's displacement: rest, ±STEP along x (u_r) and along z (u_z)
     shifts = np.array([[0, 0, 0], [STEP, 0, 0], [-STEP, 0, 0], [0, 0, STEP], [0, 0, -STEP]])

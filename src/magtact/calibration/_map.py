@@ -22,6 +22,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .._errors import MagtactError
+from .._sensor import Sensor
 from ..doe import check_design
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..metamodel import ModelSet
@@ -144,6 +145,8 @@ class SensorMap:
     field_source: str = "models"
     force_source: str = "models"
     fe: FEForces | None = None
+    #: The sensor this map is for: its magnet, the chip's setting and standoff, the silicone.
+    sensor: Sensor | None = None
 
     def __str__(self) -> str:
         from .._display import sensor_map_rows, text_block
@@ -156,6 +159,9 @@ class SensorMap:
         return html_block(*sensor_map_rows(self))
 
     def __post_init__(self):
+        if self.sensor is None:  # the study's own parts
+            object.__setattr__(self, "sensor", Sensor.of_study(
+                self.study, self.H, self.G, self.study.magnet.M_z * self.field_scale))
         if self.field_source not in ("models", "exact"):
             raise ValueError(f"field_source must be 'models' or 'exact', got "
                              f"{self.field_source!r}")
@@ -172,8 +178,15 @@ class SensorMap:
         """(a, z0): u_z = a p (a < 0) and the Hall point's height below the unloaded magnet
         centre, z = z0 − a p (docs/method.md §1)."""
         a = float(loading_path(self.study, 1.0, 0.0, self.H)[1])
-        z0 = float(hall_from_magnet_centre(self.study, 0.0, 0.0, self.H)[1])
+        z0 = float(hall_from_magnet_centre(self.study, 0.0, 0.0, self.H,
+                                           self.sensor.standoff)[1])
         return a, z0
+
+    @property
+    def magnet_M_z(self) -> float:
+        """The magnetisation [A/m] whose exact field ``field_scale`` scales: the sensor's
+        magnet over the scale (the study's magnet where the scale is a design's M_z)."""
+        return self.sensor.M_z / self.field_scale
 
     def _pq(self, w):
         p, qx, qy = w[..., 0], w[..., 1], w[..., 2]
@@ -209,7 +222,7 @@ class SensorMap:
             d = u.chip_offset
             x, y, z = a * w[..., 1] + d[0], a * w[..., 2] + d[1], z0 - a * p + d[2]
             rho = np.hypot(x, y)
-            b_rho, bz = cylinder_field(rho, z, m.R_m, m.H_m, m.M_z)
+            b_rho, bz = cylinder_field(rho, z, m.R_m, m.H_m, self.magnet_M_z)
             with np.errstate(invalid="ignore", divide="ignore"):
                 ex = np.where(rho > 0, x / np.where(rho > 0, rho, 1.0), 0.0)
                 ey = np.where(rho > 0, y / np.where(rho > 0, rho, 1.0), 0.0)
@@ -405,11 +418,12 @@ class SensorMap:
         F_r, F_z = self.ranges
         return {
             "H_mm": mm(self.H), "G_kPa": from_si(self.G, "kPa"),
-            "M_z_A_per_m": self.study.magnet.M_z * self.field_scale,
+            "M_z_A_per_m": self.sensor.M_z,
             # the parts the field depends on: the sensor this map is for
-            "magnet_grade": self.study.magnet.grade, "silicone": self.study.material.silicone,
-            "standoff_mm": mm(self.study.hall.standoff), "chip": self.study.hall.chip,
-            "chip_setting": {k: getattr(self.study.hall, k)
+            "magnet_grade": self.sensor.grade, "silicone": self.sensor.silicone,
+            "standoff_mm": mm(self.sensor.standoff), "chip": self.sensor.chip,
+            "chip_setting": {k: (getattr(self.study.hall, k) if self.sensor.setting is None
+                                 else int(getattr(self.sensor.setting, k)))
                              for k in ("gain_sel", "res", "osr", "dig_filt")},
             "t_m": self.t_m, "theta_m_rad": self.theta_m,
             "F_r_range_N": F_r, "F_z_range_N": F_z, "field_source": self.field_source,
@@ -448,7 +462,7 @@ def _near_fold(w, folds, t_m) -> np.ndarray:
 
 def sensor_map(models: ModelSet, study: Study, H: float, G: float, M_z: float | None = None,
                field_source: str | None = None, design=None, force_source: str = "models",
-               dataset=None) -> SensorMap:
+               dataset=None, sensor: Sensor | None = None) -> SensorMap:
     """The field-to-force map of design (H [m], G [Pa][, M_z [A/m]]) over its stable region.
 
     The region is that of :func:`magtact.optimise.per_design`: t ≤ t_m, θ ≤ θ_m, every
@@ -457,7 +471,8 @@ def sensor_map(models: ModelSet, study: Study, H: float, G: float, M_z: float | 
     ``dataset``'s paths at H, interpolated, docs/method.md §13.4; the region is then also
     capped at the paths' largest t and θ). ``field_source``: ``"models"`` or ``"exact"``;
     default ``"exact"`` with the FE forces (the FE source is meant to carry no model error),
-    else ``"models"``.
+    else ``"models"``. ``sensor``: the design's parts (its magnet, the chip's setting and
+    standoff, the silicone), default the study's own.
 
     Raises
     ------
@@ -480,4 +495,5 @@ def sensor_map(models: ModelSet, study: Study, H: float, G: float, M_z: float | 
     if fe is not None:  # no force beyond the FE paths
         t_m, theta_m = min(t_m, fe.t_max), min(theta_m, fe.theta_max)
     return SensorMap(models, study, float(H), float(G), t_m, theta_m,
-                     float(design.field_scale), UnitParameters(), field_source, force_source, fe)
+                     float(design.field_scale), UnitParameters(), field_source, force_source, fe,
+                     sensor)

@@ -11,6 +11,7 @@ from threadpoolctl import threadpool_limits
 
 from .._errors import MagtactError
 from .._files import json_dict, json_list, json_number, json_text
+from .._sensor import Sensor
 from ..doe import check_design
 from ..metamodel import ModelSet
 from ..study import HallChip, Study, from_si, hall_chip, to_si
@@ -329,7 +330,7 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
               fit=DEFAULT_FIT, degrees=DEGREES, table_sizes=TABLE_SIZES,
               model_error: tuple[float, float] | None = None,
               chip: HallChip | None = None, force_source: str = "auto",
-              dataset=None) -> Calibration:
+              dataset=None, sensor: Sensor | None = None) -> Calibration:
     """The calibration of design (H [m], G [Pa]) (docs/method.md §13): its map, the round-trip
     check, the resolution σ_F with the chip's noise (``noise`` = (σ_x, σ_z) [T], else the
     study's ``[hall]``), the firmware approximation held to σ_F, and, with ``presses``, the
@@ -338,6 +339,8 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
     design's answer uses (:attr:`magtact.designer.DesignAnswer.chip`), default the study's.
     ``force_source`` (``"auto"``, ``"fe"``, ``"models"``, :func:`force_source_for`) with
     ``dataset`` (the DOE data set of the models): where the map's forces come from.
+    ``sensor``: the design's parts (:attr:`magtact.designer.DesignAnswer.sensor`: its magnet,
+    the chip's setting and standoff, the silicone), default the study's own.
 
     Raises
     ------
@@ -355,17 +358,17 @@ def calibrate(models: ModelSet, study: Study, H: float, G: float, M_z: float | N
     # take a hundred times longer
     with threadpool_limits(limits=1, user_api="blas"):
         return _calibrate(models, study, H, G, M_z, chip, noise_source, source, presses, fit,
-                          degrees, table_sizes, model_error, dataset)
+                          degrees, table_sizes, model_error, dataset, sensor)
 
 
 def _calibrate(models, study, H, G, M_z, chip, noise_source, source, presses, fit, degrees,
-               table_sizes, model_error, dataset) -> Calibration:
+               table_sizes, model_error, dataset, sensor) -> Calibration:
     from ..designer import resolution
     from ..optimise import per_design
 
     design = per_design(models, H, G, study, M_z)
     smap = sensor_map(models, study, H, G, M_z, design=design, force_source=source,
-                      dataset=dataset)
+                      dataset=dataset, sensor=sensor)
     res = resolution(models, study, design, chip)
     sigma = (res.sigma_r_worst, res.sigma_z_worst)
     trip = round_trip_error(smap)

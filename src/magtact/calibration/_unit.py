@@ -244,7 +244,7 @@ def _model(smap: SensorMap, theta, w):
     y = a * w[..., 2] + th[..., 3]
     z = z0 - a * w[..., 0] + th[..., 4]
     rho = np.hypot(x, y)
-    b_rho, b_z = cylinder_field(rho, z, mag.R_m, mag.H_m, mag.M_z)
+    b_rho, b_z = cylinder_field(rho, z, mag.R_m, mag.H_m, smap.magnet_M_z)
     with np.errstate(invalid="ignore", divide="ignore"):
         ex = np.where(rho > 0, x / np.where(rho > 0, rho, 1.0), 0.0)
         ey = np.where(rho > 0, y / np.where(rho > 0, rho, 1.0), 0.0)

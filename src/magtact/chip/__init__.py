@@ -21,9 +21,9 @@ from ._reading import (
     exact_field_models,
     sensor_grid,
 )
-from ._setting import SettingChoice, setting_for, with_setting
+from ._setting import SettingChoice, setting_for
 
 __all__ = [
     "ChipOption", "Saturation", "SensorGrid", "SettingChoice", "chip_options", "onset",
-    "saturation", "sensor_grid", "setting_for", "with_setting",
+    "saturation", "sensor_grid", "setting_for",
 ]

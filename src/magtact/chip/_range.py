@@ -33,7 +33,9 @@ ZOOM_N, ZOOM_XATOL = 33, 1e-6
 N_T, N_THETA = 41, 11
 
 
-def chip_margin(study: Study, H, t_m, theta_m, geometry: dict | None = None) -> np.ndarray:
+def chip_margin(study: Study, H, t_m, theta_m, geometry: dict | None = None, *,
+                chip: HallChip | None = None, M_z: float | None = None,
+                standoff: float | None = None) -> np.ndarray:
     """How far the exact field exceeds the chip's range over each height's stable region.
 
     .. math:: m(H) = \\max_{t \\le t_m,\\ θ \\le θ_m}
@@ -49,19 +51,23 @@ def chip_margin(study: Study, H, t_m, theta_m, geometry: dict | None = None) -> 
     geometry : dict of array_like, optional
         Each row's values [m] of the study's geometric design variables (shape (n,)); the
         field depends on the magnet's (R_m, H_m).
+    chip : HallChip, optional
+        The chip at a design's setting (default: the study's ``[hall]`` chip).
+    M_z, standoff : float, optional
+        A design's magnetisation [A/m] and chip standoff [m] (default: the study's).
 
     Returns
     -------
     numpy.ndarray, shape (n,)
         ≤ 0 where the chip reads the whole stable region.
     """
-    chip = hall_chip(study)
+    chip = hall_chip(study) if chip is None else chip
     H, t_m, theta_m = (np.atleast_1d(np.asarray(v, float)) for v in (H, t_m, theta_m))
     s = np.linspace(0.0, 1.0, N_T)[:, None, None]
     u = np.linspace(0.0, 1.0, N_THETA)[None, :, None]
     T, TH = s * t_m[None, None, :], u * theta_m[None, None, :]
     HH = np.broadcast_to(H[None, None, :], T.shape)
-    B_r, B_z = ExactField(study, "B_r"), ExactField(study, "B_z")
+    B_r, B_z = ExactField(study, "B_r", standoff, M_z), ExactField(study, "B_z", standoff, M_z)
     geo = {k: np.broadcast_to(np.asarray(v, float), H.shape)[None, None, :]
            for k, v in (geometry or {}).items() if k in B_r.geometry}
     ratio = np.maximum(np.abs(B_r.value(T, TH, HH, **geo)) / chip.range_x,
@@ -173,11 +179,13 @@ def _illinois(ratio, theta, lo, hi, todo, xtol, max_steps: int = 200):
     return lo, hi
 
 
-def field_ratio(study: Study, H, chip: HallChip | tuple[float, float]):
+def field_ratio(study: Study, H, chip: HallChip | tuple[float, float], *,
+                M_z: float | None = None, standoff: float | None = None):
     """``ratio(t, θ)`` of :func:`onset` for the exact field of ``study``'s magnet and chip
-    position at height(s) H [m], against the range of ``chip`` (or (range_x, range_z) [T])."""
+    position (or a design's ``M_z`` [A/m] and ``standoff`` [m]) at height(s) H [m], against
+    the range of ``chip`` (or (range_x, range_z) [T])."""
     rx, rz = (chip.range_x, chip.range_z) if isinstance(chip, HallChip) else chip
-    B_r, B_z = ExactField(study, "B_r"), ExactField(study, "B_z")
+    B_r, B_z = ExactField(study, "B_r", standoff, M_z), ExactField(study, "B_z", standoff, M_z)
 
     def ratio(t, theta):
         return np.maximum(np.abs(B_r.value(t, theta, H)) / rx,
@@ -186,7 +194,8 @@ def field_ratio(study: Study, H, chip: HallChip | tuple[float, float]):
 
 
 def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChip,
-               t_max: float = 1.0, theta_max: float | None = None) -> Saturation:
+               t_max: float = 1.0, theta_max: float | None = None, *,
+               M_z: float | None = None, standoff: float | None = None) -> Saturation:
     """Where the exact field first leaves the chip's range, over the paths θ ∈ [0, θ_max]
     up to the load t_max (default: the whole paths, t ∈ [0, 1], θ ∈ [0, loading.theta_max]).
 
@@ -198,12 +207,15 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
     (see :func:`check_rest_field` for the study-wide check).
 
     The forces are G times the models' per-unit-G forces, so where the chip leaves its range
-    does not depend on G: it is found once per (study, models, H, range, path box) and kept,
-    for a grid of designs that differ in G alone.
+    does not depend on G: it is found once per (study, models, H, range, path box, magnet and
+    chip position) and kept, for a grid of designs that differ in G alone. ``M_z`` [A/m] and
+    ``standoff`` [m]: a design's magnet and chip position (default: the study's).
     """
     theta_max = study.loading.theta_max if theta_max is None else float(theta_max)
     s = _unit_saturation(study, models, float(H), (float(chip.range_x), float(chip.range_z)),
-                         float(t_max), theta_max)
+                         float(t_max), theta_max,
+                         None if M_z is None else float(M_z),
+                         None if standoff is None else float(standoff))
     if s.F_z is None:
         return s
     G = np.asarray(G, dtype=float)
@@ -212,16 +224,17 @@ def saturation(study: Study, models: ModelSet, H: float, G: float, chip: HallChi
 
 @functools.lru_cache(maxsize=256)
 def _unit_saturation(study: Study, models: ModelSet, H: float, chip: tuple[float, float],
-                     t_max: float, theta_max: float) -> Saturation:
+                     t_max: float, theta_max: float, M_z: float | None,
+                     standoff: float | None) -> Saturation:
     """:func:`saturation` at G = 1 Pa against the range ``chip`` = (range_x, range_z) [T]."""
     G = 1.0
     t = np.linspace(0.0, t_max, N_SCAN_T)
     th = np.linspace(0.0, theta_max, N_SCAN_THETA)
     T, TH = np.meshgrid(t, th, indexing="ij")
-    B_x = np.abs(ExactField(study, "B_r").value(T, TH, H))
-    B_z = np.abs(ExactField(study, "B_z").value(T, TH, H))
-    out = dict(B_max_x=float(B_x.max()), B_max_z=float(B_z.max()))
-    ratio = field_ratio(study, H, chip)
+    B_r, B_z = ExactField(study, "B_r", standoff, M_z), ExactField(study, "B_z", standoff, M_z)
+    B_x = np.abs(B_r.value(T, TH, H))
+    out = dict(B_max_x=float(B_x.max()), B_max_z=float(np.abs(B_z.value(T, TH, H)).max()))
+    ratio = field_ratio(study, H, chip, M_z=M_z, standoff=standoff)
     t_on = onset(ratio, th, t_max)
     if np.isnan(t_on).all():
         return Saturation(**out)
@@ -244,18 +257,19 @@ def _unit_saturation(study: Study, models: ModelSet, H: float, chip: tuple[float
             step = cand[1] - cand[0]
             lo, hi = max(lo, best_theta - step), min(hi, best_theta + step)
     ts = float(onset(ratio, np.array([best_theta]), t_max)[0])
-    bx = abs(float(ExactField(study, "B_r").value(ts, best_theta, H))) / chip[0]
-    bz = abs(float(ExactField(study, "B_z").value(ts, best_theta, H))) / chip[1]
+    bx = abs(float(B_r.value(ts, best_theta, H))) / chip[0]
+    bz = abs(float(B_z.value(ts, best_theta, H))) / chip[1]
     F_r, F_z_s = models.forces(ts, best_theta, H, G)
     return Saturation(**out, t=ts, theta=best_theta, axis="x" if bx > bz else "z",
                       F_r=float(F_r), F_z=float(F_z_s))
 
 
 def saturation_force(study: Study, models: ModelSet, H: float, G: float, chip: HallChip,
-                     t_m: float, theta_m: float) -> float:
+                     t_m: float, theta_m: float, *, M_z: float | None = None,
+                     standoff: float | None = None) -> float:
     """The design's saturation figure: the smallest normal force [N] at which the chip leaves
     its range inside the stable region t ≤ t_m, θ ≤ θ_m (:func:`saturation`); inf: never."""
-    s = saturation(study, models, H, G, chip, t_m, theta_m)
+    s = saturation(study, models, H, G, chip, t_m, theta_m, M_z=M_z, standoff=standoff)
     return float("inf") if s.F_z is None else s.F_z
 
 

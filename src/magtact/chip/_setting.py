@@ -16,7 +16,7 @@ saturate at the largest load t compete, and the answer says so.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -61,17 +61,20 @@ class SettingChoice:
         return self.figures.setting
 
 
-def setting_for(models: ModelSet, study: Study, design) -> SettingChoice | None:
+def setting_for(models: ModelSet, study: Study, design, *, M_z: float | None = None,
+                standoff: float | None = None) -> SettingChoice | None:
     """The best chip setting for a design whose extrema are computed (``design``: a
     :class:`magtact.optimise.DesignResult`; see the module notes), or None for a chip without
-    a setting table."""
+    a setting table. ``M_z`` [A/m] and ``standoff`` [m]: the design's magnet and chip position
+    (default: the design's M_z, else the study's; the study's standoff)."""
     if chip_part(study.hall.chip).table is None:
         return None
     H, G = design.H, design.G
     T, TH = np.meshgrid(np.linspace(0.0, design.t_m, N_GRID),
                         np.linspace(0.0, design.theta_m, N_GRID), indexing="ij")
-    bx = np.abs(ExactField(study, "B_r", M_z=design.M_z).value(T, TH, H))  # (t, θ)
-    bz = np.abs(ExactField(study, "B_z", M_z=design.M_z).value(T, TH, H))
+    M_z = design.M_z if design.M_z is not None else M_z
+    bx = np.abs(ExactField(study, "B_r", standoff, M_z).value(T, TH, H))  # (t, θ)
+    bz = np.abs(ExactField(study, "B_z", standoff, M_z).value(T, TH, H))
     Bx_t, Bz_t = bx.max(axis=1), bz.max(axis=1)  # per load level
     Bx, Bz = float(Bx_t.max()), float(Bz_t.max())
     J = dF_dB(models, T, TH, H, G).reshape(-1, 2, 2) / design.field_scale
@@ -128,11 +131,3 @@ def _fast_settings(hall, rate: float) -> tuple[SettingFigures, ...]:
     study = Study(hall=hall)
     return tuple(f for f in (setting_figures(study, s) for s in candidate_settings(study))
                  if f.rate >= rate and np.isfinite(f.sigma_x[1]) and np.isfinite(f.sigma_z[1]))
-
-
-def with_setting(study: Study, setting: ChipSetting) -> Study:
-    """``study`` with its ``[hall]`` chip setting fixed at ``setting``."""
-    if setting.gain_sel is None:
-        return study
-    return replace(study, hall=replace(study.hall, **{k: int(v) for k, v in
-                                                      setting.__dict__.items()}))

@@ -186,7 +186,7 @@ def chosen_or_given(result, *, H=None, G=None, grade=None, standoff=None, settin
              "setting": chip}
     try:
         changed = sensor.changed(grade=grade, silicone=silicone, **given)
-        changed.into(result.study)  # a silicone the catalogue holds
+        changed.check(result.study, free=result.study.geometric_variables)  # its silicone
     except MagtactError as exc:
         option = "--grade" if str(exc).startswith("grade") else "--silicone"
         raise MagtactError(f"{option}: {str(exc).partition(': ')[2]}") from None

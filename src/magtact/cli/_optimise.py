@@ -180,6 +180,7 @@ def compare_command(
         "--study", "an argument", "an argument: magtact compare H1,G1 H2,G2 STUDY")] = None,
 ) -> None:
     """Percentage changes of Γ_r,max, Γ_z,max, F_r,min, F_z,max from design 1 to design 2."""
+    from .._sensor import Sensor
     from ..designer import answer
     from ..optimise import compare
 
@@ -187,7 +188,8 @@ def compare_command(
     d2 = parse_design(second, "second design")
     s = get_study(study)
     m, _ = study_models(s, models)
-    a1, a2 = answer(m, s, *d1), answer(m, s, *d2)  # each with the chip at its own setting
+    # each with the study's parts, the chip at its own setting
+    a1, a2 = (answer(m, s, Sensor.of_study(s, *d)) for d in (d1, d2))
     cmp = compare(a1.design, a2.design)
     table = Table(title=f"{first} → {second} (mm,kPa)")
     for col in ("quantity", "design 1", "design 2", "change (%)"):

@@ -10,13 +10,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.optimize import minimize
 
+from .._sensor import Sensor
 from ..chip import (
     Saturation,
     SettingChoice,
     chip_margin,
     saturation,
     setting_for,
-    with_setting,
 )
 from ..doe import check_design
 from ..metamodel import ModelSet
@@ -74,13 +74,12 @@ class Parts:
         return html_block(*parts_rows(self))
 
 
-def parts_of(study: Study, G: float, M_z: float | None = None) -> Parts:
-    """The parts of a design of ``study`` with shear modulus G [Pa] (and M_z [A/m])."""
-    inside, below, above = silicones_around(G)
-    return Parts(study.magnet.grade, study.magnet.size,
-                 study.magnet.M_z if M_z is None else float(M_z), study.material.silicone,
+def parts_of(study: Study, sensor: Sensor) -> Parts:
+    """The parts of ``sensor``, a design of ``study`` (whose magnet names its size)."""
+    inside, below, above = silicones_around(sensor.G)
+    return Parts(sensor.grade, study.magnet.size, sensor.M_z, sensor.silicone,
                  tuple(x.name for x in inside), None if below is None else below.name,
-                 None if above is None else above.name, study.magnet.R_m, study.magnet.H_m)
+                 None if above is None else above.name, sensor.R_m, sensor.H_m)
 
 
 @dataclass(frozen=True)
@@ -115,16 +114,18 @@ class DesignAnswer:
     parts: Parts | None = None
     #: Each requirement of the study met or not, with its margin.
     verdict: Verdict | None = None
-    #: The study of this design: its magnet, the chip's standoff and setting.
+    #: The study (the problem) this design answers.
     study: Study | None = None
     #: Each requirement over the built units: worst corner, yield, what limits it
     #: (:func:`magtact.tolerance.robust_verdict`; None: not computed).
     robust: RobustVerdict | None = None
+    #: The sensor this answer is for: its body, magnet, chip at its setting and standoff.
+    sensor: Sensor | None = None
 
     @property
     def standoff(self) -> float:
         """The chip's distance below the body [m]."""
-        return 0.0 if self.study is None else self.study.hall.standoff
+        return 0.0 if self.sensor is None else self.sensor.standoff
 
     @property
     def figures(self) -> SettingFigures | None:
@@ -157,28 +158,32 @@ class DesignAnswer:
         return html_block(answer_title(self), answer_rows(self))
 
 
-def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "design",
+def answer(models: ModelSet, study: Study, sensor: Sensor, label: str = "design",
            M_z: float | None = None) -> DesignAnswer:
-    """The designer's answer for design (H [m], G [Pa][, M_z [A/m]]) with the study's
-    ``[hall]`` chip: for a chip with a setting table whose setting the study leaves to magtact,
-    at the best setting for this design (:func:`magtact.designer.best_setting`); σ_F at the
+    """The designer's answer for ``sensor``, a design (H, G) of ``study`` with its parts:
+    the magnet's magnetisation, the chip at the sensor's standoff and setting (for a chip
+    with a setting table whose setting neither the sensor nor the study fixes, at the best
+    setting for this design, :func:`magtact.designer.best_setting`), the silicone. σ_F at the
     upper end of the setting's noise interval and, where it is an interval, at its lower end.
 
-    A chip range below this design's field at rest shows as saturation at t = 0. ``M_z``
-    (where it is a design variable) scales the field and divides the force noise.
+    ``models``: in the sensor problem with the exact field of the sensor's magnet at its
+    standoff (:func:`magtact.chip.exact_field_models`). ``M_z`` [A/m] (where M_z is a design
+    variable of models fitted at the study's magnet) scales the field and divides the force
+    noise. A chip range below this design's field at rest shows as saturation at t = 0.
     """
+    H, G = sensor.H, sensor.G
     check_design(study, H)  # outside the data's domain the models extrapolate
-    chip = hall_chip(study)
+    chip = hall_chip(study, sensor.setting)
+    place = {"M_z": sensor.M_z, "standoff": sensor.standoff}
     design = per_design(models, H, G, study, M_z)
-    choice = setting_for(models, study, design) if chip.picked else None
+    choice = setting_for(models, study, design, **place) if chip.picked else None
     if choice is not None:  # the chip at the setting chosen for this design
-        study = with_setting(study, choice.setting)
-        chip = hall_chip(study)
-    parts = parts_of(study, G, M_z)
-    if M_z is not None:  # the exact field of this design's magnet
-        study = replace(study, magnet=replace(study.magnet, M_z=float(M_z)))
-    sat = replace(saturation(study, models, H, G, chip),
-                  region_margin=float(chip_margin(study, H, design.t_m, design.theta_m)[0]))
+        chip = hall_chip(study, choice.setting)
+    if chip.figures is not None:
+        sensor = replace(sensor, setting=chip.figures.setting)
+    sat = replace(saturation(study, models, H, G, chip, **place),
+                  region_margin=float(chip_margin(study, H, design.t_m, design.theta_m,
+                                                  chip=chip, **place)[0]))
     res = None if chip.noise is None else resolution(models, study, design, chip)
     low = None
     if chip.figures is not None and chip.figures.interval:
@@ -186,7 +191,8 @@ def answer(models: ModelSet, study: Study, H: float, G: float, label: str = "des
         low = resolution(models, study, design, replace(chip, noise_x=f.sigma_x[0],
                                                         noise_z=f.sigma_z[0]))
     return DesignAnswer(label, design, chip, res, sat, study.constraints.G_tolerance, choice,
-                        low, parts, verdict(models, study, design, chip), study)
+                        low, parts_of(study, sensor),
+                        verdict(models, study, design, chip, **place), study, sensor=sensor)
 
 
 def resolution(models: ModelSet, study: Study, design: DesignResult, chip: HallChip

@@ -122,13 +122,17 @@ def _n(x: float) -> str:
 BOUNDARY_RTOL = 1e-6
 
 
-def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip) -> Verdict:
-    """The verdict on ``design`` with ``chip`` at its setting, against ``[requirements]``
-    (``study`` holds the design's magnet and the chip's standoff; see the module notes)."""
+def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip, *,
+            M_z: float | None = None, standoff: float | None = None) -> Verdict:
+    """The verdict on ``design`` with ``chip`` at its setting, against ``[requirements]``, with
+    the design's magnetisation ``M_z`` [A/m] and the chip at ``standoff`` [m] (default: the
+    study's; see the module notes)."""
     req = study.requirements
-    grid = sensor_grid(models, study, design.H, design.t_m, design.theta_m, n=N_FINE)
-    M_z = study.magnet.M_z
-    sat = saturation(study, models, design.H, design.G, chip, design.t_m, design.theta_m)
+    grid = sensor_grid(models, study, design.H, design.t_m, design.theta_m, standoff,
+                       n=N_FINE)
+    M_z = study.magnet.M_z if M_z is None else float(M_z)
+    sat = saturation(study, models, design.H, design.G, chip, design.t_m, design.theta_m,
+                     M_z=M_z, standoff=standoff)
     F_sat = math.inf if sat.F_z is None else sat.F_z
     if chip.noise is None:
         s_r = s_z = math.nan
@@ -149,7 +153,8 @@ def verdict(models: ModelSet, study: Study, design: DesignResult, chip: HallChip
                              f"reads 0–{_n(req.F_z)} N normal without saturating", text,
                              min(design.F_z_max, F_sat) - req.F_z, "N"))
     shear = -design.F_r_min
-    within, read = shear_envelope(models, study, design, chip, req.F_z)
+    within, read = shear_envelope(models, study, design, chip, req.F_z, M_z=M_z,
+                                  standoff=standoff)
     stable = shear >= req.F_r * (1.0 - BOUNDARY_RTOL)
     occurs = within >= req.F_r * (1.0 - BOUNDARY_RTOL)
     read_all = read >= req.F_r * (1.0 - BOUNDARY_RTOL)
@@ -200,7 +205,8 @@ def footprint(study: Study) -> Requirement:
 
 
 def shear_envelope(models: ModelSet, study: Study, design: DesignResult, chip: HallChip,
-                   F_z: float, n: tuple[int, int] = N_FINE) -> tuple[float, float]:
+                   F_z: float, n: tuple[int, int] = N_FINE, *, M_z: float | None = None,
+                   standoff: float | None = None) -> tuple[float, float]:
     """The largest shear |F_r| [N] on the paths of the stable region within the normal force
     F_z [N]: that the body carries (every load up to F_z on each path), and that the chip
     reads (the loads before it leaves its range on each path).
@@ -220,7 +226,7 @@ def shear_envelope(models: ModelSet, study: Study, design: DesignResult, chip: H
             over = np.asarray(models.forces(mid, th[below], H, G)[1], float) > F_z
             hi, lo = np.where(over, mid, hi), np.where(over, lo, mid)
         t_F[below] = lo
-    t_on = onset(field_ratio(study, H, chip), th, t_m)
+    t_on = onset(field_ratio(study, H, chip, M_z=M_z, standoff=standoff), th, t_m)
     t_read = np.where(np.isnan(t_on), t_F, np.minimum(t_F, t_on))
     s = np.linspace(0.0, 1.0, n[0])[:, None]
     F_r_body = np.abs(np.asarray(models.forces(s * t_F, th, H, G)[0], float))

@@ -13,7 +13,8 @@ from ._fe import solve_fe
 SOLVERS = ("fe", "exact")
 
 
-def hall_field(study: Study, t, theta, H, solver: str | None = None
+def hall_field(study: Study, t, theta, H, solver: str | None = None, *,
+               M_z: float | None = None, standoff: float | None = None
                ) -> tuple[np.ndarray, np.ndarray]:
     """Flux density (B_r, B_z) [T] at the Hall point for load t, shear angle θ and height H.
 
@@ -31,6 +32,9 @@ def hall_field(study: Study, t, theta, H, solver: str | None = None
         ``"fe"``: the axisymmetric finite-element solution (:func:`solve_fe`, solved once per
         process and magnet); ``"exact"``: the closed form :func:`cylinder_field`. Default:
         ``study.magnetics.solver``.
+    M_z, standoff : float, optional
+        A design's magnetisation [A/m] (the FE field, solved for the study's magnet, scales
+        with it) and chip standoff [m]; default the study's.
 
     Returns
     -------
@@ -65,7 +69,7 @@ def hall_field(study: Study, t, theta, H, solver: str | None = None
     ``B_z`` is the upward component; below an axially magnetised (+z) magnet it is positive.
     """
     u_r, u_z = loading_path(study, t, theta, H)
-    x, z = hall_from_magnet_centre(study, u_r, u_z, H)
+    x, z = hall_from_magnet_centre(study, u_r, u_z, H, standoff)
     if (study.magnetics.solver if solver is None else solver) == "fe":
         m = study.magnet
         gap = np.hypot(np.maximum(np.abs(x) - m.R_m, 0.0), np.maximum(np.abs(z) - m.H_m / 2, 0.0))
@@ -74,10 +78,10 @@ def hall_field(study: Study, t, theta, H, solver: str | None = None
                              f"the Hall point reaches {from_si(gap.max(), 'mm'):.4g} mm from the "
                              f"magnet, beyond the finely meshed zone near_mm = "
                              f"{from_si(study.magnetics.near, 'mm'):g}; increase near_mm")
-    return magnet_field(study, x, z, solver)
+    return magnet_field(study, x, z, solver, M_z)
 
 
-def magnet_field(study: Study, x, z, solver: str | None = None
+def magnet_field(study: Study, x, z, solver: str | None = None, M_z: float | None = None
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Flux density (B_x, B_z) [T] in the plane y = 0 of the magnet's frame.
 
@@ -90,6 +94,8 @@ def magnet_field(study: Study, x, z, solver: str | None = None
         direction, z along the magnet's axis, up).
     solver : {"fe", "exact"}, optional
         As in :func:`hall_field`.
+    M_z : float, optional
+        The magnet's magnetisation [A/m] instead of the study's.
 
     Returns
     -------
@@ -101,9 +107,11 @@ def magnet_field(study: Study, x, z, solver: str | None = None
         raise MagtactError(f"field solver must be one of {SOLVERS}, got {solver!r}")
     x, z = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(z, dtype=float))
     rho = np.abs(x)
+    m = study.magnet
     if solver == "exact":
-        m = study.magnet
-        B_rho, B_z = cylinder_field(rho, z, m.R_m, m.H_m, m.M_z)
+        B_rho, B_z = cylinder_field(rho, z, m.R_m, m.H_m, m.M_z if M_z is None else M_z)
     else:
         B_rho, B_z = solve_fe(study).B(rho, z)
+        if M_z is not None:  # the field is linear in the magnetisation
+            B_rho, B_z = B_rho * (M_z / m.M_z), B_z * (M_z / m.M_z)
     return np.sign(x) * B_rho, B_z

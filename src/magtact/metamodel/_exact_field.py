@@ -151,6 +151,8 @@ class ExactField:
                                      "the standoff")
                 z0[i] = c0
             self.z0 = z0[where].reshape(np.shape(standoff))
+            if np.ndim(standoff) == 0:  # one chip position: its own coefficients
+                self.z0, self.z1, self.z2 = c0, c1, c2
         self.info = {"kind": "exact closed-form field (magtact.magnetics.cylinder_field)"}
 
     def bind(self, **geometry: float) -> ExactField:

@@ -169,14 +169,14 @@ class SensorDesign:
     F_saturation: float
     F_r_within: float = float("nan")
 
-    def apply(self, study: Study) -> Study:
-        """``study`` with this sensor's parts: the magnet's grade and M_z, the chip's standoff
-        and setting."""
-        from ..chip import with_setting
+    def sensor(self, study: Study):
+        """This design as a :class:`magtact.Sensor` of ``study``: its magnet's grade and
+        M_z, the chip at its standoff and setting, the study's body and silicone."""
+        from .._sensor import Sensor
 
-        s = replace(study, magnet=replace(study.magnet, grade=self.grade, M_z=self.M_z),
-                    hall=replace(study.hall, standoff=self.standoff))
-        return s if self.option.figures is None else with_setting(s, self.option.figures.setting)
+        f = self.option.figures
+        return replace(Sensor.of_study(study, self.H, self.G, self.M_z), grade=self.grade,
+                       setting=None if f is None else f.setting, standoff=float(self.standoff))
 
     @property
     def sigma(self) -> float:

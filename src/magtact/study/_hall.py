@@ -158,12 +158,13 @@ def _rate_classes(study: Study):
             yield s
 
 
-def hall_chip(study: Study) -> HallChip:
+def hall_chip(study: Study, setting: ChipSetting | None = None) -> HallChip:
     """The Hall chip of ``study``: its ``[hall]`` figures, zeros filled from the chip's data.
 
-    For a chip with a setting table and the setting fixed (or a chip with one setting), the
-    setting's range and noise (upper end of its interval); for a setting magtact picks per
-    design, the widest range the fixed fields allow and no noise (``picked``).
+    For a chip with a setting table and the setting fixed (or a chip with one setting, or a
+    design's ``setting`` given), the setting's range and noise (upper end of its interval);
+    for a setting magtact picks per design, the widest range the fixed fields allow and no
+    noise (``picked``).
 
     Raises
     ------
@@ -173,7 +174,8 @@ def hall_chip(study: Study) -> HallChip:
     h = study.hall
     table = chip_part(h.chip).table
     if table is not None:
-        cands = list(candidate_settings(study))
+        at_setting = setting is not None and setting.gain_sel is not None
+        cands = [setting] if at_setting else list(candidate_settings(study))
         if len(cands) == 1:
             fig = setting_figures(study, cands[0])
             own = any(v > 0 for v in (h.noise_x, h.noise_z, h.range_x, h.range_z))

@@ -98,8 +98,9 @@ class ToleranceBox:
         return np.column_stack([t.ppf(u[:, k]) for k, t in enumerate(self.inputs)])
 
 
-def tolerance_box(study: Study) -> ToleranceBox:
-    """The tolerance box of a design of ``study`` (its magnet's grade, its chip; see the
+def tolerance_box(study: Study, grade: str | None = None) -> ToleranceBox:
+    """The tolerance box of a design of ``study`` with a magnet of ``grade`` (default: the
+    study's; ``"custom"``: the study's remanence tolerance) and the study's chip (see the
     module notes).
 
     Raises
@@ -107,17 +108,19 @@ def tolerance_box(study: Study) -> ToleranceBox:
     StudyError
         Naming ``tolerances.temperature_C`` for a range whose ends are reversed.
     """
-    from ..parts import chip_part, grade
+    from ..parts import chip_part
+    from ..parts import grade as catalogue_grade
 
-    tol, m = study.tolerances, study.magnet
+    tol = study.tolerances
+    grade = study.magnet.grade if grade is None else grade
     k = tol.coverage
 
     def normal(name, sigma, source, scale=1.0):
         s = sigma * scale
         return Tolerance(name, 0.0, -k * s, k * s, "normal", s, source)
 
-    if m.grade != "custom":
-        g = grade(m.grade)
+    if grade != "custom":
+        g = catalogue_grade(grade)
         B_r = Tolerance("B_r", 1.0, g.B_r_min / g.B_r, g.B_r_max / g.B_r, "uniform", 0.0,
                         f"grade {g.name}: {g.B_r_min:g}–{g.B_r_max:g} T ({g.source})")
         alpha = g.alpha

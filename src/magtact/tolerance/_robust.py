@@ -237,7 +237,7 @@ def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None
     :meth:`magtact.Result.of` gives them) over ``box`` (default: its study's,
     :func:`tolerance_box`). See the module notes."""
     study = answer.study
-    box = tolerance_box(study) if box is None else box
+    box = tolerance_box(study, answer.sensor.grade) if box is None else box
     ctx = design_context(models, answer, box)
     tol, req = study.tolerances, study.requirements
     target = tol.yield_target
@@ -323,7 +323,7 @@ def worst_factors(models: ModelSet, answer, box: ToleranceBox | None = None
     """
     from scipy.optimize import brentq
 
-    box = tolerance_box(answer.study) if box is None else box
+    box = tolerance_box(answer.study, answer.sensor.grade) if box is None else box
     ctx = design_context(models, answer, box)
     g, b = box.inputs[box.index("G")], box.inputs[box.index("fe_bias")]
     force = (1.0 + g.low) / (1.0 + b.high)
@@ -351,7 +351,7 @@ def yield_factors(models: ModelSet, answer, target: float, box: ToleranceBox | N
     chip must then read F_z,req over the first at the nominal parts, the body carry it over
     the second. Calibrated on this design (its units' spread relative to its nominal unit).
     """
-    box = tolerance_box(answer.study) if box is None else box
+    box = tolerance_box(answer.study, answer.sensor.grade) if box is None else box
     ctx = design_context(models, answer, box)
     tol = answer.study.tolerances
     X = np.concatenate([box.nominal[None, :],

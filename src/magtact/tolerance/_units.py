@@ -37,10 +37,11 @@ N_SHEAR = 11
 
 @dataclass(frozen=True)
 class DesignContext:
-    """A design and what its units share: the study (its magnet, chip standoff and setting),
-    H, G [Pa], M_z [A/m], the chip's range (x, z) [T], the required forces F_z, F_r [N], the
-    nominal worst σ_F over the required loads [N] (NaN: not known), and the stable region and
-    per-unit-G extrema at heights ``H_nodes`` (t_m, θ_m, f_r,min, f_z,max)."""
+    """A design and what its units share: the study (the problem: loading, magnet size,
+    requirements), H, G [Pa], M_z [A/m], the chip's range (x, z) [T], the required forces F_z,
+    F_r [N], the nominal worst σ_F over the required loads [N] (NaN: not known), the stable
+    region and per-unit-G extrema at heights ``H_nodes`` (t_m, θ_m, f_r,min, f_z,max), and the
+    chip's standoff [m]."""
 
     models: ModelSet
     study: Study
@@ -56,6 +57,7 @@ class DesignContext:
     theta_m: np.ndarray
     f_r_min: np.ndarray
     f_z_max: np.ndarray
+    standoff: float = 0.0
 
     def at(self, H) -> tuple[np.ndarray, ...]:
         """(t_m, θ_m, f_r,min, f_z,max) at heights H [m], interpolated in the nodes."""
@@ -68,15 +70,15 @@ def design_context(models: ModelSet, answer, box: ToleranceBox) -> DesignContext
     models of its study (in the sensor problem, with the exact field)."""
     from ..optimise import force_extrema
 
-    study, d, v = answer.study, answer.design, answer.verdict
+    study, d, v, sensor = answer.study, answer.design, answer.verdict, answer.sensor
     dH = box.inputs[box.index("H")]
     H_nodes = np.array([d.H + dH.low, d.H, d.H + dH.high]) if dH.high > dH.low \
         else np.array([d.H])
     sigma = float("nan") if v is None else max(v.sigma_r, v.sigma_z)
-    return DesignContext(models, study, d.H, d.G, study.magnet.M_z,
+    return DesignContext(models, study, d.H, d.G, sensor.M_z,
                          (answer.chip.range_x, answer.chip.range_z), study.requirements.F_z,
                          study.requirements.F_r, sigma, H_nodes,
-                         *force_extrema(models, H_nodes, study))
+                         *force_extrema(models, H_nodes, study), standoff=sensor.standoff)
 
 
 def unit_figures(ctx: DesignContext, box: ToleranceBox, X: np.ndarray) -> dict[str, np.ndarray]:
@@ -98,7 +100,7 @@ def unit_figures(ctx: DesignContext, box: ToleranceBox, X: np.ndarray) -> dict[s
     gain = 1.0 + c["chip_sensitivity"]
     force = ctx.G * (1.0 + c["G"]) / (1.0 + c["fe_bias"])  # the unit's G as the models see it
     H = ctx.H + c["H"]
-    standoff = np.maximum(s.hall.standoff + c["standoff"], 0.0)
+    standoff = np.maximum(ctx.standoff + c["standoff"], 0.0)
     R_m, H_m, M_z = m.R_m + c["R_m"], m.H_m + c["H_m"], ctx.M_z * rem
     off_x, off_z = c["chip_offset"] * box.offset[0], c["chip_offset"] * box.offset[1]
     t_m, theta_m, f_r_min, f_z_max = ctx.at(H)
