@@ -401,9 +401,14 @@ def _outline(name: str) -> xr.Dataset:
     path = bundled_path(name)
     if not path.is_file():
         return load_bundled(name)  # its error names the missing file
+    import pandas as pd
+
     with h5py.File(path, "r") as f:
         coords = {k: f[k][()] for k in (*DIMS, *GEOMETRY_NAMES) if k in f}
         attrs = {k: v.decode() if isinstance(v, bytes) else v for k, v in f.attrs.items()}
+    # each dimension's levels as a pandas index: xarray takes it as it is, where an array would
+    # have it look for (and import) dask to tell what kind of array it was given
+    coords = {k: pd.Index(v, name=k) if np.ndim(v) == 1 else v for k, v in coords.items()}
     return xr.Dataset(coords=coords, attrs=attrs)
 
 
