@@ -108,6 +108,12 @@ class SensorGrid:
         need = np.where(sat, need, 0.0)
         return need.reshape(need.shape[0], -1).max(axis=1) * (1.0 + READ_MARGIN)
 
+    def read_order(self, F_z: float) -> _ReadOrder:
+        """:meth:`G_range` for the normal force F_z [N] at many ranges and magnetisations:
+        the points in the order of their :meth:`read_need` (:class:`_ReadOrder`), sorted
+        once; per range one pass over the points, per magnetisation a count."""
+        return _ReadOrder(self, F_z)
+
     def unit_noise(self, noise_x, noise_z) -> np.ndarray:
         """Force noise per unit G / M_z at every point, shape (n, N_T, N_THETA, 2) (F_r, F_z):
         σ_F,k = √(j_kx² σ_x² + j_kz² σ_z²); ``noise_x``, ``noise_z`` [T RMS] scalars or (n,)."""
@@ -133,6 +139,45 @@ class SensorGrid:
             F = np.asarray(G, float).reshape(-1, 1, 1) * self.f_z
         F = np.where(sat, F, np.inf)
         return F.reshape(F.shape[0], -1).min(axis=1)
+
+
+class _ReadOrder:
+    """Per design of a grid: its points in the order of their :meth:`SensorGrid.read_need`
+    for the normal force F_z [N], the greatest first, for :meth:`SensorGrid.G_range` of many
+    ranges and magnetisations at once (:meth:`SensorGrid.read_order`).
+
+    G_range is the greatest need among the saturated points, and a point saturates where the
+    magnetisation exceeds its :meth:`SensorGrid.M_limit`: in this order it is the need of the
+    first point whose M_limit lies below the magnetisation, the first point where the running
+    least M_limit does (NaN limits, which never saturate, skipped). The first level's need is
+    inf, so a design saturated there reads inf, and one saturated nowhere 0, as
+    :meth:`SensorGrid.G_range_at` (the needs of a force F_z ≥ 0 are ≥ 0). Arrays point
+    first, design last."""
+
+    def __init__(self, grid: SensorGrid, F_z: float):
+        need = grid.read_need(F_z)
+        n = need.shape[0]
+        need = need.reshape(n, -1)
+        order = np.argsort(-need, axis=1, kind="stable")
+        self.need = np.ascontiguousarray(np.take_along_axis(need, order, axis=1).T)
+        self.b_x, self.b_z = (
+            np.ascontiguousarray(np.take_along_axis(np.abs(b.reshape(n, -1)), order, axis=1).T)
+            for b in (grid.b_x, grid.b_z))
+
+    def least_limit(self, range_x: float, range_z: float) -> np.ndarray:
+        """The running least M_limit [A/m] (:meth:`SensorGrid.M_limit`, the same quotients)
+        over the points in this order, shape (P, n); ``range_x``, ``range_z`` [T] scalars."""
+        with np.errstate(divide="ignore"):
+            limit = np.minimum(range_x / self.b_x, range_z / self.b_z)
+        return np.fmin.accumulate(limit, axis=0, out=limit)
+
+    def G_range(self, least: np.ndarray, M_z: float) -> np.ndarray:
+        """G_range [Pa] per design at magnetisation M_z [A/m] (the field's, times any factor)
+        from :meth:`least_limit`."""
+        P = least.shape[0]
+        first = P - np.count_nonzero(least < M_z, axis=0)  # the first saturated point, or P
+        need = np.take_along_axis(self.need, np.minimum(first, P - 1)[None], axis=0)[0]
+        return np.where(first < P, np.maximum(need, 0.0), 0.0) * (1.0 + READ_MARGIN)
 
 
 def sensor_grid(models: ModelSet, study: Study, H, t_m, theta_m,

@@ -271,7 +271,8 @@ class _Within:
 
     Over G the points within the normal force F_z change only where G passes a point's
     F_z / f_z: on the piece G ∈ (F_z / f_i, F_z / f_(i−1)] (f sorted, f_(−1) = 0) they are the
-    first i, for i = 0 … P (:meth:`pieces`). One per grid, shared by every chip noise."""
+    first i, for i = 0 … P (:meth:`pieces`). One per grid (kept, :func:`_within_of`), shared by
+    every chip noise."""
 
     def __init__(self, grid: SensorGrid):
         n = grid.f_z.shape[0]
@@ -283,6 +284,31 @@ class _Within:
         r = np.take_along_axis(np.abs(grid.f_r.reshape(n, -1)), self.order, axis=1)
         self.R = np.concatenate([np.zeros((n, 1)), np.maximum.accumulate(r, axis=1)], axis=1)
         self._kept: dict = {}  # the pieces' bounds per (F_z, F_r, G_high)
+        self._open: dict = {}  # the pieces that may hold a G, per (F_z, F_r, G_high)
+        self._squares: tuple | None = None
+        self._noises: dict = {}  # _Noise per chip noise (σ_x, σ_z)
+
+    def noise(self, noise_x: float, noise_z: float) -> _Noise:
+        """The :class:`_Noise` of the chip noise (σ_x, σ_z) [T RMS] (scalars) over this grid;
+        kept, with what it has computed, for the next solve on the same grid."""
+        key = (float(noise_x), float(noise_z))
+        if key not in self._noises:
+            self._noises[key] = _Noise(self, key)
+        return self._noises[key]
+
+    def squares(self) -> tuple[np.ndarray, np.ndarray]:
+        """(j_kx², j_kz²) of every point in this order, what every chip noise combines
+        (:meth:`SensorGrid.unit_noise`), permuted once: each of shape (P, 2, n), point first
+        and height last (k: F_r, F_z), so that a running maximum over the points runs along
+        whole rows of heights."""
+        if self._squares is None:
+            n = self.order.shape[0]
+            j = self.grid.j.reshape(n, -1, 2, 2)
+            at = self.order[..., None]
+            self._squares = tuple(
+                np.ascontiguousarray(np.take_along_axis(j[..., c] ** 2, at, axis=1).transpose(
+                    1, 2, 0)) for c in (0, 1))
+        return self._squares
 
     def pieces(self, F_z: float) -> tuple[np.ndarray, np.ndarray]:
         """(start, end) [Pa] of the pieces i = 0 … P of G (shape (n, P + 1)): just above
@@ -304,6 +330,24 @@ class _Within:
             self._kept[key] = (np.maximum(start, need), np.minimum(end, G_high))
         return self._kept[key]
 
+    def open_pieces(self, F_z: float, F_r: float, G_high: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The pieces that may hold a G (their least G at most their largest, :meth:`bounds`),
+        in their order, per height: their indices i, least and largest G, each of shape
+        (n, K) with K the most of any height; the rest of a row is padded with pieces that
+        hold none (least G inf, largest −inf). Every other piece holds no G whatever the
+        lower bound on G, so the least σ over G is the least over these; kept."""
+        key = (F_z, F_r, G_high)
+        if key not in self._open:
+            lowest, cap = self.bounds(F_z, F_r, G_high)
+            ok = lowest <= cap
+            K = max(int(ok.sum(axis=1).max(initial=0)), 1)
+            i = np.argsort(~ok, axis=1, kind="stable")[:, :K]  # the open ones first, in order
+            held = np.take_along_axis(ok, i, axis=1)
+            self._open[key] = (i, np.where(held, np.take_along_axis(lowest, i, axis=1), np.inf),
+                               np.where(held, np.take_along_axis(cap, i, axis=1), -np.inf))
+        return self._open[key]
+
     def most_shear(self, G_low, G_high: float, F_z: float) -> tuple[np.ndarray, np.ndarray]:
         """Per height: the largest shear [N] the loads within the normal force F_z [N] include
         over G ∈ [G_low, G_high] (G R_i grows with G on a piece: its largest is at the piece's
@@ -319,18 +363,63 @@ class _Within:
         return best, np.where(ok[rows, j], G[rows, j], np.nan)
 
 
+#: The :class:`_Within` of the last grids the reduction solved on (grid, within), newest first:
+#: the sensor problem solved again for a worst corner asks for the same grid
+#: (:func:`magtact.chip.sensor_grid` keeps it) and the same chip noises.
+_WITHINS: list = []
+WITHINS_KEPT = 2
+
+
+def _within_of(grid: SensorGrid) -> _Within:
+    """The kept :class:`_Within` of ``grid`` (the same object, read only), else a new one."""
+    for i, (g, within) in enumerate(_WITHINS):
+        if g is grid:
+            _WITHINS.insert(0, _WITHINS.pop(i))
+            return within
+    within = _Within(grid)
+    _WITHINS.insert(0, (grid, within))
+    del _WITHINS[WITHINS_KEPT:]
+    return within
+
+
 class _Noise:
     """One chip noise over a grid's :class:`_Within`: the worst per-unit √(σ_r² + σ_z²) among
-    the first i points."""
+    the first i points.
+
+    The worst σ_k among the first i points is the square root of the largest σ_k² among them
+    (the square root is monotone, also in floating point): the running maximum is taken of
+    j_kx² σ_x² + j_kz² σ_z² (:meth:`_Within.squares`), and the root only at the pieces
+    :meth:`least` compares. ``noise``: (σ_x, σ_z) [T RMS], scalars or one per height."""
 
     def __init__(self, within: _Within, noise: tuple):
         self.within = within
-        grid, order = within.grid, within.order
-        n = order.shape[0]
-        S = grid.unit_noise(*noise).reshape(n, -1, 2)
-        cm = np.maximum.accumulate(np.take_along_axis(S, order[..., None], axis=1), axis=1)
-        cm = np.concatenate([np.zeros((n, 1, 2)), cm], axis=1)  # cm[:, i]: worst of first i
-        self.W = np.hypot(cm[..., 0], cm[..., 1])  # (n, P + 1)
+        self.noise = noise
+        self._W: dict = {}  # W at the open pieces, per (F_z, F_r, G_high)
+
+    def _running(self) -> np.ndarray:
+        """q[i] = the largest σ_r², σ_z² per unit among the first i points, shape
+        (P + 1, 2, n) (q[0] = 0: every σ² is ≥ 0)."""
+        jx2, jz2 = self.within.squares()
+        P, _, n = jx2.shape
+        sx2, sz2 = (np.asarray(v, float).reshape(-1) ** 2 for v in self.noise)
+        q = np.empty((P + 1, 2, n))
+        q[0] = 0.0
+        np.multiply(jx2, sx2, out=q[1:])
+        q[1:] += jz2 * sz2
+        return np.maximum.accumulate(q, axis=0, out=q)
+
+    def W(self, F_z: float, F_r: float, G_high: float) -> np.ndarray:
+        """The worst per-unit √(σ_r² + σ_z²) of the pieces :meth:`_Within.open_pieces`, shape
+        (n, K); kept (the running maxima over all points are not: several MB a noise)."""
+        key = (F_z, F_r, G_high)
+        if key not in self._W:
+            i = self.within.open_pieces(F_z, F_r, G_high)[0]
+            q = self._running()
+            n = q.shape[2]
+            at = i * (2 * n) + np.arange(n)[:, None]  # piece i of height h: q[i, :, h]
+            q = q.reshape(-1)
+            self._W[key] = np.hypot(np.sqrt(q[at]), np.sqrt(q[at + n]))
+        return self._W[key]
 
     def least(self, M_z: float, G_low: np.ndarray, G_high: float, F_z: float,
               F_r: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -341,15 +430,17 @@ class _Noise:
 
         On piece i σ = G W_i / M_z grows with G, and the shear G R_i reaches F_r from
         G = F_r / R_i on: the piece's best G is the largest of its start, G_low and F_r / R_i,
-        where that is within the piece and G_high."""
-        n = self.W.shape[0]
+        where that is within the piece and G_high. Only the pieces that may hold a G are
+        compared (:meth:`_Within.open_pieces`); of equal values the first piece's is kept."""
+        _, lowest, cap = self.within.open_pieces(F_z, F_r, G_high)
+        W = self.W(F_z, F_r, G_high)
+        n = W.shape[0]
         rows = np.arange(n)
         M = np.broadcast_to(np.asarray(M_z, float), (n,))
         G_low = np.broadcast_to(np.asarray(G_low, float), (n,))
-        lowest, cap = self.within.bounds(F_z, F_r, G_high)
         G = np.maximum(lowest, G_low[:, None])
         with np.errstate(invalid="ignore"):  # inf × 0 where no G is feasible: masked
-            value = np.where(G <= cap, G * self.W, np.inf)
+            value = np.where(G <= cap, G * W, np.inf)
         j = np.argmin(value, axis=1)
         best = value[rows, j] / M
         return best, np.where(np.isfinite(best), G[rows, j], G_low)
@@ -404,14 +495,14 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
     ok = np.isfinite(G_force) & (G_force <= G_hi)
     options = [(k, o) for k, o in enumerate(space.options) if only is None or k == only[1]]
     grades = [(g, M) for g, M in enumerate(space.M_z) if only is None or g == only[0]]
-    within = _Within(grid)
-    need = grid.read_need(space.F_z * space.read_factor)
+    within = _within_of(grid)
+    reading = grid.read_order(space.F_z * space.read_factor)
     cands, falls = [], []
     for k, o in options:
-        noise = _Noise(within, (o.noise_x, o.noise_z))
-        M_limit = grid.M_limit(o.range_x, o.range_z)
+        noise = within.noise(o.noise_x, o.noise_z)
+        least = reading.least_limit(o.range_x, o.range_z)
         for g, M_z in grades:
-            G_range = grid.G_range_at(M_limit, M_z * space.field_factor, need)
+            G_range = reading.G_range(least, M_z * space.field_factor)
             G_low = np.maximum(np.maximum(G_force, G_range), space.G_bounds[0])
             value, G = noise.least(M_z, G_low, G_hi, space.F_z, space.F_r)
             # per standoff level: the first height of the least value
