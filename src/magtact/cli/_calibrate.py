@@ -3,6 +3,7 @@ calibration from presses (docs/method.md §13)."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -57,6 +58,114 @@ def fit_names(text: str, presses: bool) -> tuple[str, ...]:
     return tuple(names)
 
 
+def _draw_figures(conn, parent_end) -> None:
+    """The figure process of :class:`FigureProcess`: import the figures' code, then draw the
+    calibration it is sent and answer ``("ok", "")`` or ``("error", "what failed")``."""
+    import pickle
+    import signal
+    import warnings
+
+    parent_end.close()  # the command's end: closed here, its exit ends recv() below
+    # Ctrl-C is the command's to handle, and the handlers the command's process set for SIGTERM
+    # are not this process's: it ends when the command ends it
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    warnings.simplefilter("ignore")  # nothing of this process reaches the terminal
+    try:
+        from ..report import calibration_figures
+
+        data, folder = conn.recv()
+    except Exception:  # the command ended before its calibration, or draws the figure itself
+        return
+    try:
+        calibration_figures(pickle.loads(data), folder)
+    except Exception as exc:
+        conn.send(("error", f"{type(exc).__name__}: {exc}"))
+    else:
+        conn.send(("ok", ""))
+
+
+class FigureProcess:
+    """The calibration figure drawn by a second process.
+
+    Started before the design, the process imports matplotlib and the figures' code while the
+    design and the calibration are computed (the command's own process never imports them);
+    :meth:`draw` hands it the calibration, drawn while the command writes its other files, and
+    :meth:`wait` returns when ``calibration.png`` and ``.svg`` are written. Where no process
+    starts by fork (systems other than Linux), the calibration does not pickle or the process
+    has died, :meth:`wait` draws the figure in the command's process.
+    """
+
+    def __init__(self):
+        self._job = None  # (calibration, folder) until its figure is written
+        self._sent = False
+        self._proc = self._conn = None
+        if sys.platform.startswith("linux"):
+            import multiprocessing
+
+            ctx = multiprocessing.get_context("fork")
+            self._conn, child = ctx.Pipe()
+            self._proc = ctx.Process(target=_draw_figures, args=(child, self._conn),
+                                     daemon=True)
+            self._proc.start()
+            child.close()
+
+    def draw(self, cal, folder: Path) -> None:
+        """Hand the calibration's figure (written in ``folder``) to the process."""
+        import pickle
+
+        self._job = (cal, folder)
+        if self._proc is not None:
+            try:
+                self._conn.send((pickle.dumps(cal), folder))
+                self._sent = True
+            except Exception:  # a calibration that does not pickle, a process gone
+                pass
+
+    def wait(self) -> None:
+        """Return when the figure's files are written.
+
+        Raises
+        ------
+        RuntimeError
+            If the process could not write the figure (the message says why).
+        """
+        if self._job is None:
+            return
+        if self._sent:
+            self._sent = False
+            try:
+                status, why = self._conn.recv()
+            except (EOFError, OSError):  # the process died: the figure is drawn here
+                pass
+            else:
+                if status != "ok":
+                    raise RuntimeError(f"calibration figure not written: {why}")
+                self._job = None
+                return
+        from ..report import calibration_figures
+
+        cal, folder = self._job
+        self._job = None
+        calibration_figures(cal, folder)
+
+    def close(self) -> None:
+        """End the process (at once where the command stops before its figure)."""
+        if self._proc is None:
+            return
+        if self._proc.is_alive():
+            self._proc.kill()  # not a signal a handler inherited from the command could keep
+        self._proc.join()
+        self._conn.close()
+        self._proc = None
+
+    def __enter__(self) -> FigureProcess:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
 @app.command("calibrate")
 def calibrate_command(
     study: StudyArg = None,
@@ -95,7 +204,6 @@ def calibrate_command(
     force_table.csv, calibration.json and calibration.png in OUT."""
     from .. import calibrate, design
     from ..calibration import DEFAULT_FIT, read_presses, write_calibration_outputs
-    from ..report import calibration_figures
 
     s = get_study(study)
     if force_source not in ("auto", "fe", "models"):
@@ -111,9 +219,10 @@ def calibrate_command(
     sigma = None if noise is None else parse_noise(noise)
     units = None if fit is None else fit_names(fit, presses is not None)
     data = None if presses is None else read_presses(presses)
-    # the folder is checked (writable, nothing of the user's in the way) before the work
+    # the folder is checked (writable, nothing of the user's in the way) before the work; the
+    # figure's process ends before the folder's files are put in place (or left)
     with outputs("calibrate", out, "force.h", "force_map.json", "force_table.csv",
-                 "calibration.json") as o:
+                 "calibration.json") as o, FigureProcess() as figure:
         with console.status("choosing the sensor"):
             result = design(s, models=models, log=lambda m: console.print(m, highlight=False))
         sensor, given = chosen_or_given(result, H=H, G=G, grade=grade, standoff=standoff,
@@ -127,7 +236,9 @@ def calibrate_command(
             cal = calibrate(result, sensor if given else None, noise=sigma, presses=data,
                             fit=DEFAULT_FIT if units is None else units, model_error=eps,
                             force_source=force_source)
-        write_calibration_outputs(cal, o.folder, figures=calibration_figures)
+        figure.draw(cal, o.folder)  # drawn while the other files are written
+        write_calibration_outputs(cal, o.folder)
+        figure.wait()
     a = cal.firmware.chosen
     console.print(
         f"map: round trip F -> B -> F within {cal.round_trip:.2g} of the force range; "
