@@ -147,13 +147,16 @@ def _cel_plain(kc, sets):
     return [0.5 * np.pi * (ss + cc * em) / (em * (em + pp)) for cc, ss, pp in state]
 
 
-@pytest.mark.parametrize("shape", [(), (5,), (3, 1000), (2, 3 * _exact._CEL_BLOCK + 17)])
-def test_bulirschs_iteration_in_blocks_equals_one_pass(shape):
+@pytest.mark.parametrize("shape, slow", [((), None), ((5,), -1), ((3, 1000), 7),
+                                         ((2, 3 * _exact._CEL_BLOCK + 17), -1),
+                                         ((2, 3 * _exact._CEL_BLOCK + 17), 0),
+                                         ((2, 3 * _exact._CEL_BLOCK + 17), 2 * _exact._CEL_BLOCK)])
+def test_bulirschs_iteration_in_blocks_equals_one_pass(shape, slow):
     rng = np.random.default_rng(len(shape))
     kc = rng.uniform(0.05, 1.0, shape)
     p = rng.uniform(0.0, 2.0, shape)
-    if kc.size > 1:
-        kc.flat[-1] = 1e-9  # one slow point, in the last block: every block takes its steps
+    if slow is not None:
+        kc.flat[slow] = 1e-9  # one slow point: every block takes the steps of its block
         p.flat[:3] = 0.0  # the general branch
     sets = [(p, np.ones(shape), -np.ones(shape)), (p * p, rng.normal(size=shape),
                                                    rng.normal(size=shape))]

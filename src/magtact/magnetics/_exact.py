@@ -51,26 +51,32 @@ def _cel_sets(kc: np.ndarray, sets: list[tuple]) -> list[np.ndarray]:
     Landen/AGM sequence of k_c is shared by every set, so several integrals over the same
     modulus cost little more than one.
 
-    Every point takes the same number of Landen steps, the one at which the sequence of k_c
-    has converged at every point (:func:`_landen_steps`); the points then go through those
-    steps in blocks of ``_CEL_BLOCK`` (:func:`_cel_block`), so that a block's arrays stay in
-    the processor's cache. Each point's arithmetic is the same as in one pass over them all."""
+    Every point takes the same number of Landen steps: the first after which the sequence of
+    k_c has converged at every point. The points go through them in blocks of ``_CEL_BLOCK``
+    (:class:`_Landen`), so that a block's arrays stay in the processor's cache: each block
+    steps on until it has converged at the most steps any block has needed so far, and where a
+    later block needs more, the earlier ones take those steps too (and must have converged
+    there as well). Each point's arithmetic is that of one pass over all of them."""
     if np.any(kc == 0):
         raise ValueError("cel: kc must be non-zero (the integral diverges)")
     if any(np.any(p < 0) for p, _, _ in sets):
         raise ValueError("cel: p must be >= 0")
-    steps = _landen_steps(np.abs(kc))
-    if kc.size <= _CEL_BLOCK:
-        return _cel_block(kc, sets, steps)
     shape = kc.shape
     kc = kc.reshape(-1)
     sets = [tuple(np.reshape(v, -1) for v in st) for st in sets]
+    blocks = [_Landen(kc[b], [tuple(v[b] for v in st) for st in sets])
+              for b in (slice(a, a + _CEL_BLOCK) for a in range(0, max(kc.size, 1), _CEL_BLOCK))]
     out = [np.empty(kc.size) for _ in sets]
-    for a in range(0, kc.size, _CEL_BLOCK):
-        b = slice(a, a + _CEL_BLOCK)
-        for whole, part in zip(out, _cel_block(kc[b], [tuple(v[b] for v in st)
-                                                       for st in sets], steps), strict=True):
-            whole[b] = part
+    steps, done = 0, [-1] * len(blocks)  # done: the steps at which a block's values were taken
+    while any(d != steps for d in done):
+        for i, block in enumerate(blocks):
+            block.step_to(steps)
+            steps = block.n
+            if done[i] != steps:
+                b = slice(i * _CEL_BLOCK, (i + 1) * _CEL_BLOCK)
+                for whole, part in zip(out, block.values(), strict=True):
+                    whole[b] = part
+                done[i] = steps
     return [v.reshape(shape) for v in out]
 
 
@@ -78,68 +84,75 @@ def _cel_sets(kc: np.ndarray, sets: list[tuple]) -> list[np.ndarray]:
 _CEL_BLOCK = 8192
 
 
-def _landen_steps(k: np.ndarray) -> int:
-    """The Landen steps of Bulirsch's iteration for the moduli |k_c| = ``k``: the first after
-    which |g − k| ≤ g ``_CEL_TOL`` at every point (g: the previous arithmetic mean)."""
-    em = np.ones_like(k)
-    g = em
-    em = k + em
-    kk = k
-    for n in range(_CEL_MAX_ITER):
-        if np.all(np.abs(g - k) <= g * _CEL_TOL):
-            return n
-        k = 2.0 * np.sqrt(kk)
-        kk = k * em
-        g = em
-        em = k + em
-    # the iteration converges quadratically for every valid input
-    raise RuntimeError("cel: no convergence")  # pragma: no cover
+class _Landen:
+    """Bulirsch's iteration over one block of moduli ``kc`` and the (p, c, s) sets."""
 
+    def __init__(self, kc: np.ndarray, sets: list[tuple]):
+        k = np.abs(kc)
+        self.state = []
+        for p, c, s in sets:
+            # p > 0 in every call the cylinder field makes except on the mantle line r = R
+            # (p = 0), where the general branch of Bulirsch's algorithm applies.
+            pos = p > 0
+            pp = np.where(pos, np.sqrt(np.where(pos, p, 1.0)), 0.0)
+            cc = c.copy()
+            ss = np.where(pos, s / np.where(pos, pp, 1.0), s)
+            if not np.all(pos):
+                pg = np.where(pos, 0.0, p)  # the general branch, evaluated where p <= 0 only
+                f = kc * kc
+                q = 1.0 - f
+                g = 1.0 - pg
+                f = f - pg
+                q = q * (s - c * pg)
+                pn = np.sqrt(f / g)
+                cn = (c - s) / g
+                sn = -q / (g * g * pn) + cn * pn
+                pp = np.where(pos, pp, pn)
+                cc = np.where(pos, cc, cn)
+                ss = np.where(pos, ss, sn)
+            f = cc
+            cc = cc + ss / pp
+            g = k / pp
+            ss = 2.0 * (ss + f * g)
+            pp = g + pp
+            self.state.append([cc, ss, pp])
+        em = np.ones_like(k)
+        self.g, self.em, self.k, self.kk = em, k + em, k, k
+        self.n = 0  # Landen steps taken
 
-def _cel_block(kc: np.ndarray, sets: list[tuple], steps: int) -> list[np.ndarray]:
-    """Bulirsch's iteration for ``kc`` and the (p, c, s) sets, ``steps`` Landen steps."""
-    k = np.abs(kc)
-    state = []
-    for p, c, s in sets:
-        # p > 0 in every call the cylinder field makes except on the mantle line r = R (p = 0),
-        # where the general branch of Bulirsch's algorithm applies.
-        pos = p > 0
-        pp = np.where(pos, np.sqrt(np.where(pos, p, 1.0)), 0.0)
-        cc = c.copy()
-        ss = np.where(pos, s / np.where(pos, pp, 1.0), s)
-        if not np.all(pos):
-            pg = np.where(pos, 0.0, p)  # the general branch, evaluated where p <= 0 only
-            f = kc * kc
-            q = 1.0 - f
-            g = 1.0 - pg
-            f = f - pg
-            q = q * (s - c * pg)
-            pn = np.sqrt(f / g)
-            cn = (c - s) / g
-            sn = -q / (g * g * pn) + cn * pn
-            pp = np.where(pos, pp, pn)
-            cc = np.where(pos, cc, cn)
-            ss = np.where(pos, ss, sn)
-        f = cc
-        cc = cc + ss / pp
-        g = k / pp
-        ss = 2.0 * (ss + f * g)
-        pp = g + pp
-        state.append([cc, ss, pp])
-    em = np.ones_like(k)
-    em = k + em
-    kk = k
-    for _ in range(steps):
-        k = 2.0 * np.sqrt(kk)
-        kk = k * em
-        for st in state:
+    def converged(self) -> bool:
+        """Whether |g − k| ≤ g ``_CEL_TOL`` at every point (g: the previous arithmetic
+        mean)."""
+        return bool(np.all(np.abs(self.g - self.k) <= self.g * _CEL_TOL))
+
+    def step(self) -> None:
+        """One Landen step of the moduli and every set."""
+        self.k = k = 2.0 * np.sqrt(self.kk)
+        self.kk = kk = k * self.em
+        for st in self.state:
             cc, ss, pp = st
             f = cc
             cc = cc + ss / pp
             gp = kk / pp
             st[:] = cc, 2.0 * (ss + f * gp), gp + pp
-        em = k + em
-    return [0.5 * np.pi * (ss + cc * em) / (em * (em + pp)) for cc, ss, pp in state]
+        self.g = self.em
+        self.em = k + self.em
+        self.n += 1
+
+    def step_to(self, n: int) -> None:
+        """Take steps up to ``n``, then on until converged (``self.n``: where it is)."""
+        while self.n < n:
+            self.step()
+        while not self.converged():
+            if self.n >= _CEL_MAX_ITER - 1:
+                # the iteration converges quadratically for every valid input
+                raise RuntimeError("cel: no convergence")  # pragma: no cover
+            self.step()
+
+    def values(self) -> list[np.ndarray]:
+        """cel of each set at the steps taken."""
+        em = self.em
+        return [0.5 * np.pi * (ss + cc * em) / (em * (em + pp)) for cc, ss, pp in self.state]
 
 
 def cylinder_field(r, z, R_m, H_m, M_z) -> tuple[np.ndarray, np.ndarray]:
