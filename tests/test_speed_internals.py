@@ -179,12 +179,36 @@ def test_the_cylinder_field_over_many_points_equals_one_pass(monkeypatch):
         np.testing.assert_array_equal(a, b)
 
 
-def test_the_outline_of_a_bundled_data_set_does_not_import_dask_array():
+def test_the_outline_and_the_whole_of_a_bundled_data_set_do_not_import_dask():
     code = ("import sys\n"
-            "from magtact.doe._dataset import BUNDLED_NAME, _outline\n"
+            "from magtact.doe._dataset import BUNDLED_NAME, _outline, load_bundled\n"
             "ds = _outline(BUNDLED_NAME)\n"
             "assert ds['H'].values.dtype == float and ds.attrs\n"
-            "print('dask.array' in sys.modules)\n")
+            "ds = load_bundled()\n"
+            "print('dask' in sys.modules)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_a_data_set_read_with_its_indexes_made_from_pandas_equals_xarrays_reading():
+    import xarray as xr
+
+    from magtact.doe._dataset import BUNDLED_NAMES, bundled_path, load_dataset
+
+    names = [n for n in BUNDLED_NAMES if bundled_path(n).is_file()]
+    assert names
+    for name in names:
+        with xr.open_dataset(bundled_path(name), engine="h5netcdf") as ds:
+            want = ds.load()
+        got = load_dataset(bundled_path(name))
+        assert got.identical(want), name
+        assert list(got.variables) == list(want.variables)
+        assert list(got.xindexes) == list(want.xindexes)
+        for k in want.xindexes:
+            assert type(got.xindexes[k]) is type(want.xindexes[k])
+            assert got.xindexes[k].equals(want.xindexes[k])
+        for k in want.variables:  # NaN fill values: compared as text
+            assert type(got[k].variable) is type(want[k].variable)
+            assert repr(got[k].encoding) == repr(want[k].encoding), (name, k)
+        assert repr(got.encoding) == repr(want.encoding)
