@@ -16,11 +16,7 @@ from matplotlib.figure import Figure
 from PIL import Image
 
 from magtact.cli._calibrate import FigureProcess
-from magtact.report._fig_calibration import (
-    MINOR_TICK_DECADES,
-    calibration_figures,
-    draw_calibration,
-)
+from magtact.report import MINOR_TICK_DECADES, calibration_figures, draw_calibration
 
 SUPERSCRIPT = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻", "0123456789-")
 

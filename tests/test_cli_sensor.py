@@ -84,8 +84,11 @@ def test_the_chosen_sensor_is_the_chosen_answers(magone_design):
                                              r.variables["standoff"])
     assert s.grade == r.sensor_design.choice.grade
     assert s.setting == r.chosen.chip.figures.setting
-    assert (s.R, s.R_m, s.H_m, s.silicone) == (r.study.body.R, r.study.magnet.R_m,
-                                               r.study.magnet.H_m, r.study.material.silicone)
+    assert (s.R, s.R_m, s.H_m) == (r.study.body.R, r.study.magnet.R_m, r.study.magnet.H_m)
+    # the silicone chosen, whose cited G range holds G
+    assert s.silicone == r.sensor_design.choice.silicone
+    lo, hi = magtact.parts.SILICONES[s.silicone].G_range
+    assert lo <= s.G <= hi
     # the chosen answer is for this sensor, a design of the study as it was given
     assert r.chosen.sensor == s and r.chosen.study == r.study
     with pytest.raises(AttributeError):

@@ -242,7 +242,7 @@ def parts_rows(p) -> tuple[str, list[tuple[str, str]]]:
         around = [n for n in (p.softer, p.stiffer) if n is not None]
         holds = ("none; between " + " and ".join(around)) if around else "none"
     rows = [("magnet", magnet), ("magnetisation M_z", f"{sig(1e-6 * p.M_z)} MA/m"),
-            ("silicone of the study", p.silicone),
+            ("silicone", p.silicone),
             ("silicones whose G range holds G", holds)]
     return "parts", rows
 
@@ -373,13 +373,25 @@ def sensor_map_rows(m) -> tuple[str, list[tuple[str, str]]]:
     return "sensor map F(B)", rows
 
 
+def _silicone_words(name: str, G: float) -> str:
+    """A silicone with the design's G and the silicone's cited G range (kPa)."""
+    from .parts import SILICONES
+
+    if name == "none":
+        return f"G {sig(1e-3 * G)} kPa"
+    if name not in SILICONES:
+        return f"{name}, G {sig(1e-3 * G)} kPa"
+    lo, hi = SILICONES[name].G_range
+    reach = f"{sig(1e-3 * lo)} kPa" if lo == hi else f"{sig(1e-3 * lo)}–{sig(1e-3 * hi)} kPa"
+    return f"{name}, G {sig(1e-3 * G)} kPa (its range {reach})"
+
+
 def sensor_parts_rows(sensor) -> tuple[str, list[tuple[str, str]]]:
     """Title and rows of one sensor (:class:`magtact.Sensor`): body, magnet and chip in mm,
     kPa and MA/m."""
     grade = "no grade named" if sensor.grade == "custom" else sensor.grade
     rows = [("body", f"H {sig(1e3 * sensor.H)} mm, radius {short(1e3 * sensor.R)} mm"),
-            ("silicone", f"{sensor.silicone}, G {sig(1e-3 * sensor.G)} kPa"
-             if sensor.silicone != "none" else f"G {sig(1e-3 * sensor.G)} kPa"),
+            ("silicone", _silicone_words(sensor.silicone, sensor.G)),
             ("magnet", f"{grade}, ⌀{short(2e3 * sensor.R_m)} × {short(1e3 * sensor.H_m)} mm, "
                        f"M_z {sig(1e-6 * sensor.M_z)} MA/m"),
             ("Hall chip", sensor.chip + ("" if sensor.setting is None
@@ -443,14 +455,14 @@ def study_rows(study) -> tuple[str, list[tuple[str, str]]]:
 
 class Card(dict):
     """The design card (:func:`magtact.card`): a dict (``header``, ``rows`` and, where
-    the card has them, ``verdict`` and ``parts``) that prints as a few lines and shows as a
-    table in a notebook."""
+    the card has them, ``verdict``, ``parts`` and the best sensor of each silicone,
+    ``silicones``) that prints as a few lines and shows as a table in a notebook."""
 
     def _rows(self) -> tuple[str, list[tuple[str, str]]]:
         header = [str(h) for h in self.get("header", [])]
         verdict = [v for v in self.get("verdict") or [] if isinstance(v, dict)]
         rows = requirement_rows(verdict)
-        for p in self.get("parts") or []:
+        for p in [*(self.get("parts") or []), *(self.get("silicones") or [])]:
             if isinstance(p, (list, tuple)) and len(p) == 2:
                 rows.append((str(p[0]), round_text(str(p[1]))))
         shown = {str(v.get("statement", "")) for v in verdict}  # the verdict's rows, once

@@ -88,7 +88,7 @@ def card(result: Result, budgets: tuple[Budget, Budget] | None = None) -> Card:
     >>> print(magtact.card(result))                                 # doctest: +SKIP
     """
     from ._display import Card
-    from .report import card_rows, parts_list
+    from .report import card_rows, parts_list, silicone_table
 
     if budgets is None:
         budgets = error_budgets(result)
@@ -98,6 +98,9 @@ def card(result: Result, budgets: tuple[Budget, Budget] | None = None) -> Card:
     if result.chosen.verdict is not None:  # the verdict and the parts lead, as in card.json
         doc = {"verdict": result.chosen.verdict.to_json(),
                "parts": parts_list(result.chosen)} | doc
+    silicones = silicone_table(result.sensor_design)
+    if silicones:
+        doc["silicones"] = silicones
     return Card(doc)
 
 
@@ -217,6 +220,7 @@ def write_results_into(result: Result, out: str | Path, *, figures: bool = True,
         budget_figures,
         fig_geometry_pareto,
         optimise_figures,
+        silicone_table,
         write_card,
         write_explorer,
     )
@@ -235,7 +239,8 @@ def write_results_into(result: Result, out: str | Path, *, figures: bool = True,
         files = [f for f in files if f.name != "chosen.json"] + written
     files.append(write_card([result.chosen, result.original], out, result.constraints,
                             rtol=result.study.optimise.active_rtol, study=result.study,
-                            extra_rows=_extra_rows(result.models, budgets)))
+                            extra_rows=_extra_rows(result.models, budgets),
+                            silicones=silicone_table(result.sensor_design)))
     grid = write_explorer(result, out) if explorer else None  # for the report's explorer
     if grid is not None:
         files.append(grid)

@@ -24,7 +24,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..metamodel import ModelSet
-from ..optimise import ForceConstraints, InfeasibleError, most_shear_within, sweep
+from ..optimise import (
+    ForceConstraints,
+    InfeasibleError,
+    most_shear_within,
+    silicone_ranges,
+    sweep,
+)
 from ..study import Study, from_si
 from ._verdict import Requirement, _n, footprint
 
@@ -119,7 +125,10 @@ def infeasibility(models: ModelSet, study: Study, constraints: ForceConstraints,
     """The answer to ``study``'s infeasible force requirements (``constraints``: F_r,c ≤ 0 and
     F_z,c > 0 as :func:`magtact.optimise.force_constraints` gives them)."""
     table = sweep(models, study)
-    G_hi = float(study.design.G[1])
+    # the G the silicones to choose from reach (the design range where none is named)
+    ranges = silicone_ranges(study)[1] if study.optimise.problem == "sensor" else \
+        np.array([study.design.G], float)
+    G_hi = float(ranges[:, 1].max())
     # the forces every unit reaches: with a tolerance δ of G, the softest body's, (1 − δ) times
     # the nominal; the constraints hold the required forces over (1 − δ)
     k = 1.0 - constraints.tolerance
@@ -138,7 +147,12 @@ def infeasibility(models: ModelSet, study: Study, constraints: ForceConstraints,
     # reading), over the G that carry F_z, [F_z / f_z,max, G_hi] for the softest unit
     with np.errstate(divide="ignore"):
         G_normal = np.where(table.f_z_max > 0, F_z / np.asarray(table.f_z_max, float), np.inf)
-    envelope, G_envelope = most_shear_within(models, study, table, G_normal, k * G_hi, F_z)
+    envelope, G_envelope = np.zeros(table.H.shape), np.full(table.H.shape, np.nan)
+    for lo, hi in ranges:  # the most over every silicone's G range
+        e, G_e = most_shear_within(models, study, table, np.maximum(G_normal, k * lo), k * hi,
+                                   F_z)
+        more = e > envelope
+        envelope, G_envelope = np.where(more, e, envelope), np.where(more, G_e, G_envelope)
     shear_within = np.minimum(shear, envelope)
     G_shear = np.where(envelope < shear, G_envelope / k, G_hi)  # the nominal unit's G
     shear_with, i_r = best(shear_within, normal >= F_z)

@@ -74,6 +74,7 @@ from ._sensor import (
     optimise_sensor,
     sensor_nsga2,
     sensor_space,
+    silicone_ranges,
 )
 from ._setting import best_setting, sigma_objective
 

@@ -8,19 +8,21 @@ shear, as the verdict reads it; where no sensor's do, the problem is solved with
 verdict says no) and to the chip's range (it reads every required load without leaving the
 range of its setting). The setting must reach the required sample rate. The grade and the
 standoff change the field only (exactly: B ∝ M_z, and the chip's position), not the mechanics;
-the setting changes the range and the noise.
+the setting changes the range and the noise; the silicone bounds G to the range of its cited
+figures (``[design] silicones``; none named: G free over the design range).
 
 Two solvers answer it, and each checks the other:
 
-- the **exact reduction** enumerates every grade, standoff level and setting on a grid of
-  heights, and is exact in G: over the required loads σ_F = (G / M_z) W(F_z,req / G), with W
-  the largest per-unit noise among the grid points whose normal force per unit G is at most
-  F_z,req / G. W steps down only where G passes a point's F_z,req / f_z, so the least σ_F over
-  G lies at the smallest feasible G, just above one of these breakpoints, or where the shear
-  among the loads, G R (R the largest |f_r| per unit G among the same points), reaches the
-  required shear;
-- **NSGA-II** over the mixed variables (H real; the standoff level, the grade and the chip
-  option integers, each in the order of its effect: standoff, magnetisation, range), with
+- the **exact reduction** enumerates every grade, standoff level, setting and silicone on a
+  grid of heights, and is exact in G (within the silicone's G range): over the required
+  loads σ_F = (G / M_z) W(F_z,req / G), with W the largest per-unit noise among the grid
+  points whose normal force per unit G is at most F_z,req / G. W steps down only where G
+  passes a point's F_z,req / f_z, so the least σ_F over G lies at the smallest feasible G,
+  just above one of these breakpoints, or where the shear among the loads, G R (R the largest
+  |f_r| per unit G among the same points), reaches the required shear;
+- **NSGA-II** over the mixed variables (H real; the standoff level, the grade, the chip
+  option and the silicone integers, the first three in the order of their effect: standoff,
+  magnetisation, range), with
   pymoo's mixed-variable operators, minimising (σ_F,r, σ_F,z); each design it proposes takes
   its least-noise feasible G (the reduction's exact step in G), so that the two solvers differ
   in how they search the heights and the discrete choices.
@@ -68,7 +70,9 @@ class SensorSpace:
     field times ``field_factor`` up to the normal force F_z × ``read_factor`` (a worst corner
     of the parts' tolerances, :func:`magtact.tolerance.worst_factors`; 1: the nominal parts).
     ``F_r`` [N]: the shear the loads within the normal force F_z must include (the shear
-    requirement where it occurs, as the verdict reads it; 0: none asked)."""
+    requirement where it occurs, as the verdict reads it; 0: none asked). ``silicones`` and
+    ``G_ranges`` (S, 2) [Pa]: the silicones to choose from and the G each reaches within the
+    bounds (one entry, the G bounds, where G is free)."""
 
     grades: tuple[str, ...]
     M_z: np.ndarray
@@ -82,6 +86,12 @@ class SensorSpace:
     field_factor: float = 1.0
     read_factor: float = 1.0
     F_r: float = 0.0
+    silicones: tuple[str, ...] = ("none",)
+    G_ranges: np.ndarray | None = None
+
+    def G_range_of(self, j: int) -> tuple[float, float]:
+        """The G bounds [Pa] of silicone ``j``."""
+        return self.G_bounds if self.G_ranges is None else tuple(self.G_ranges[j])
 
     def box(self, H) -> tuple[np.ndarray, ...]:
         """(t_m, θ_m, f_r,min, f_z,max) at heights H [m], interpolated in the table."""
@@ -90,9 +100,11 @@ class SensorSpace:
         return tuple(np.interp(H, tb.H, getattr(tb, k))
                      for k in ("t_m", "theta_m", "f_r_min", "f_z_max"))
 
-    def G_force(self, f_r_min, f_z_max) -> np.ndarray:
-        """The smallest G [Pa] meeting the force constraints (inf where none in the bounds)."""
-        low, high = feasible_G(f_r_min, f_z_max, self.constraints, self.G_bounds)
+    def G_force(self, f_r_min, f_z_max, j: int | None = None) -> np.ndarray:
+        """The smallest G [Pa] meeting the force constraints (inf where none in the bounds;
+        ``j``: within silicone j's G range)."""
+        bounds = self.G_bounds if j is None else self.G_range_of(j)
+        low, high = feasible_G(f_r_min, f_z_max, self.constraints, bounds)
         return np.where(low <= high, low, np.inf)
 
 
@@ -124,8 +136,26 @@ def sensor_space(models: ModelSet, study: Study, table: HeightTable | None = Non
     # the shear where it occurs: the nominal unit's, as the verdict reads it (a worst corner's
     # problem moves the force constraints, not the requirement)
     F_r = max(float(study.requirements.F_r), 0.0) if shear_within else 0.0
+    silicones, G_ranges = silicone_ranges(study)
     return SensorSpace(grades, M_z, standoffs, tuple(chip_options(study)), d.H, d.G,
-                       table.take(order), constraints, F_z, field_factor, read_factor, F_r)
+                       table.take(order), constraints, F_z, field_factor, read_factor, F_r,
+                       silicones, G_ranges)
+
+
+def silicone_ranges(study: Study) -> tuple[tuple[str, ...], np.ndarray]:
+    """The silicones of ``study``'s sensor problem that reach a G of its design range, and
+    the G range [Pa] of each within it; G free (the study's silicone over the design range)
+    where it names none."""
+    from ..parts import SILICONES
+
+    d = study.design
+    lo, hi = d.G
+    pairs = [(n, max(lo, SILICONES[n].G_range[0]), min(hi, SILICONES[n].G_range[1]))
+             for n in d.silicones]
+    pairs = [p for p in pairs if p[1] <= p[2]]
+    if not pairs:
+        pairs = [(study.material.silicone, lo, hi)]
+    return tuple(p[0] for p in pairs), np.array([p[1:] for p in pairs], float)
 
 
 @dataclass(frozen=True)
@@ -154,6 +184,8 @@ class SensorDesign:
         never in the stable region).
     F_r_within : float
         The largest shear [N] on the grid among the loads within the required normal force.
+    silicone : str
+        The silicone the body is cast from (its G range holds G).
     """
 
     H: float
@@ -168,15 +200,17 @@ class SensorDesign:
     G_range: float
     F_saturation: float
     F_r_within: float = float("nan")
+    silicone: str = "none"
 
     def sensor(self, study: Study):
         """This design as a :class:`magtact.Sensor` of ``study``: its magnet's grade and
-        M_z, the chip at its standoff and setting, the study's body and silicone."""
+        M_z, the chip at its standoff and setting, its silicone, the study's body."""
         from .._sensor import Sensor
 
         f = self.option.figures
         return replace(Sensor.of_study(study, self.H, self.G, self.M_z), grade=self.grade,
-                       setting=None if f is None else f.setting, standoff=float(self.standoff))
+                       setting=None if f is None else f.setting, standoff=float(self.standoff),
+                       silicone=self.silicone)
 
     @property
     def sigma(self) -> float:
@@ -202,7 +236,8 @@ class SensorDesign:
                 "G_force_kPa": _finite(from_si(self.G_force, "kPa")),
                 "G_range_kPa": _finite(from_si(self.G_range, "kPa")),
                 "F_saturation_N": _finite(self.F_saturation),
-                "F_r_within_N": _finite(self.F_r_within), "feasible": self.feasible}
+                "F_r_within_N": _finite(self.F_r_within), "feasible": self.feasible,
+                "silicone": self.silicone}
 
 
 def _finite(x: float) -> float | None:
@@ -210,16 +245,20 @@ def _finite(x: float) -> float | None:
 
 
 def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, standoff,
-                     grade, option) -> dict[str, np.ndarray]:
+                     grade, option, silicone=0) -> dict[str, np.ndarray]:
     """σ_F,r, σ_F,z [N], G [Pa], G_force, G_range [Pa], F_saturation and F_r_within [N] of
-    designs given by arrays: H [m], G [Pa], and indices of the standoff level, grade and chip
-    option. Where G is None, each design takes the G of least √(σ_r² + σ_z²) among those it
-    may have (exact on the grid; inf σ where none is feasible)."""
+    designs given by arrays: H [m], G [Pa], and indices of the standoff level, grade, chip
+    option and silicone. Where G is None, each design takes the G of least √(σ_r² + σ_z²)
+    among those its silicone reaches (exact on the grid; inf σ where none is feasible)."""
     H = np.atleast_1d(np.asarray(H, float))
     standoff, grade, option = (np.atleast_1d(np.asarray(v, int)) for v in (standoff, grade,
                                                                             option))
+    silicone = np.broadcast_to(np.asarray(silicone, int), H.shape)
     t_m, theta_m, f_r_min, f_z_max = space.box(H)
-    G_force = space.G_force(f_r_min, f_z_max)
+    G_force = np.empty(H.size)
+    for j in np.unique(silicone):
+        at = silicone == j
+        G_force[at] = space.G_force(f_r_min[at], f_z_max[at], int(j))
     G = np.full(H.size, np.nan) if G is None else np.atleast_1d(np.asarray(G, float)).copy()
     free = np.isnan(G)
     M_z = space.M_z[grade]
@@ -229,11 +268,12 @@ def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, s
     grid = sensor_grid(models, study, H, t_m, theta_m, space.standoffs[standoff])
     G_range = grid.G_range(M_z * space.field_factor, rx, rz, space.F_z * space.read_factor)
     none = np.zeros(H.size, bool)  # designs with no G that meets the problem
-    if free.any():  # the best G of each design
-        i = np.flatnonzero(free)
-        low = np.maximum(np.maximum(G_force[i], G_range[i]), space.G_bounds[0])
+    for j in np.unique(silicone[free]):  # the best G of each design, per silicone
+        i = np.flatnonzero(free & (silicone == j))
+        lo, hi = space.G_range_of(int(j))
+        low = np.maximum(np.maximum(G_force[i], G_range[i]), lo)
         value, G[i] = _Noise(_Within(grid.take(i)), (sx[i], sz[i])).least(
-            M_z[i], low, space.G_bounds[1], space.F_z, space.F_r)
+            M_z[i], low, hi, space.F_z, space.F_r)
         none[i] = ~np.isfinite(value)
     sigma = grid.sigma(G, M_z, sx, sz, space.F_z)
     out = {k: np.where(none, np.inf, v) for k, v in zip(("sigma_r", "sigma_z"), sigma,
@@ -247,12 +287,14 @@ def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, s
     return out
 
 
-def _design(space: SensorSpace, values: dict, H, s, g, k, i: int = 0) -> SensorDesign:
+def _design(space: SensorSpace, values: dict, H, s, g, k, j: int = 0, i: int = 0
+            ) -> SensorDesign:
     return SensorDesign(float(np.atleast_1d(H)[i]), float(values["G"][i]), space.grades[g],
                         float(space.M_z[g]), float(space.standoffs[s]), space.options[k],
                         *(float(values[n][i]) for n in ("sigma_r", "sigma_z", "G_force",
                                                         "G_range", "F_saturation",
-                                                        "F_r_within")))
+                                                        "F_r_within")),
+                        silicone=space.silicones[j])
 
 
 @dataclass(frozen=True)
@@ -263,6 +305,7 @@ class _Best:
     s: int
     g: int
     k: int
+    j: int = 0
 
 
 class _Within:
@@ -458,41 +501,70 @@ def most_shear_within(models: ModelSet, study: Study, table: HeightTable, G_low,
 
 def exact_sensor_reduction(models: ModelSet, study: Study, space: SensorSpace
                            ) -> tuple[SensorDesign, int]:
-    """The least √(σ_r² + σ_z²) over every grade, standoff level and chip option, on ``N_H``
-    heights (refined around the best), exact in G; the best-reading design where none is
-    feasible. Returns it and the number of discrete combinations compared."""
+    """The least √(σ_r² + σ_z²) over every grade, standoff level, chip option and silicone, on
+    ``N_H`` heights (refined around the best), exact in G; the best-reading design where none
+    is feasible. Returns it and the number of discrete combinations compared."""
+    design, combos, _ = _reduction(models, study, space)
+    return design, combos
+
+
+def _reduction(models: ModelSet, study: Study, space: SensorSpace
+               ) -> tuple[SensorDesign, int, tuple[SensorDesign | None, ...]]:
+    """:func:`exact_sensor_reduction`, and the best design of each silicone on the heights'
+    grid (the chosen one's refined; None where the silicone has no feasible design)."""
     H = np.linspace(*space.H_bounds, N_H)
-    best, fallback = _reduce_heights(models, study, space, H, np.arange(space.standoffs.size))
+    best, fallback, each = _reduce_heights(models, study, space, H,
+                                           np.arange(space.standoffs.size))
     if best is None and space.F_r > 0:  # no sensor's loads include the shear: the problem
-        return exact_sensor_reduction(models, study, replace(space, F_r=0.0))  # without it
+        return _reduction(models, study, replace(space, F_r=0.0))  # without it
     if best is not None:  # refine the height between the grid's neighbours
         step = H[1] - H[0]
         Hf = np.clip(np.linspace(best.H - step, best.H + step, 41), *space.H_bounds)
-        best, fallback = _reduce_heights(models, study, space, Hf, np.array([best.s]), best,
-                                         fallback, only=(best.g, best.k))
+        best, fallback, _ = _reduce_heights(models, study, space, Hf, np.array([best.s]), best,
+                                            fallback, only=(best.g, best.k, best.j))
     pick = best if best is not None else fallback
     if pick is None:  # no height reads and carries anything: nothing to report as the best
         raise InfeasibleError("no design of the sensor space carries the required forces and "
                               "keeps the chip in range")
-    values = evaluate_designs(models, study, space, pick.H, pick.G, pick.s, pick.g, pick.k)
-    combos = space.standoffs.size * space.M_z.size * len(space.options)
-    return _design(space, values, pick.H, pick.s, pick.g, pick.k), combos
+    per = [pick if best is not None and j == pick.j else b for j, b in enumerate(each)]
+    found = [j for j, b in enumerate(per) if b is not None]
+    out = [None] * len(per)
+    if found:  # every silicone's best in one evaluation
+        b = [per[j] for j in found]
+        values = evaluate_designs(models, study, space, [x.H for x in b], [x.G for x in b],
+                                  [x.s for x in b], [x.g for x in b], [x.k for x in b],
+                                  [x.j for x in b])
+        for i, x in enumerate(b):
+            out[x.j] = _design(space, values, [y.H for y in b], x.s, x.g, x.k, x.j, i)
+    if best is not None:
+        design = out[pick.j]
+    else:
+        values = evaluate_designs(models, study, space, pick.H, pick.G, pick.s, pick.g, pick.k,
+                                  pick.j)
+        design = _design(space, values, pick.H, pick.s, pick.g, pick.k, pick.j)
+    combos = space.standoffs.size * space.M_z.size * len(space.options) * len(space.silicones)
+    return design, combos, tuple(out)
 
 
 def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, only=None):
-    """The best design over the heights ``H``, the standoff levels ``levels`` and every grade
-    and chip option (``only``: one (grade, option)), all heights and levels in one grid; where
-    none is feasible (and no ``best`` is known), the best-reading one. Of equally good designs
-    the first in the order (standoff, option, grade, height) is kept, and a design replaces
+    """The best design over the heights ``H``, the standoff levels ``levels`` and every grade,
+    chip option and silicone (``only``: one (grade, option, silicone)), all heights and levels
+    in one grid; where none is feasible (and no ``best`` is known), the best-reading one; and
+    the best of each silicone (None where it has none). Of equally good designs the first in
+    the order (standoff, option, grade, silicone, height) is kept, and a design replaces
     ``best`` only when strictly better."""
     t_m, theta_m, f_r_min, f_z_max = space.box(H)
     n = H.size
+    silicones = [(j, *space.G_range_of(j)) for j in range(len(space.silicones))
+                 if only is None or j == only[2]]
+    G_force = {j: np.tile(space.G_force(f_r_min, f_z_max, j), levels.size)
+               for j, _, _ in silicones}
+    each = [None] * len(space.silicones)
+    if not any((G_force[j] <= hi).any() for j, _, hi in silicones):
+        return best, fallback, tuple(each)  # no G carries the forces: no design, no grid
     rows_s = np.repeat(levels, n)  # rows: standoff level, then height
     grid = sensor_grid(models, study, np.tile(H, levels.size), np.tile(t_m, levels.size),
                        np.tile(theta_m, levels.size), space.standoffs[rows_s])
-    G_force = np.tile(space.G_force(f_r_min, f_z_max), levels.size)
-    G_hi = space.G_bounds[1]
-    ok = np.isfinite(G_force) & (G_force <= G_hi)
     options = [(k, o) for k, o in enumerate(space.options) if only is None or k == only[1]]
     grades = [(g, M) for g, M in enumerate(space.M_z) if only is None or g == only[0]]
     within = _within_of(grid)
@@ -503,42 +575,57 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
         least = reading.least_limit(o.range_x, o.range_z)
         for g, M_z in grades:
             G_range = reading.G_range(least, M_z * space.field_factor)
-            G_low = np.maximum(np.maximum(G_force, G_range), space.G_bounds[0])
-            value, G = noise.least(M_z, G_low, G_hi, space.F_z, space.F_r)
-            # per standoff level: the first height of the least value
-            v = value.reshape(levels.size, n)
-            i = np.argmin(v, axis=1)
-            for li, s in enumerate(levels):
-                r = li * n + i[li]
-                if np.isfinite(value[r]):
-                    cands.append((float(value[r]), int(s), k, g, float(H[i[li]]), float(G[r])))
+            solved: dict = {}  # silicones of the same G range share the answer
+            for j, lo, hi in silicones:
+                G_low = np.maximum(np.maximum(G_force[j], G_range), lo)
+                if not (G_low <= hi).any():  # no G of this silicone at any height
+                    continue
+                if (lo, hi) not in solved:
+                    solved[lo, hi] = noise.least(M_z, G_low, hi, space.F_z, space.F_r)
+                value, G = solved[lo, hi]
+                # per standoff level: the first height of the least value
+                v = value.reshape(levels.size, n)
+                i = np.argmin(v, axis=1)
+                for li, s in enumerate(levels):
+                    r = li * n + i[li]
+                    if np.isfinite(value[r]):
+                        cands.append((float(value[r]), int(s), k, g, j, float(H[i[li]]),
+                                      float(G[r])))
     if not cands and best is None:
-        # where none reads the required loads: the design that reads the most, at G_hi
+        # where none reads the required loads: the design that reads the most, at the
+        # stiffest G of its silicone
         for k, o in options:
             for g, M_z in grades:
-                F_sat = np.where(ok, grid.F_saturation(np.full(ok.size, G_hi), M_z,
-                                                       o.range_x, o.range_z),
-                                 -np.inf).reshape(levels.size, n)
-                j = np.argmax(F_sat, axis=1)
-                for li, s in enumerate(levels):
-                    if ok[li * n + j[li]]:
-                        falls.append((-float(F_sat[li, j[li]]), int(s), k, g,
-                                      float(H[j[li]])))
+                # the saturation force is G times its value per unit G
+                unit = grid.F_saturation(np.ones(H.size * levels.size), M_z, o.range_x,
+                                         o.range_z)
+                for j, _, hi in silicones:
+                    ok = np.isfinite(G_force[j]) & (G_force[j] <= hi)
+                    F_sat = np.where(ok, hi * unit, -np.inf).reshape(levels.size, n)
+                    m = np.argmax(F_sat, axis=1)
+                    for li, s in enumerate(levels):
+                        if ok[li * n + m[li]]:
+                            falls.append((-float(F_sat[li, m[li]]), int(s), k, g, j,
+                                          float(H[m[li]]), hi))
+    for c in sorted(cands, key=lambda c: c[:5]):  # the best of each silicone
+        if each[c[4]] is None:
+            each[c[4]] = _Best(c[0], c[5], c[6], c[1], c[3], c[2], c[4])
     if cands:
-        v, s, k, g, h, G = min(cands, key=lambda c: c[:4])
+        v, s, k, g, j, h, G = min(cands, key=lambda c: c[:5])
         if best is None or v < best.sigma:
-            best = _Best(v, h, G, s, g, k)
+            best = _Best(v, h, G, s, g, k, j)
     if falls:
-        f, s, k, g, h = min(falls, key=lambda c: c[:4])
+        f, s, k, g, j, h, hi = min(falls, key=lambda c: c[:5])
         if fallback is None or -f > fallback.sigma:
-            fallback = _Best(-f, h, G_hi, s, g, k)
-    return best, fallback
+            fallback = _Best(-f, h, hi, s, g, k, j)
+    return best, fallback, tuple(each)
 
 
 @dataclass(frozen=True)
 class SensorPareto:
     """NSGA-II's feasible non-dominated sensor designs (arrays of shape (n,)): H [m], G [Pa],
-    indices of the standoff level, grade and option, σ_F,r and σ_F,z [N]."""
+    indices of the standoff level, grade and option, σ_F,r and σ_F,z [N], and of the
+    silicone."""
 
     H: np.ndarray
     G: np.ndarray
@@ -550,6 +637,7 @@ class SensorPareto:
     seed: int
     generations: int
     evaluations: int
+    silicone: np.ndarray | None = None
 
 
 def same_designs():
@@ -587,25 +675,28 @@ def sensor_nsga2(models: ModelSet, study: Study, space: SensorSpace) -> SensorPa
 
     o = study.optimise
     scale = 1e3  # objectives in mN
+    NAMES = ("H", "standoff", "grade", "option", "silicone")
+    highest = np.array([space.G_range_of(j)[1] for j in range(len(space.silicones))])
 
     class _Sensors(Problem):
         def __init__(self):
             super().__init__(vars={"H": Real(bounds=space.H_bounds),
                                    "standoff": Integer(bounds=(0, space.standoffs.size - 1)),
                                    "grade": Integer(bounds=(0, space.M_z.size - 1)),
-                                   "option": Integer(bounds=(0, len(space.options) - 1))},
+                                   "option": Integer(bounds=(0, len(space.options) - 1)),
+                                   "silicone": Integer(bounds=(0, len(space.silicones) - 1))},
                              n_obj=2, n_ieq_constr=1)
 
         def _evaluate(self, X, out, *args, **kwargs):
-            v = {k: np.array([x[k] for x in X]) for k in ("H", "standoff", "grade", "option")}
+            v = {k: np.array([x[k] for x in X]) for k in NAMES}
             r = evaluate_designs(models, study, space, v["H"], None, v["standoff"],
-                                 v["grade"], v["option"])
+                                 v["grade"], v["option"], v["silicone"])
             feasible = np.isfinite(r["sigma_r"]) & np.isfinite(r["sigma_z"])
             out["F"] = np.where(feasible[:, None],
                                 np.stack([r["sigma_r"], r["sigma_z"]], axis=1) * scale, 1e6)
             low = np.maximum(r["G_force"], r["G_range"])
             with np.errstate(invalid="ignore", divide="ignore"):
-                g = np.minimum(low / space.G_bounds[1] - 1.0, 1e6)
+                g = np.minimum(low / highest[v["silicone"]] - 1.0, 1e6)
             # a design whose loads never include the shear breaks the problem too
             out["G"] = np.where(feasible, g, np.maximum(g, 1.0))[:, None]
 
@@ -623,14 +714,15 @@ def sensor_nsga2(models: ModelSet, study: Study, space: SensorSpace) -> SensorPa
         return None
     X = [x for x, ok in zip(opt.get("X"), feasible, strict=True) if ok]
     F = np.atleast_2d(opt.get("F"))[feasible] / scale
-    col = {k: np.array([x[k] for x in X]) for k in ("H", "standoff", "grade", "option")}
+    col = {k: np.array([x[k] for x in X]) for k in NAMES}
     col["G"] = evaluate_designs(models, study, space, col["H"], None, col["standoff"],
-                                col["grade"], col["option"])["G"]
+                                col["grade"], col["option"], col["silicone"])["G"]
     order = np.argsort(col["H"])
     return SensorPareto(col["H"][order], col["G"][order], col["standoff"][order].astype(int),
                         col["grade"][order].astype(int), col["option"][order].astype(int),
                         F[order, 0], F[order, 1], o.seed, generations,
-                        int(res.algorithm.evaluator.n_eval))
+                        int(res.algorithm.evaluator.n_eval),
+                        col["silicone"][order].astype(int))
 
 
 @dataclass(frozen=True)
@@ -650,9 +742,15 @@ class SensorOptimisation:
     gap : float
         (σ NSGA-II − σ reduction) / σ reduction; NaN where either found no feasible design.
     combinations : int
-        Discrete combinations (standoff levels × grades × chip options) the reduction compared.
+        Discrete combinations (standoff levels × grades × chip options × silicones) the
+        reduction compared.
     wall_time : float
         [s].
+    per_silicone : tuple of SensorDesign or None
+        The reduction's best sensor of each silicone of :attr:`silicones` (on its heights'
+        grid; the chosen silicone's refined), None where a silicone has no feasible design.
+    silicones : tuple of str
+        The silicones the problem chose from.
     """
 
     choice: SensorDesign
@@ -661,6 +759,8 @@ class SensorOptimisation:
     gap: float
     combinations: int
     wall_time: float
+    per_silicone: tuple[SensorDesign | None, ...] = ()
+    silicones: tuple[str, ...] = ()
 
     @property
     def feasible(self) -> bool:
@@ -719,9 +819,10 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
     space = sensor_space(models, study, table, constraints, field_factor, read_factor,
                          shear_within)
     if reduction is None:
-        red, combos = exact_sensor_reduction(models, study, space)
+        red, combos, per = _reduction(models, study, space)
     else:
         red, combos = reduction.reduction_choice, reduction.combinations
+        per = reduction.per_silicone
         t0 -= reduction.wall_time
     if space.F_r > 0 and not red.F_r_within >= space.F_r * (1.0 - 1e-9):
         # no sensor's loads include the shear: the reduction answered the problem without it
@@ -731,9 +832,10 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
     if pareto is not None:
         i = int(np.argmin(np.hypot(pareto.sigma_r, pareto.sigma_z)))
         values = evaluate_designs(models, study, space, pareto.H[i], pareto.G[i],
-                                  pareto.standoff[i], pareto.grade[i], pareto.option[i])
+                                  pareto.standoff[i], pareto.grade[i], pareto.option[i],
+                                  pareto.silicone[i])
         nsga = _design(space, values, pareto.H[i], pareto.standoff[i], pareto.grade[i],
-                       pareto.option[i])
+                       pareto.option[i], pareto.silicone[i])
         gap = (nsga.sigma - red.sigma) / red.sigma
         if gap > WARN_GAP:
             warnings.warn(
@@ -743,4 +845,5 @@ def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = 
                 SensorGapWarning, stacklevel=2)
         elif nsga.sigma < red.sigma:
             choice = nsga
-    return SensorOptimisation(choice, red, pareto, gap, combos, time.perf_counter() - t0)
+    return SensorOptimisation(choice, red, pareto, gap, combos, time.perf_counter() - t0,
+                              per, space.silicones)

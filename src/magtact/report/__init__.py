@@ -10,12 +10,14 @@ from ._card import (
     infeasible_card,
     parts_list,
     read_card,
+    silicone_table,
     write_card,
     write_infeasible_card,
 )
 from ._explorer import explorer_data, write_explorer
 from ._fig_budget import budget_figures, budget_labels, draw_budget
 from ._fig_calibration import (
+    MINOR_TICK_DECADES,
     calibration_figure,
     calibration_figures,
     draw_calibration,

@@ -78,7 +78,7 @@ def card_rows(answers, constraints=None, rtol: float = 1e-2
             from ..parts import SILICONES
 
             lo, hi = SILICONES[named].G_range
-            label += f" (the study's {named}: {_kpa_range(lo, hi)})"
+            label += f" (the chosen sensor's {named}: {_kpa_range(lo, hi)})"
         row(label, _silicone_text)
     if constraints is not None:
         row("active constraints", lambda a: _active(a, constraints, rtol))
@@ -120,8 +120,7 @@ def parts_list(a) -> list[list[str]]:
     out = []
     if p is not None:
         out.append(["magnet", _magnet_text(a)])
-        out.append(["silicone", f"{p.silicone} (G {kpa(a.G):.3g} kPa)" if p.silicone != "none"
-                    else f"G {kpa(a.G):.3g} kPa"])
+        out.append(["silicone", _named_silicone(p.silicone, a.G)])
     chip = a.chip.name + (f", {_setting_text(a)}" if a.chip.figures is not None else "")
     out.append(["Hall chip", chip])
     out.append(["chip standoff below the body", f"{mm(a.standoff):.3g} mm"])
@@ -201,10 +200,44 @@ def _magnet_text(a) -> str:
                 f"°C)")
     if p.size != "custom":
         return text + f", {p.size} mm (diameter × height)"
-    if a.study is None:
+    if p.R_m is None:
         return text
-    m = a.study.magnet
-    return text + f", ⌀{mm(2 * m.R_m):.3g} × {mm(m.H_m):.3g} mm"
+    return text + f", ⌀{mm(2 * p.R_m):.3g} × {mm(p.H_m):.3g} mm"
+
+
+def _named_silicone(name: str, G: float) -> str:
+    """The silicone to buy and the design's G, with the silicone's cited G range."""
+    from ..parts import SILICONES
+
+    if name == "none":
+        return f"G {kpa(G):.3g} kPa (no silicone named)"
+    if name not in SILICONES:
+        return f"{name} (G {kpa(G):.3g} kPa)"
+    return f"{name} (G {kpa(G):.3g} kPa; its range {_kpa_range(*SILICONES[name].G_range)})"
+
+
+def silicone_table(opt) -> list[list[str]]:
+    """The best sensor of each silicone the sensor problem chose from, as [silicone with its
+    G range, the sensor in words] pairs (``opt``: its
+    :class:`magtact.optimise.SensorOptimisation`; [] where it chose from one silicone)."""
+    from ..parts import SILICONES
+
+    if opt is None or len(opt.silicones) < 2:
+        return []
+    rows = []
+    for name, d in zip(opt.silicones, opt.per_silicone, strict=True):
+        label = (f"best with {name} ({_kpa_range(*SILICONES[name].G_range)})"
+                 if name in SILICONES else f"best with {name}")
+        if d is None:
+            text = "no sensor meets the problem"
+        else:
+            chosen = d.silicone == opt.choice.silicone
+            text = (f"σ_F {_mN(d.sigma_r)} / {_mN(d.sigma_z)} (shear / normal) at H "
+                    f"{mm(d.H):.3g} mm, G {kpa(d.G):.3g} kPa, {d.grade}, chip "
+                    f"{mm(d.standoff):.3g} mm below" + ("; the chosen silicone" if chosen
+                                                        else ""))
+        rows.append([label, text])
+    return rows
 
 
 def _kpa_range(lo: float, hi: float) -> str:
@@ -234,7 +267,8 @@ def _active(a, constraints, rtol: float) -> str:
 
 
 def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None,
-               extra_rows: list[list[str]] | None = None) -> Path:
+               extra_rows: list[list[str]] | None = None,
+               silicones: list[list[str]] | None = None) -> Path:
     """Write ``card.json`` (the card's rows and every number of each answer) into ``folder``.
 
     ``study`` names the study and its sensitivity definition, so that :func:`read_card` can add
@@ -248,6 +282,8 @@ def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None
     doc = {"header": header, "rows": rows, "answers": [answer_json(a) for a in answers]}
     if answers[0].verdict is not None:  # the chosen design's verdict and parts lead the card
         doc = {"verdict": answers[0].verdict.to_json(), "parts": parts_list(answers[0])} | doc
+    if silicones:
+        doc["silicones"] = silicones
     if study is not None:
         doc |= {"study": study.name, "definition": study.sensitivity.definition}
     return write_json(Path(folder) / "card.json", doc, indent=1, ensure_ascii=False)

@@ -122,9 +122,11 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
         sections[name] = _section(name, getattr(base, name), data.get(name, {}), complete, source)
     study = _apply_parts(replace(base, **top, **sections), data.get("magnet", {}), source)
     study = _apply_requirements(study, base, source)
+    study = _apply_silicone(study, data, source)
     _check_standoff(study, source)
     try:
         _check_consistency(study, source)
+        _check_silicones(study, source)
         check_physical(study, source)
     except StudyError as exc:  # the key the user wrote, where the rule names a base value
         raise blamed(exc, written_keys(data), source) from None
@@ -179,6 +181,36 @@ def _apply_requirements(s: Study, base: Study, source) -> Study:
                              f"'requirements' the force is requirements.{own} ({abs(derived):g} "
                              "N); change that, or set constraints.source = 'values'", source)
     return replace(s, constraints=replace(c, F_r_c=-r.F_r, F_z_c=r.F_z))
+
+
+def _apply_silicone(s: Study, given: dict, source) -> Study:
+    """A study that names the silicone its body is cast from (``[material] silicone``) and
+    not the silicones to choose from (``[design] silicones``) chooses that silicone alone (no
+    silicone, ``"none"``: G free over the design range)."""
+    material, design = given.get("material", {}), given.get("design", {})
+    if "silicone" not in material or "silicones" in design:
+        return s
+    name = s.material.silicone
+    return replace(s, design=replace(s.design, silicones=() if name == "none" else (name,)))
+
+
+def _check_silicones(s: Study, source) -> None:
+    """In the sensor problem, some silicone to choose from must reach a G of the design
+    range."""
+    from ..parts import SILICONES
+
+    d = s.design
+    if s.optimise.problem != "sensor" or not d.silicones:
+        return
+    ranges = {n: SILICONES[n].G_range for n in d.silicones}
+    if not any(lo <= d.G[1] and hi >= d.G[0] for lo, hi in ranges.values()):
+        shown = "; ".join(f"{n} {lo / 1e3:.4g}–{hi / 1e3:.4g} kPa" if hi > lo
+                          else f"{n} {lo / 1e3:.4g} kPa" for n, (lo, hi) in ranges.items())
+        raise StudyError("design.silicones",
+                         f"no silicone to choose from reaches a G in the design range "
+                         f"{d.G[0] / 1e3:g}–{d.G[1] / 1e3:g} kPa (design.G_kPa): {shown}; "
+                         "widen design.G_kPa, name other silicones, or give [] for G free "
+                         "over the design range", source)
 
 
 def _check_standoff(s: Study, source) -> None:

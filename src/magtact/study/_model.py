@@ -145,6 +145,12 @@ class Design:
         tuple(GRADES), choices=tuple(GRADES),
         doc="magnet grades the sensor problem chooses from (catalogue names, each sets M_z); "
             "[]: the study's magnet only")
+    silicones: tuple[str, ...] = setting(
+        tuple(SILICONES), choices=tuple(SILICONES),
+        doc="silicones the sensor problem chooses from (catalogue names, each bounds G to the "
+            "range of its cited figures); []: G free over the design range, the body cast from "
+            "[material] silicone; a study that sets [material] silicone and not this chooses "
+            "that silicone alone")
     H_original: float = setting(3e-3, "mm", positive=True, doc="H of the original sensor")
     G_original: float = setting(29.4e3, "kPa", positive=True, doc="G of the original sensor")
 
