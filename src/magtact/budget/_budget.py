@@ -472,7 +472,7 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     rows += _model_rows(models, study, design, dataset, seeds)
 
     # ---- time: the silicone's relaxation -----------------------------------------------------
-    time_rows, time_info = _time_rows(models, study, design)
+    time_rows, time_info = _time_rows(models, study, design, sensor.silicone)
     rows += time_rows
     if not time_rows:
         not_modelled.append("the silicone's relaxation in time (hysteresis, creep): "
@@ -490,12 +490,12 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
                   env_info, tuple(not_modelled), time_info)
 
 
-def _time_rows(models, study, design) -> tuple[list[BudgetRow], dict]:
-    """The time rows (hysteresis, creep) and the ``time`` entry of budget.json; no rows where
-    the silicone's relaxation is not known. The MagOne's measured hysteresis is compared in
-    either case (the smallest one-term relaxation that reaches it)."""
+def _time_rows(models, study, design, silicone: str) -> tuple[list[BudgetRow], dict]:
+    """The time rows (hysteresis, creep) and the ``time`` entry of budget.json for a body of
+    ``silicone``; no rows where the silicone's relaxation is not known. The MagOne's measured
+    hysteresis is compared in either case (the smallest one-term relaxation that reaches it)."""
     env = study.environment
-    prony, source = relaxation_of(study, design.G)
+    prony, source = relaxation_of(study, design.G, silicone)
     g_min, tau_at = implied_ratio(design_forces(models, design.H, 0.0), design.t_m,
                                   env.press_time, MEASURED_HYSTERESIS, env.calibrated_on)
     if prony is None:

@@ -28,14 +28,17 @@ from ._sensor import (
 COMPONENTS = ("F_r", "F_z")
 
 
-def relaxation_of(study: Study, G: float) -> tuple[Prony | None, str]:
-    """The relaxation modulus of the study's silicone with G_∞ = ``G`` [Pa] (the design's G is
-    the long-time modulus), and where it comes from.
+def relaxation_of(study: Study, G: float, silicone: str | None = None
+                  ) -> tuple[Prony | None, str]:
+    """The relaxation modulus of the design's silicone (``silicone``, default the study's
+    ``[material] silicone``) with G_∞ = ``G`` [Pa] (the design's G is the long-time modulus),
+    and where it comes from.
 
     The study's ``[material] relaxation_g1/g2`` win where either is nonzero; else the
-    catalogue's series of ``material.silicone``; else None, and the text says why.
+    catalogue's series of the silicone; else None, and the text says why.
     """
     m = study.material
+    name = m.silicone if silicone is None else silicone
     if m.relaxation_g1 > 0 or m.relaxation_g2 > 0:
         g, tau = zip(*((gi, ti) for gi, ti in ((m.relaxation_g1, m.relaxation_tau1),
                                                 (m.relaxation_g2, m.relaxation_tau2))
@@ -43,15 +46,14 @@ def relaxation_of(study: Study, G: float) -> tuple[Prony | None, str]:
         terms = ", ".join(f"g = {gi:.3g} at τ = {ti:.3g} s" for gi, ti in zip(g, tau,
                                                                                strict=True))
         source = (f"given by the study ([material] relaxation_*: {terms}; not a catalogue "
-                  f"figure of {m.silicone})")
+                  f"figure of {name})")
         return Prony.from_ratios(G, g, tau, source), source
-    silicone = SILICONES.get(m.silicone)
-    if silicone is not None and silicone.relaxation is not None:
-        r = silicone.relaxation
-        return Prony.from_ratios(G, r.g, r.tau, f"{m.silicone}: {r.source}"), \
-            f"{m.silicone}: {r.source}"
-    why = ("no silicone named" if silicone is None
-           else f"no relaxation data for {m.silicone} ({silicone.relaxation_note})")
+    entry = SILICONES.get(name)
+    if entry is not None and entry.relaxation is not None:
+        r = entry.relaxation
+        return Prony.from_ratios(G, r.g, r.tau, f"{name}: {r.source}"), f"{name}: {r.source}"
+    why = ("no silicone named" if entry is None
+           else f"no relaxation data for {name} ({entry.relaxation_note})")
     return None, (f"{why}; give the silicone's relaxation (its two strengths and time "
                   "constants) in the study's [material] section")
 
