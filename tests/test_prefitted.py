@@ -62,3 +62,36 @@ def test_shipped_accuracy_report_is_what_the_models_give(ds, shipped, name):
 def test_shipped_held_out_accuracy_within_targets(ds, shipped, name):
     """Max |error| ≤ 1 % of range for B, ≤ 2 % for F/G on held-out (θ, H) paths."""
     assert _errors(shipped, ds, name)[1] <= (0.01 if name.startswith("B") else 0.02)
+
+
+@pytest.mark.parametrize("path", sorted(prefitted_dir().parent.glob("*/*.json")),
+                         ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_every_shipped_model_file_agrees_with_its_feature_form(path):
+    """The shipped fits load without checking their two forms (it costs more than the loading
+    itself): here each model file's (t, θ) and (p, q) expressions are checked against each
+    other, as every other model file is when loaded."""
+    import json
+
+    from magtact.metamodel._io import FORMAT, model_from_dict
+
+    data = json.loads(path.read_text(encoding="utf-8"))
+    if data.get("format") != FORMAT:  # an exact-field or a field-force file: one expression
+        pytest.skip(f"{data.get('format')}: no second form")
+    model_from_dict(data, str(path))  # check=True: raises where the two forms disagree
+
+
+def test_the_agreement_check_finds_two_forms_that_disagree(tmp_path):
+    import json
+
+    from magtact import MagtactError
+    from magtact.metamodel import load_models
+
+    src = prefitted_dir()
+    for k in ("B_r", "B_z", "f_r", "f_z"):
+        (tmp_path / f"{k}.json").write_text((src / f"{k}.json").read_text())
+    doc = json.loads((tmp_path / "f_z.json").read_text())
+    doc["expression_pq"] = f"2*({doc['expression_pq']})"
+    (tmp_path / "f_z.json").write_text(json.dumps(doc))
+    with pytest.raises(MagtactError, match="describe different models"):
+        load_models(tmp_path)
+    load_models(tmp_path, check=False)  # the package's own files are loaded unchecked

@@ -104,3 +104,15 @@ def test_the_card_names_the_silicone_with_its_range_and_each_silicones_best(mago
         assert (d is None) == (text == "no sensor meets the problem")
     assert "best with" in str(card)
     assert np.isfinite(c.sigma)
+
+
+def test_a_complete_study_file_written_before_the_silicones_leaves_G_free():
+    import tomllib
+
+    data = tomllib.loads(magtact.load("magone").to_toml())
+    data["base"] = "none"
+    del data["design"]["silicones"]
+    assert study_from_dict(data).design.silicones == ()
+    data["design"]["grades"] = "N42"  # other keys stay checked
+    with pytest.raises(StudyError, match=r"design\.grades"):
+        study_from_dict(data)

@@ -9,8 +9,9 @@ range, since with the same range a noisier setting is never the better choice.
 
 from __future__ import annotations
 
+import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..parts import SettingFigures
 from ..study import HallChip, Study, StudyError, candidate_settings, hall_chip, setting_figures
@@ -57,12 +58,21 @@ def chip_options(study: Study) -> list[ChipOption]:
     StudyError
         Naming ``hall.noise_x_uT`` for a chip whose noise is not known.
     """
+    return list(_options(study.hall, study.requirements.rate))
+
+
+@functools.lru_cache(maxsize=32)
+def _options(hall, rate: float) -> tuple[ChipOption, ...]:
+    """:func:`chip_options` of a ``[hall]`` section and a required rate [Hz] (they depend on
+    nothing else: kept, since every solve of the sensor problem asks for them)."""
+    base = Study(hall=hall)
+    study = replace(base, requirements=replace(base.requirements, rate=rate))
     chip = hall_chip(study)
     if not chip.picked:
         noise = require_noise(chip, "the sensor problem")
         rate = chip.figures.rate if chip.figures is not None else math.nan
-        return [ChipOption(chip.range_x, chip.range_z, *noise, rate, chip.setting,
-                           chip.figures)]
+        return (ChipOption(chip.range_x, chip.range_z, *noise, rate, chip.setting,
+                           chip.figures),)
     best: dict[tuple[float, float], SettingFigures] = {}
     for s in candidate_settings(study):
         f = setting_figures(study, s)
@@ -75,7 +85,7 @@ def chip_options(study: Study) -> list[ChipOption]:
             best[key] = f
     options = [ChipOption(f.range_x, f.range_z, f.sigma_x[1], f.sigma_z[1], f.rate, f.words, f)
                for f in best.values()]
-    return sorted(options, key=lambda o: (-o.range_z, -o.range_x, o.noise_z))
+    return tuple(sorted(options, key=lambda o: (-o.range_z, -o.range_x, o.noise_z)))
 
 
 def _power(f: SettingFigures) -> float:

@@ -62,8 +62,9 @@ def model_to_dict(model: Metamodel) -> dict:
     }
 
 
-def model_from_dict(data: dict, source: str = "<dict>") -> Metamodel:
-    """A model from the content of a model file (see the module notes).
+def model_from_dict(data: dict, source: str = "<dict>", check: bool = True) -> Metamodel:
+    """A model from the content of a model file (see the module notes); ``check``: that its
+    two forms agree (False only for files of the package, which its tests check).
 
     Raises
     ------
@@ -82,7 +83,8 @@ def model_from_dict(data: dict, source: str = "<dict>") -> Metamodel:
         expr_pq = parse_expression(data["expression_pq"], ("p", "q", "H", *geo))
     except ValueError as exc:
         raise MagtactError(f"{source}: {exc}") from None
-    _check_agree(expr, expr_pq, source)
+    if check:
+        _check_agree(expr, expr_pq, source)
     info = data.get("info", {})
     if not isinstance(info, dict):
         raise MagtactError(f"{source}: 'info' must be an object")
@@ -221,7 +223,7 @@ def save_models(models: ModelSet, folder: str | Path) -> list[Path]:
     return paths
 
 
-def _load_any(path: Path, name: str):
+def _load_any(path: Path, name: str, check: bool = True):
     data = _read_json(path)
     if isinstance(data, dict) and data.get("format") == EXACT_FORMAT and name in ("B_r", "B_z"):
         import tomllib
@@ -236,13 +238,13 @@ def _load_any(path: Path, name: str):
         return ExactField(study, name)
     if isinstance(data, dict) and data.get("format") == FIELD_FORCE_FORMAT:
         return field_force_from_dict(data, str(path))
-    return model_from_dict(data, str(path))
+    return model_from_dict(data, str(path), check)
 
 
-def _read_response(folder: Path, k: str):
+def _read_response(folder: Path, k: str, check: bool = True):
     """The model of response ``k`` from ``folder/<k>.json``, checked to hold that response."""
     path = folder / f"{k}.json"
-    m = _load_any(path, k)
+    m = _load_any(path, k, check)
     if m.name != k or m.units != RESPONSES[k]:
         raise MagtactError(f"{path}: holds {m.name!r} [{m.units}], "
                            f"expected {k!r} [{RESPONSES[k]}]")
@@ -260,7 +262,8 @@ def load_field_models(folder: str | Path) -> tuple:
     return tuple(_read_response(Path(folder), k) for k in ("B_r", "B_z"))
 
 
-def load_models(folder: str | Path, B_model=None, definition: str | None = None) -> ModelSet:
+def load_models(folder: str | Path, B_model=None, definition: str | None = None, *,
+                check: bool = True) -> ModelSet:
     """Read ``B_r, B_z, f_r, f_z`` from ``<folder>/<name>.json`` (see :func:`save_models`).
 
     Parameters
@@ -271,6 +274,10 @@ def load_models(folder: str | Path, B_model=None, definition: str | None = None)
         then only ``f_r.json`` and ``f_z.json`` are read.
     definition : {"jacobian", "published"}, optional
         The sensitivity definition the study asks for; the force files must be of it.
+    check : bool
+        Check that each model's two forms (in (t, θ) and in the features (p, q)) agree; False
+        only for the fits shipped with magtact, which their tests check (the check costs more
+        than the loading).
 
     Raises
     ------
@@ -286,7 +293,7 @@ def load_models(folder: str | Path, B_model=None, definition: str | None = None)
         models["B_r"], models["B_z"] = B_model
     for k in RESPONSES:
         if k not in models:
-            models[k] = _read_response(folder, k)
+            models[k] = _read_response(folder, k, check)
     for k in ("f_r", "f_z"):
         if isinstance(models[k], FieldForceModel):
             models[k] = ComposedForce(models[k], models["B_r"], models["B_z"])

@@ -122,7 +122,8 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
         sections[name] = _section(name, getattr(base, name), data.get(name, {}), complete, source)
     study = _apply_parts(replace(base, **top, **sections), data.get("magnet", {}), source)
     study = _apply_requirements(study, base, source)
-    study = _apply_silicone(study, data, source)
+    if not complete:  # a complete file writes every key: its silicone is no choice made
+        study = _apply_silicone(study, data, source)
     _check_standoff(study, source)
     try:
         _check_consistency(study, source)
@@ -250,7 +251,9 @@ def _section(name: str, default, given: dict, complete: bool, source):
     for key, f in spec.items():
         full = f"{name}.{key}"
         if key not in given:
-            if complete:
+            if complete and f.metadata.get("missing") is not None:
+                values[f.name] = f.metadata["missing"]  # a file written before the key
+            elif complete:
                 raise StudyError(full, f"is missing; expected {_expected(f)}", source)
             continue
         values[f.name] = _convert(full, f, given[key], source)

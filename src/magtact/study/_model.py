@@ -23,19 +23,23 @@ from ._units import PHYSICAL, from_si, to_si
 
 
 def setting(default, unit: str = "", *, positive: bool = False, choices=None,
-            integer: bool = False, minimum=None, maximum=None, bounds=None, doc: str = ""):
+            integer: bool = False, minimum=None, maximum=None, bounds=None, doc: str = "",
+            missing=None):
     """A study setting with its user unit (``default`` is given in SI).
 
     ``bounds = (low, high)`` is the physical range of the value in SI (inclusive; a zero is
     also accepted when ``minimum`` is 0); default: the range of its unit in
     :data:`magtact.study._units.PHYSICAL`. ``maximum`` bounds the value as written (integers:
-    the work a study may ask for).
+    the work a study may ask for). ``missing``: the value a complete study file (``base =
+    "none"``) that leaves the key out means, for a setting that files written before it
+    existed lack (None: the key is required there).
     """
     if bounds is None and not choices and not integer:
         bounds = PHYSICAL.get(unit)
     return field(default=default, metadata={
         "unit": unit, "positive": positive, "choices": choices, "integer": integer,
         "minimum": minimum, "maximum": maximum, "bounds": bounds, "doc": doc,
+        "missing": missing,
     })
 
 
@@ -150,7 +154,7 @@ class Design:
         doc="silicones the sensor problem chooses from (catalogue names, each bounds G to the "
             "range of its cited figures); []: G free over the design range, the body cast from "
             "[material] silicone; a study that sets [material] silicone and not this chooses "
-            "that silicone alone")
+            "that silicone alone", missing=())
     H_original: float = setting(3e-3, "mm", positive=True, doc="H of the original sensor")
     G_original: float = setting(29.4e3, "kPa", positive=True, doc="G of the original sensor")
 
