@@ -166,3 +166,20 @@ def test_the_yield_factors_ask_more_of_the_nominal_parts_for_a_higher_yield(chos
     half, most = (yield_factors(models, a, y) for y in (0.5, 0.99))
     assert 1.0 <= half.read <= most.read and most.force <= half.force <= 1.0
     assert half.field == most.field == 1.0
+
+
+def test_the_corners_alone_give_the_full_verdicts_decisions(chosen):
+    """Without samples the verdict keeps what a solve decides on (met, worst and nominal
+    figures, what limits each requirement), equal to the full verdict's, and no yield."""
+    models, a = chosen
+    full, quick = robust_verdict(models, a), robust_verdict(models, a, samples=False)
+    for f, q in zip(full.requirements, quick.requirements, strict=True):
+        assert (q.key, q.met, q.worst, q.nominal, q.limited_by) == \
+            (f.key, f.met, f.worst, f.nominal, f.limited_by)
+        assert np.isnan(q.yield_fraction) and np.isnan(q.interval).all()
+    assert quick.samples == 0 and np.isnan(quick.yield_fraction)
+    assert (quick.sigma_nominal, quick.sigma_worst) == (full.sigma_nominal, full.sigma_worst)
+    target = replace(a, study=replace(a.study, tolerances=replace(a.study.tolerances,
+                                                                   yield_target=0.9)))
+    with pytest.raises(ValueError, match="yield target is judged on the samples"):
+        robust_verdict(models, target, samples=False)

@@ -383,12 +383,15 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
     from .optimise import InfeasibleError, optimise_sensor
     from .tolerance import worst_factors, yield_factors
 
-    chosen = _robust(models, chosen)
     problem = (constraints, 1.0, 1.0)
     if study.tolerances.design_for != "worst":
-        return sensor, chosen, problem
+        return sensor, _robust(models, chosen), problem
     k = 1.0 - constraints.tolerance  # the required forces
     target = study.tolerances.yield_target
+    # the solves decide on the worst corners alone (without a yield target); the answer kept
+    # gets the whole verdict, its samples and yields, at the end
+    quick = target <= 0
+    chosen = _robust(models, chosen, samples=not quick)
     for _ in range(WORST_CORNER_SOLVES):
         normal, shear = chosen.robust["normal"], chosen.robust["shear"]
         if normal.met and shear.met:
@@ -421,19 +424,23 @@ def _for_every_unit(models: ModelSet, study: Study, table, constraints, sensor, 
             break
         sensor, problem = worst, (at_worst, w.field, w.read)
         c = sensor.choice
-        chosen = _robust(models, _answer(models, study, c.sensor(study),
-                                         "chosen"))
+        chosen = _robust(models, _answer(models, study, c.sensor(study), "chosen"),
+                         samples=not quick)
+    if quick:
+        chosen = _robust(models, chosen)
     return sensor, chosen, problem
 
 
-def _robust(models: ModelSet, answer):
-    """``answer`` with its robust verdict (:func:`magtact.tolerance.robust_verdict`)."""
+def _robust(models: ModelSet, answer, samples: bool = True):
+    """``answer`` with its robust verdict (:func:`magtact.tolerance.robust_verdict`; without
+    ``samples``, its worst corners alone)."""
     from dataclasses import replace
 
     from .tolerance import robust_verdict
 
     return replace(answer, robust=robust_verdict(
-        _exact_models(models, answer.study, answer.sensor, answer.design.M_z), answer))
+        _exact_models(models, answer.study, answer.sensor, answer.design.M_z), answer,
+        samples=samples))
 
 
 def _root_found_saturation(models: ModelSet, study: Study, sensor, F_chosen: float):

@@ -230,18 +230,24 @@ def sobol_units(box: ToleranceBox, samples: int, replicates: int, seed: int) -> 
     return np.concatenate(sets)
 
 
-def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None
-                   ) -> RobustVerdict:
+def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None, *,
+                   samples: bool = True) -> RobustVerdict:
     """The robust verdict of a designer's answer (:class:`magtact.designer.DesignAnswer`;
     ``models``: those of its study, in the sensor problem with the exact field, as
     :meth:`magtact.Result.of` gives them) over ``box`` (default: its study's,
-    :func:`tolerance_box`). See the module notes."""
+    :func:`tolerance_box`). See the module notes. Without ``samples``, the worst corners
+    alone: each requirement's ``met`` (with ``[tolerances] yield_target`` 0), worst and
+    nominal figures and what limits it, the yields NaN (what a solve needs to decide, at a
+    fraction of the cost)."""
     study = answer.study
     box = tolerance_box(study, answer.sensor.grade) if box is None else box
     ctx = design_context(models, answer, box)
     tol, req = study.tolerances, study.requirements
     target = tol.yield_target
-    X_s = sobol_units(box, tol.robust_samples, tol.robust_replicates, tol.seed)
+    if not samples and target > 0:
+        raise ValueError("a yield target is judged on the samples")
+    X_s = (sobol_units(box, tol.robust_samples, tol.robust_replicates, tol.seed) if samples
+           else np.empty((0, len(box.names))))
     X_c = corners(box)
     X_0 = box.nominal[None, :]
     fig = unit_figures(ctx, box, np.concatenate([X_0, X_c, X_s]))
@@ -267,9 +273,11 @@ def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None
     for j, (k, m) in enumerate(M.items()):
         met = m[sample_rows] >= 0
         met_all &= met
-        per_set = met.reshape(tol.robust_replicates, -1).mean(axis=1)
+        per_set = met.reshape(tol.robust_replicates, -1).mean(axis=1) if ns else \
+            np.full(tol.robust_replicates, np.nan)
         i_w = worst[k]
-        bounds &= bool(m[sample_rows].min() >= m[i_w] - 1e-9 * max(1.0, abs(m[i_w])))
+        if ns:
+            bounds &= bool(m[sample_rows].min() >= m[i_w] - 1e-9 * max(1.0, abs(m[i_w])))
         cost = {box.names[i]: float(M_alone[k][j * d + i] - m[0]) for i in range(d)}
         cost = {n: (0.0 if not np.isfinite(v) else v) for n, v in cost.items()}
         limited = min(cost, key=cost.get)
@@ -279,13 +287,17 @@ def robust_verdict(models: ModelSet, answer, box: ToleranceBox | None = None
             k, statements.get(k, k),
             bool(m[i_w] >= 0) if target <= 0 else bool(per_set.mean() >= target),
             float(per_set.mean()),
-            _interval(per_set, met), float(value), words, float(nominal), float(m[i_w]),
+            _interval(per_set, met) if ns else (math.nan, math.nan), float(value), words,
+            float(nominal), float(m[i_w]),
             limited if cost[limited] < 0 else "", cost,
             {n: float(v) for n, v in zip(box.names, np.concatenate([X_0, X_c])[i_w],
                                          strict=True)}))
-    per_set = met_all.reshape(tol.robust_replicates, -1).mean(axis=1)
     s_nom = float(fig["sigma"][0])
     s_worst = float(fig["sigma"][corner_rows].max())
+    if not ns:
+        return RobustVerdict(tuple(out), math.nan, (math.nan, math.nan), 0,
+                             tol.robust_replicates, box, s_nom, s_worst, bounds)
+    per_set = met_all.reshape(tol.robust_replicates, -1).mean(axis=1)
     return RobustVerdict(tuple(out), float(per_set.mean()), _interval(per_set, met_all), ns,
                          tol.robust_replicates, box, s_nom, s_worst, bounds)
 
