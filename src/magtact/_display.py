@@ -373,17 +373,18 @@ def sensor_map_rows(m) -> tuple[str, list[tuple[str, str]]]:
     return "sensor map F(B)", rows
 
 
-def _silicone_words(name: str, G: float) -> str:
-    """A silicone with the design's G and the silicone's cited G range (kPa)."""
+def silicone_words(name: str, G: float) -> str:
+    """The silicone to buy with the design's G [Pa] and the silicone's cited G range, in kPa
+    (the card's and the sensor's one wording)."""
     from .parts import SILICONES
 
     if name == "none":
-        return f"G {sig(1e-3 * G)} kPa"
+        return f"G {1e-3 * G:.3g} kPa (no silicone named)"
     if name not in SILICONES:
-        return f"{name}, G {sig(1e-3 * G)} kPa"
+        return f"{name} (G {1e-3 * G:.3g} kPa)"
     lo, hi = SILICONES[name].G_range
-    reach = f"{sig(1e-3 * lo)} kPa" if lo == hi else f"{sig(1e-3 * lo)}–{sig(1e-3 * hi)} kPa"
-    return f"{name}, G {sig(1e-3 * G)} kPa (its range {reach})"
+    reach = f"{1e-3 * lo:.3g} kPa" if lo == hi else f"{1e-3 * lo:.3g}–{1e-3 * hi:.3g} kPa"
+    return f"{name} (G {1e-3 * G:.3g} kPa; its range {reach})"
 
 
 def sensor_parts_rows(sensor) -> tuple[str, list[tuple[str, str]]]:
@@ -391,7 +392,7 @@ def sensor_parts_rows(sensor) -> tuple[str, list[tuple[str, str]]]:
     kPa and MA/m."""
     grade = "no grade named" if sensor.grade == "custom" else sensor.grade
     rows = [("body", f"H {sig(1e3 * sensor.H)} mm, radius {short(1e3 * sensor.R)} mm"),
-            ("silicone", _silicone_words(sensor.silicone, sensor.G)),
+            ("silicone", silicone_words(sensor.silicone, sensor.G)),
             ("magnet", f"{grade}, ⌀{short(2e3 * sensor.R_m)} × {short(1e3 * sensor.H_m)} mm, "
                        f"M_z {sig(1e-6 * sensor.M_z)} MA/m"),
             ("Hall chip", sensor.chip + ("" if sensor.setting is None

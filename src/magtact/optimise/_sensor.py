@@ -496,7 +496,7 @@ def most_shear_within(models: ModelSet, study: Study, table: HeightTable, G_low,
     or a scalar), on the sensor problem's grid (the shear the sensor problem asks of the
     loads), and the G [Pa] where it is; 0 and NaN where the interval is empty."""
     grid = sensor_grid(models, study, table.H, table.t_m, table.theta_m)
-    return _Within(grid).most_shear(G_low, G_high, F_z)
+    return _within_of(grid).most_shear(G_low, G_high, F_z)  # kept: asked once per G range
 
 
 def exact_sensor_reduction(models: ModelSet, study: Study, space: SensorSpace

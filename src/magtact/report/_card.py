@@ -120,7 +120,9 @@ def parts_list(a) -> list[list[str]]:
     out = []
     if p is not None:
         out.append(["magnet", _magnet_text(a)])
-        out.append(["silicone", _named_silicone(p.silicone, a.G)])
+        from .._display import silicone_words
+
+        out.append(["silicone", silicone_words(p.silicone, a.G)])
     chip = a.chip.name + (f", {_setting_text(a)}" if a.chip.figures is not None else "")
     out.append(["Hall chip", chip])
     out.append(["chip standoff below the body", f"{mm(a.standoff):.3g} mm"])
@@ -203,17 +205,6 @@ def _magnet_text(a) -> str:
     if p.R_m is None:
         return text
     return text + f", ⌀{mm(2 * p.R_m):.3g} × {mm(p.H_m):.3g} mm"
-
-
-def _named_silicone(name: str, G: float) -> str:
-    """The silicone to buy and the design's G, with the silicone's cited G range."""
-    from ..parts import SILICONES
-
-    if name == "none":
-        return f"G {kpa(G):.3g} kPa (no silicone named)"
-    if name not in SILICONES:
-        return f"{name} (G {kpa(G):.3g} kPa)"
-    return f"{name} (G {kpa(G):.3g} kPa; its range {_kpa_range(*SILICONES[name].G_range)})"
 
 
 def silicone_table(opt) -> list[list[str]]:
