@@ -4,6 +4,8 @@ The same job functions run everywhere; results come back to the calling process 
 (the caller caches each one at once, so an interruption loses only the jobs in flight).
 Local workers are ``spawn``-ed processes that exit by themselves if the calling process dies
 (a watchdog thread compares their parent id), so a killed study leaves no orphan solving on.
+A dask worker process runs one job at a time whatever its number of threads: the meshes are
+made by gmsh, whose state is global to a process and which is not thread-safe.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import os
 import queue
 import threading
 import time
+import uuid
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
@@ -25,6 +28,8 @@ from ._jobs import Outcome
 THREAD_VARS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
 #: How long to try to reach a dask scheduler.
 CONNECT_TIMEOUT = "10s"
+#: Held by the job that runs in a dask worker process (its other threads wait).
+_JOB_LOCK = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -57,7 +62,8 @@ def execute(tasks: list[Task], *, workers: int | None = None, scheduler: str | N
         other in this process. Ignored when ``scheduler`` is given.
     scheduler : str, optional
         Address of a dask.distributed scheduler (``"tcp://host:8786"``): the jobs run on its
-        workers instead.
+        workers instead, one job at a time in each worker process (start the workers with
+        ``--nthreads 1``, one process per core: ``dask worker ADDR --nworkers N --nthreads 1``).
     on_start : callable
         Called with a job when it is known to be running (in this process or a local worker).
 
@@ -145,12 +151,23 @@ def _dask(tasks: list[Task], scheduler: str) -> Iterator[tuple[object, Outcome]]
     with client:
         futures = {}
         for task in tasks:
-            fut = client.submit(task.func, task.job, *task.args, pure=False)
+            fut = client.submit(_one_at_a_time, task.func, task.job, *task.args, pure=False,
+                                key=f"{task.func.__name__}-{uuid.uuid4()}")
             futures[fut.key] = (fut, task.job)
             fut.add_done_callback(lambda f: done.put(f.key))
         for _ in range(len(futures)):
             fut, job = futures[done.get()]
             yield job, _outcome(fut)
+
+
+def _one_at_a_time(func: Callable[..., Outcome], job: object, *args) -> Outcome:
+    """``func(job, *args)`` in a dask worker, never beside another job of the same process.
+
+    A worker with several threads would otherwise run several jobs at once in one process, and
+    two meshes made by gmsh at the same time in one process come out empty or mixed up.
+    """
+    with _JOB_LOCK:
+        return func(job, *args)
 
 
 def _outcome(fut) -> Outcome:
