@@ -9,13 +9,14 @@ t ≤ t_m, θ ≤ θ_m, with the assumptions it rests on.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from .._errors import MagtactError
-from .._files import json_dict, json_list, json_number, json_text
+from .._files import UnreadableFile, read_result
+from .._records import entry, from_json_or_none, keys, to_json
 from .._sensor import Sensor
 from ..designer import HallChip, hall_chip, resolution
 from ..doe import check_design
@@ -23,7 +24,7 @@ from ..magnetics import hall_field
 from ..metamodel import ModelSet
 from ..optimise import DesignResult, per_design
 from ..sensitivity import dF_dB, gamma
-from ..study import Study, from_si, kpa, mm, to_si
+from ..study import Study, from_si, mm
 from ..viscoelastic import (
     MEASURED_HYSTERESIS,
     SiliconeSweep,
@@ -41,8 +42,6 @@ from . import _array, _fabrication
 N_BOX = 41
 #: Components of every row.
 COMPONENTS = ("F_r", "F_z")
-#: Keys of the resolution in ``budget.json`` (the order of :attr:`Budget.resolution`).
-RESOLUTION_KEYS = tuple(f"{c}_{where}" for where in ("at_rest", "worst") for c in COMPONENTS)
 #: Sources of the cited defaults (docs/method.md §12).
 SOURCES = {
     "remanence_tc": "Advanced Magnetic Materials, 'What are temperature coefficients α and β "
@@ -59,42 +58,102 @@ class BudgetRow:
     """One row of the budget: a false force [N] of one force component.
 
     ``at_rest``: at t = 0; ``worst``: the largest over the stable region (NaN where a row has
-    no such value). ``group``: noise, temperature, stray field, neighbours, fabrication, model.
+    no such value, null in the file). ``group``: noise, temperature, stray field, neighbours,
+    fabrication, model.
     """
 
-    name: str
-    group: str
-    component: str
-    at_rest: float
-    worst: float
-    assumptions: str
+    name: str = entry(kind=str)
+    group: str = entry(kind=str)
+    component: str = entry(kind=str)
+    at_rest: float = entry(unit="mN", null_nan=True)
+    worst: float = entry(unit="mN", null_nan=True)
+    assumptions: str = entry(kind=str)
 
     def to_json(self) -> dict:
         """The row in ``budget.json``: forces in mN, a value that is not finite as null."""
-        return {"name": self.name, "group": self.group, "component": self.component,
-                "at_rest_mN": _mN(self.at_rest), "worst_mN": _mN(self.worst),
-                "assumptions": self.assumptions}
+        return to_json(self)
 
     @classmethod
     def from_json(cls, data) -> BudgetRow | None:
-        """The row :meth:`to_json` wrote (None for anything but a JSON object; a value of the
-        wrong type reads as NaN or as text)."""
-        if not isinstance(data, dict):
-            return None
-        return cls(json_text(data.get("name")), json_text(data.get("group")),
-                   json_text(data.get("component")), _from_mN(data.get("at_rest_mN")),
-                   _from_mN(data.get("worst_mN")), json_text(data.get("assumptions")))
+        """The row :meth:`to_json` wrote, in SI; None for anything else."""
+        return from_json_or_none(cls, data)
 
 
-def _mN(v) -> float | None:
-    """A force [N] in mN for a file; None where it is not finite."""
-    return None if v is None or not math.isfinite(v) else from_si(v, "mN")
+@dataclass(frozen=True)
+class Noise:
+    """The field noise (σ_x, σ_z) [T] of a budget's noise row, as ``budget.json`` holds it."""
+
+    x: float = entry("noise_x_uT", "uT")
+    z: float = entry("noise_z_uT", "uT")
 
 
-def _from_mN(v) -> float:
-    """A force of a file in mN back in N; NaN where there is none."""
-    v = json_number(v)
-    return math.nan if v is None else to_si(v, "mN")
+@dataclass(frozen=True)
+class Resolution:
+    """The resolution σ_F [N] of a design, as ``budget.json``'s ``resolution_mN`` holds it (the
+    order of :attr:`Budget.resolution`)."""
+
+    F_r_at_rest: float = entry("F_r_at_rest", "mN", null_nan=True)
+    F_z_at_rest: float = entry("F_z_at_rest", "mN", null_nan=True)
+    F_r_worst: float = entry("F_r_worst", "mN", null_nan=True)
+    F_z_worst: float = entry("F_z_worst", "mN", null_nan=True)
+
+
+#: Keys of the resolution in ``budget.json`` (the order of :attr:`Budget.resolution`).
+RESOLUTION_KEYS = keys(Resolution)
+
+
+@dataclass(frozen=True)
+class ArrayInfo:
+    """The array of a budget (:attr:`Budget.array` holds it as a dict of these names, in SI):
+    the layout, the pitch of the neighbour rows [m], the smallest pitch [m] at which the
+    crosstalk stays below the resolution (None without a noise figure) and the worst
+    crosstalk [N] of one neighbour and of all."""
+
+    layout: str = entry(kind=str)
+    rings: int = entry(kind=int)
+    pitch: float = entry(unit="mm")
+    pitch_given: bool = entry(kind=bool)
+    smallest_pitch: float | None = entry(unit="mm", optional=True)
+    criterion: str = entry(kind=str)
+    one_neighbour_worst: tuple = entry(unit="mN", levels=("list",), null_nan=True)
+    all_neighbours_worst: tuple = entry(unit="mN", levels=("list",), null_nan=True)
+
+
+#: Units of the fabrication figures that are not false forces in mN (each key carries its
+#: unit: ``Gamma_r_0_N_per_T``, ``cal_r_mN``).
+FABRICATION_UNITS = {"Gamma_r_0": "N_per_T", "Gamma_z_0": "N_per_T", "F_r_min": "N",
+                     "F_z_max": "N"}
+
+
+@dataclass(frozen=True)
+class Fabrication:
+    """The Monte Carlo of fabrication tolerances of a budget: percentiles (5/50/95 %) of each
+    response, the linearised σ of each response per input, the inputs' 1 σ, in SI."""
+
+    percentiles: dict = entry("percentiles_5_50_95", "mN", levels=("map", "list"),
+                              key_units=FABRICATION_UNITS)
+    samples: int = entry(kind=int)
+    seed: int = entry(kind=int)
+    by_input: dict = entry("sigma_per_input_linear", "mN", levels=("map", "map"),
+                           key_units=FABRICATION_UNITS)
+    sigmas: dict = entry("inputs_1_sigma", levels=("map",))
+
+
+@dataclass(frozen=True)
+class Environment:
+    """The environment of a budget (:attr:`Budget.environment` holds it as a dict of these
+    names, in SI): temperature change [K], the remanence's and the chip's temperature
+    coefficients [1/K], the Earth's and a stray field [T], the field at rest [T] and the
+    sources of the cited defaults."""
+
+    delta_T: float = entry(unit="K")
+    remanence_tc: float = entry(unit="pct_per_K")
+    remanence_tc_tolerance: float = entry(unit="pct_per_K")
+    chip_drift: float = entry(unit="pct_per_K")
+    earth_field: float = entry(unit="uT")
+    stray_field: float = entry(unit="uT")
+    B_rest: tuple = entry(unit="mT", levels=("list",))
+    sources: dict = entry(kind=str, levels=("map",))
 
 
 @dataclass(frozen=True)
@@ -109,29 +168,36 @@ class Budget:
         The field noise of the noise row; ``noise_source`` says where it comes from.
     resolution : (σ_Fr,0, σ_Fz,0, σ_Fr,worst, σ_Fz,worst) [N] or None
     array : dict
-        Layout, rings, the pitch of the neighbour rows [m] and the smallest pitch [m] at which
-        the crosstalk stays below the resolution (None without a noise figure).
-    fabrication : dict
-        Percentiles (5/50/95 %) of the Monte Carlo's responses, in SI.
+        The names of :class:`ArrayInfo` and their values (empty without an array).
+    fabrication : Fabrication or None
+        The Monte Carlo of fabrication tolerances.
+    environment : dict
+        The names of :class:`Environment` and their values.
     not_modelled : tuple of str
+    time : dict
+        The time entry as ``budget.json`` holds it (read by
+        :meth:`magtact.viscoelastic.TimeRecord.from_json`).
     """
 
-    label: str
-    H: float
-    G: float
-    M_z: float | None
-    t_m: float
-    theta_m: float
-    chip: str
-    noise: tuple[float, float] | None
-    noise_source: str
-    rows: tuple[BudgetRow, ...]
-    resolution: tuple[float, float, float, float] | None
-    array: dict = field(default_factory=dict)
-    fabrication: dict = field(default_factory=dict)
-    environment: dict = field(default_factory=dict)
-    not_modelled: tuple[str, ...] = ()
-    time: dict = field(default_factory=dict)
+    label: str = entry(kind=str)
+    H: float = entry(unit="mm")
+    G: float = entry(unit="kPa")
+    M_z: float | None = entry(unit="A_per_m", optional=True)
+    t_m: float = entry()
+    theta_m: float = entry(unit="rad")
+    chip: str = entry(kind=str)
+    noise: tuple[float, float] | None = entry(kind=Noise, shape="tuple", inline=True,
+                                              optional=True)
+    noise_source: str = entry(kind=str)
+    rows: tuple[BudgetRow, ...] = entry(kind=BudgetRow, levels=("list",))
+    not_modelled: tuple[str, ...] = entry(kind=str, levels=("list",), default=(), kw_only=True)
+    resolution: tuple[float, float, float, float] | None = entry(
+        "resolution_mN", kind=Resolution, shape="tuple", optional=True, omit="none")
+    array: dict = entry(kind=ArrayInfo, shape="dict", default_factory=dict)
+    fabrication: Fabrication | None = entry(kind=Fabrication, omit="none", default=None)
+    environment: dict = entry(kind=Environment, shape="dict", omit="empty",
+                              default_factory=dict)
+    time: dict = entry(kind=object, omit="empty", default_factory=dict)
 
     def largest(self, n: int = 3) -> list[BudgetRow]:
         """The ``n`` rows with the largest worst-case false force."""
@@ -156,82 +222,36 @@ class Budget:
 
     @classmethod
     def from_json(cls, data) -> Budget | None:
-        """The budget :meth:`to_json` wrote, back in SI: the design, the noise, the rows, the
-        resolution, the array and the time rows (``time`` as the file holds it, in mN and s);
-        the Monte Carlo's and the environment's details stay in the file. None for anything
-        but a JSON object with a list of rows (a value of the wrong type reads as NaN, None or
-        text)."""
-        if not isinstance(data, dict) or not isinstance(data.get("rows"), list):
-            return None
-
-        def num(key: str, unit: str | None = None) -> float:
-            v = json_number(data.get(key))
-            return math.nan if v is None else v if unit is None else to_si(v, unit)
-
-        noise = [json_number(data.get(k)) for k in ("noise_x_uT", "noise_z_uT")]
-        res = json_dict(data.get("resolution_mN"))
-        arr = json_dict(data.get("array"))
-        pitch = json_number(arr.get("smallest_pitch_mm"))
-        M_z = json_number(data.get("M_z_A_per_m"))
-        return cls(
-            label=json_text(data.get("label"), "design"), H=num("H_mm", "mm"),
-            G=num("G_kPa", "kPa"), M_z=M_z, t_m=num("t_m"), theta_m=num("theta_m_rad"),
-            chip=json_text(data.get("chip")),
-            noise=None if None in noise else (to_si(noise[0], "uT"), to_si(noise[1], "uT")),
-            noise_source=json_text(data.get("noise_source")),
-            rows=tuple(r for r in map(BudgetRow.from_json, data["rows"]) if r is not None),
-            resolution=None if not res else tuple(_from_mN(res.get(k))
-                                                  for k in RESOLUTION_KEYS),
-            array={} if not arr else {
-                "layout": json_text(arr.get("layout")), "rings": arr.get("rings"),
-                "pitch": _from_mm(arr.get("pitch_mm")), "pitch_given": arr.get("pitch_given"),
-                "smallest_pitch": None if pitch is None else to_si(pitch, "mm"),
-                "criterion": json_text(arr.get("criterion")),
-                "one_neighbour_worst": [_from_mN(v) for v in
-                                        json_list(arr.get("one_neighbour_worst_mN"))],
-                "all_neighbours_worst": [_from_mN(v) for v in
-                                         json_list(arr.get("all_neighbours_worst_mN"))]},
-            not_modelled=tuple(json_text(n) for n in json_list(data.get("not_modelled"))),
-            time=json_dict(data.get("time")))
-
-
-def _from_mm(v) -> float:
-    v = json_number(v)
-    return math.nan if v is None else to_si(v, "mm")
+        """The budget :meth:`to_json` wrote, back in SI (``time`` as the file holds it, in mN
+        and s); None for anything else."""
+        return from_json_or_none(cls, data)
 
 
 @dataclass(frozen=True)
 class BudgetFile:
     """``budget.json``: the error budgets of a folder (e.g. the chosen and the original design
-    of a run), the study's name and the run that wrote it."""
+    of a run), the study's name and the run that wrote it (``run_id`` as the file gives it,
+    so that a value that is not text never names a run by accident)."""
 
-    study: str
-    budgets: tuple[Budget, ...]
-    run_id: str | None = None
+    title: str = entry(kind=str, default="Error budget", kw_only=True)
+    study: str = entry(kind=str, default="")
+    run_id: str | None = entry(kind=object, default=None, kw_only=True)
+    budgets: tuple[Budget, ...] = entry(kind=Budget, levels=("list",), kw_only=True)
 
     def to_json(self) -> dict:
-        return {"title": "Error budget", "study": self.study, "run_id": self.run_id,
-                "budgets": [b.to_json() for b in self.budgets]}
+        return to_json(self)
 
     @classmethod
-    def from_json(cls, data) -> BudgetFile | None:
-        """The file :meth:`to_json` wrote; None for anything but a JSON object with a list of
-        budgets (an entry that is not a budget is left out). ``run_id`` is kept as the file
-        gives it when it is not text (so that it never names a run by accident)."""
-        if not isinstance(data, dict) or not isinstance(data.get("budgets"), list):
-            return None
-        return cls(json_text(data.get("study")),
-                   tuple(b for b in map(Budget.from_json, data["budgets"]) if b is not None),
-                   data.get("run_id"))
+    def from_json(cls, data, where: str = "budget.json") -> BudgetFile | None:
+        """The file :meth:`to_json` wrote; None for anything else."""
+        return from_json_or_none(cls, data, where)
 
     @classmethod
     def read(cls, path: str | Path) -> BudgetFile | None:
         """:meth:`from_json` of the file ``path``; None where it is missing or not JSON."""
-        import json
-
         try:
-            return cls.from_json(json.loads(Path(path).read_text(encoding="utf-8")))
-        except (OSError, ValueError, RecursionError):
+            return cls.from_json(read_result(path, "json"), str(path))
+        except UnreadableFile:
             return None
 
 
@@ -426,13 +446,11 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
     if res is not None:
         smallest = _array.smallest_pitch(study, H, design.t_m, design.theta_m, J,
                                          (res[2], res[3]), arr.layout, arr.rings, **place)
-    array_info = {"layout": arr.layout, "rings": arr.rings, "pitch": pitch,
-                  "pitch_given": arr.pitch > 0, "smallest_pitch": smallest,
-                  "criterion": "the worst crosstalk (one neighbour or all loaded alike, over "
-                               "this taxel's stable region) at most the worst resolution σ_F "
-                               "in both components",
-                  "one_neighbour_worst": [float(v) for v in ctw["one"]],
-                  "all_neighbours_worst": [float(v) for v in ctw["all"]]}
+    array_info = asdict(ArrayInfo(
+        arr.layout, arr.rings, pitch, arr.pitch > 0, smallest,
+        "the worst crosstalk (one neighbour or all loaded alike, over this taxel's stable "
+        "region) at most the worst resolution σ_F in both components",
+        [float(v) for v in ctw["one"]], [float(v) for v in ctw["all"]]))
 
     # ---- fabrication -----------------------------------------------------------------------
     tol = study.tolerances
@@ -478,16 +496,16 @@ def error_budget(models: ModelSet, study: Study, H: float, G: float, M_z: float 
         not_modelled.append("the silicone's relaxation in time (hysteresis, creep): "
                             + time_info["source"])
 
-    env_info = {"delta_T": dT, "remanence_tc": a, "remanence_tc_tolerance": da,
-                "chip_drift": sd, "earth_field": env.earth_field,
-                "stray_field": env.stray_field, "B_rest": B0.tolist(), "sources": SOURCES}
+    inputs = _fabrication.INPUTS
+    fabrication = Fabrication(
+        pct, n, tol.seed, {k: dict(zip(inputs, v, strict=True)) for k, v in by_input.items()},
+        dict(zip(inputs, _fabrication.sigmas(study).tolist(), strict=True)))
+    env_info = asdict(Environment(dT, a, da, sd, env.earth_field, env.stray_field,
+                                  B0.tolist(), SOURCES))
     return Budget(label, float(H), float(G), None if M_z is None else float(M_z), design.t_m,
-                  design.theta_m, chip.name, noise_used, noise_source, tuple(rows), res,
-                  array_info, {"percentiles": pct, "by_input": by_input, "samples": n,
-                               "seed": tol.seed,
-                               "inputs": list(_fabrication.INPUTS),
-                               "sigmas": _fabrication.sigmas(study).tolist()},
-                  env_info, tuple(not_modelled), time_info)
+                  design.theta_m, chip.name, noise_used, noise_source, tuple(rows),
+                  not_modelled=tuple(not_modelled), resolution=res, array=array_info,
+                  fabrication=fabrication, environment=env_info, time=time_info)
 
 
 def _time_rows(models, study, design, silicone: str) -> tuple[list[BudgetRow], dict]:
@@ -576,60 +594,7 @@ def _model_rows(models, study, design, dataset, seeds) -> list[BudgetRow]:
 
 def budget_json(b: Budget) -> dict:
     """Every number of a budget in user units, the unit in each key (mN, mm, kPa, µT)."""
-    out = {
-        "label": b.label, "H_mm": mm(b.H), "G_kPa": kpa(b.G),
-        "M_z_A_per_m": b.M_z, "t_m": b.t_m, "theta_m_rad": b.theta_m, "chip": b.chip,
-        "noise_x_uT": None if b.noise is None else from_si(b.noise[0], "uT"),
-        "noise_z_uT": None if b.noise is None else from_si(b.noise[1], "uT"),
-        "noise_source": b.noise_source,
-        "rows": [r.to_json() for r in b.rows],
-        "not_modelled": list(b.not_modelled),
-    }
-    if b.resolution is not None:
-        out["resolution_mN"] = dict(zip(RESOLUTION_KEYS, map(_mN, b.resolution), strict=True))
-    a = b.array
-    out["array"] = {} if not a else {
-        "layout": a["layout"], "rings": a["rings"], "pitch_mm": mm(a["pitch"]),
-        "pitch_given": a["pitch_given"],
-        "smallest_pitch_mm": None if a["smallest_pitch"] is None else mm(a["smallest_pitch"]),
-        "criterion": a["criterion"],
-        "one_neighbour_worst_mN": [_mN(v) for v in a["one_neighbour_worst"]],
-        "all_neighbours_worst_mN": [_mN(v) for v in a["all_neighbours_worst"]]}
-    f = b.fabrication
-    if f:
-        out["fabrication"] = _fabrication_json(f)
-    e = b.environment
-    if e:
-        out["environment"] = _environment_json(e)
-    if b.time:
-        out["time"] = b.time
-    return out
-
-
-def _fabrication_json(f: dict) -> dict:
-    units = {"Gamma_r_0": ("Gamma_r_0_N_per_T", 1.0), "Gamma_z_0": ("Gamma_z_0_N_per_T", 1.0),
-             "F_r_min": ("F_r_min_N", 1.0), "F_z_max": ("F_z_max_N", 1.0)}
-    pct = {}
-    for k, v in f["percentiles"].items():
-        key, _ = units.get(k, (f"{k}_mN", None))
-        pct[key] = v if k in units else [from_si(x, "mN") for x in v]
-    lin = {}
-    for k, v in f["by_input"].items():
-        key, _ = units.get(k, (f"{k}_mN", None))
-        lin[key] = dict(zip(f["inputs"], v if k in units else [from_si(x, "mN") for x in v],
-                            strict=True))
-    return {"percentiles_5_50_95": pct, "samples": f["samples"], "seed": f["seed"],
-            "sigma_per_input_linear": lin,
-            "inputs_1_sigma": dict(zip(f["inputs"], f["sigmas"], strict=True))}
-
-
-def _environment_json(e: dict) -> dict:
-    return {"delta_T_K": e["delta_T"], "remanence_tc_pct_per_K": 100 * e["remanence_tc"],
-            "remanence_tc_tolerance_pct_per_K": 100 * e["remanence_tc_tolerance"],
-            "chip_drift_pct_per_K": 100 * e["chip_drift"],
-            "earth_field_uT": from_si(e["earth_field"], "uT"),
-            "stray_field_uT": from_si(e["stray_field"], "uT"),
-            "B_rest_mT": [from_si(v, "mT") for v in e["B_rest"]], "sources": e["sources"]}
+    return to_json(b)
 
 
 def budget_card_rows(budgets, n: int = 3) -> list[list[str]]:
@@ -718,7 +683,7 @@ def write_budgets(budgets, study: Study, folder, figures=None, *, run_id: str | 
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    doc = BudgetFile(study.name, tuple(budgets), run_id).to_json()
+    doc = BudgetFile(study.name, budgets=tuple(budgets), run_id=run_id).to_json()
     path = write_json(folder / "budget.json", doc, indent=1, ensure_ascii=False)
     if figures is not None:
         figures(doc, folder)
