@@ -260,6 +260,11 @@ def solve(models: ModelSet, study: Study, constraints: ForceConstraints | None =
                 if f.name not in ("models", "models_source", "dataset")}
 
     kept = _answers.kept(_answers.key(models, study, constraints), answer)
+    chosen = kept["study"]
+    if sensor and (chosen.magnet.R_m, chosen.magnet.H_m) != (study.magnet.R_m,
+                                                            study.magnet.H_m):
+        # another magnet size was chosen: its models and data set are the bundled ones
+        models, models_source, dataset = models_for(chosen)
     return Result(models=models, models_source=models_source, dataset=dataset, **kept)
 
 
@@ -269,6 +274,11 @@ def _solve(models: ModelSet, study: Study, constraints: ForceConstraints, sensor
     from .optimise import InfeasibleError, optimise, optimise_geometry
 
     models_source, dataset, own = "given", None, study.geometry()
+    if sensor and study.design.magnet_sizes:
+        sized = _sized_result(models, study, constraints)
+        if sized is not None:
+            return sized
+        study = _own_size(study)  # no size meets the problem: its own magnet says why
     if sensor:
         try:
             opt = optimise(models, study, constraints)
@@ -317,22 +327,101 @@ def _infeasible(models: ModelSet, study: Study, constraints, message: str) -> Ex
     return InfeasibleSpecification(message, infeasibility(models, study, constraints, message))
 
 
-def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_source: str,
-                   dataset) -> Result:
-    """The sensor problem's :class:`Result`: the whole sensor (:func:`magtact.optimise.
-    optimise_sensor`) as the chosen design, the publication's optimisation kept beside it.
-    Forces given as constraints (``magtact optimise --Fzc``) become the required forces."""
+def _required(study: Study, constraints) -> Study:
+    """``study`` with forces given as constraints (``magtact optimise --Fzc``) as its required
+    forces."""
     from dataclasses import replace
-
-    from .optimise import optimise_sensor
 
     req = study.requirements
     F_r, F_z = (-constraints.F_r_c, constraints.F_z_c)
     k = 1.0 - constraints.tolerance
     if (F_r * k, F_z * k) != (req.F_r, req.F_z):
         study = replace(study, requirements=replace(req, F_r=F_r * k, F_z=F_z * k))
+    return study
+
+
+def _own_size(study: Study) -> Study:
+    """``study`` with its own magnet alone to choose from."""
+    from dataclasses import replace
+
+    return replace(study, design=replace(study.design, magnet_sizes=()))
+
+
+def _same_size(study: Study, name: str) -> bool:
+    from .parts import SIZES
+
+    z = SIZES[name]
+    return (math.isclose(z.R_m, study.magnet.R_m, rel_tol=1e-9)
+            and math.isclose(z.H_m, study.magnet.H_m, rel_tol=1e-9))
+
+
+def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
+    """The sensor problem over the magnet sizes of ``[design] magnet_sizes``: each size's
+    problem (:meth:`magtact.study.Study.sized`, answered from the bundled data that hold it,
+    its shipped fit) solved by the exact reduction on the nominal parts, the size of the least
+    √(σ_F,r² + σ_F,z²) then solved whole (its worst corner, NSGA-II's cross-check:
+    :func:`_sensor_result`). The result's study is the problem at the chosen size; its sensor
+    problem's answer lists the best sensor of every size. None where no size has a sensor
+    (the study's own magnet then says why)."""
+    from dataclasses import replace
+
+    from .optimise import InfeasibleError, optimise, optimise_sensor, sweep
+
+    names, best, notes, solved = study.design.magnet_sizes, [], [], {}
+    for name in names:
+        st = study.sized(name)
+        try:
+            m = models if _same_size(study, name) else models_for(st)[0]
+        except MagtactError:
+            best.append(None)
+            notes.append("no bundled data hold this size")
+            continue
+        try:  # the heights' extrema on a coarser sweep than the chosen size's
+            o = st.optimise
+            coarse = replace(o, sweep_n=min(o.sweep_n, SIZE_SWEEP_N),
+                             sweep_coarse=min(o.sweep_coarse, SIZE_SWEEP_COARSE))
+            sensor = optimise_sensor(m, _required(st, constraints),
+                                     sweep(m, replace(st, optimise=coarse)), constraints,
+                                     nsga2=False)
+        except InfeasibleError:
+            best.append(None)
+            notes.append("no sensor of this size meets the requirements")
+            continue
+        best.append(sensor.choice)
+        notes.append("")
+        solved[name] = (m, st)
+    if not solved:
+        return None
+    name = min(solved, key=lambda n: best[names.index(n)].sigma)
+    m, st = solved[name]
+    original = _values_answer(models, _required(study, constraints),
+                              {"H": study.design.H_original, "G": study.design.G_original},
+                              "original")
+    result = _sensor_result(m, st, optimise(m, st, constraints), constraints, "given", None,
+                            original=original)
+    per = replace(result.sensor_design, sizes=tuple(names), per_size=tuple(best),
+                  size_notes=tuple(notes), size=name)
+    return replace(result, sensor_design=per)
+
+
+#: Heights of the sweep (and of its coarse start) on which every magnet size is compared.
+SIZE_SWEEP_N, SIZE_SWEEP_COARSE = 41, 11
+
+
+def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_source: str,
+                   dataset, nominal=None, original=None) -> Result:
+    """The sensor problem's :class:`Result`: the whole sensor (:func:`magtact.optimise.
+    optimise_sensor`) as the chosen design, the publication's optimisation kept beside it.
+    Forces given as constraints (``magtact optimise --Fzc``) become the required forces.
+    ``nominal``: the reduction's answer on the nominal parts where already solved;
+    ``original``: the original design's answer where it is not of ``study``'s magnet."""
+    from dataclasses import replace
+
+    from .optimise import optimise_sensor
+
+    study = _required(study, constraints)
     table = opt.reduction.table
-    sensor = optimise_sensor(models, study, table, constraints, nsga2=False)
+    sensor = nominal or optimise_sensor(models, study, table, constraints, nsga2=False)
     c = sensor.choice
     # where no sensor's loads within the normal force include the shear, the later solves ask
     # without it at once (the verdict says no)
@@ -349,8 +438,9 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
     sensor = checked
     c = sensor.choice
     sensor = _root_found_saturation(models, study, sensor, chosen.verdict.F_saturation)
-    original = _values_answer(models, study, {"H": study.design.H_original,
-                                              "G": study.design.G_original}, "original")
+    if original is None:
+        original = _values_answer(models, study, {"H": study.design.H_original,
+                                                  "G": study.design.G_original}, "original")
     values = {"H": c.H, "G": c.G, "M_z": c.M_z, "standoff": c.standoff}
     return Result(study, models, models_source, opt, chosen, original, values, dataset,
                   sensor, chosen.sensor)

@@ -88,7 +88,7 @@ def card(result: Result, budgets: tuple[Budget, Budget] | None = None) -> Card:
     >>> print(magtact.card(result))                                 # doctest: +SKIP
     """
     from ._display import Card
-    from .report import card_rows, parts_list, silicone_table
+    from .report import card_rows, parts_list, silicone_table, size_table
 
     if budgets is None:
         budgets = error_budgets(result)
@@ -101,6 +101,9 @@ def card(result: Result, budgets: tuple[Budget, Budget] | None = None) -> Card:
     silicones = silicone_table(result.sensor_design)
     if silicones:
         doc["silicones"] = silicones
+    sizes = size_table(result.sensor_design)
+    if sizes:
+        doc["magnet_sizes"] = sizes
     return Card(doc)
 
 
@@ -221,6 +224,7 @@ def write_results_into(result: Result, out: str | Path, *, figures: bool = True,
         fig_geometry_pareto,
         optimise_figures,
         silicone_table,
+        size_table,
         write_card,
         write_explorer,
     )
@@ -240,7 +244,8 @@ def write_results_into(result: Result, out: str | Path, *, figures: bool = True,
     files.append(write_card([result.chosen, result.original], out, result.constraints,
                             rtol=result.study.optimise.active_rtol, study=result.study,
                             extra_rows=_extra_rows(result.models, budgets),
-                            silicones=silicone_table(result.sensor_design)))
+                            silicones=silicone_table(result.sensor_design),
+                            sizes=size_table(result.sensor_design)))
     grid = write_explorer(result, out) if explorer else None  # for the report's explorer
     if grid is not None:
         files.append(grid)

@@ -751,6 +751,16 @@ class SensorOptimisation:
         grid; the chosen silicone's refined), None where a silicone has no feasible design.
     silicones : tuple of str
         The silicones the problem chose from.
+    sizes : tuple of str
+        The magnet sizes the problem chose from (catalogue names; empty: the study's magnet
+        only).
+    per_size : tuple of SensorDesign or None
+        The reduction's best sensor of each size of :attr:`sizes` (nominal parts), None where
+        the size has none; :attr:`size_notes` says why.
+    size_notes : tuple of str
+        Why a size of :attr:`sizes` has no sensor ("" where it has one).
+    size : str
+        The chosen size (of :attr:`sizes`; "" where it chose from none).
     """
 
     choice: SensorDesign
@@ -761,6 +771,10 @@ class SensorOptimisation:
     wall_time: float
     per_silicone: tuple[SensorDesign | None, ...] = ()
     silicones: tuple[str, ...] = ()
+    sizes: tuple[str, ...] = ()
+    per_size: tuple[SensorDesign | None, ...] = ()
+    size_notes: tuple[str, ...] = ()
+    size: str = ""
 
     @property
     def feasible(self) -> bool:
@@ -787,13 +801,17 @@ class SensorOptimisation:
     def to_json(self) -> dict:
         """The answer in user units (``sensor.json``)."""
         p = self.pareto
+        sizes = {"magnet_size": self.size, "magnet_sizes": [
+            {"size": name, "best": None if d is None else d.to_json(), "why_none": note or None}
+            for name, d, note in zip(self.sizes, self.per_size, self.size_notes, strict=True)]
+        } if self.sizes else {}
         return {"chosen": self.choice.to_json(),
                 "exact_reduction_choice": self.reduction_choice.to_json(),
                 "gap_to_exact_reduction": None if np.isnan(self.gap) else self.gap,
                 "combinations": self.combinations, "wall_time_s": self.wall_time,
                 "nsga2": None if p is None else {"points": int(p.H.size), "seed": p.seed,
                                                  "generations": p.generations,
-                                                 "evaluations": p.evaluations}}
+                                                 "evaluations": p.evaluations}} | sizes
 
 
 def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = None,

@@ -11,6 +11,7 @@ from ._card import (
     parts_list,
     read_card,
     silicone_table,
+    size_table,
     write_card,
     write_infeasible_card,
 )

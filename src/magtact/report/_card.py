@@ -231,6 +231,30 @@ def silicone_table(opt) -> list[list[str]]:
     return rows
 
 
+def size_table(opt) -> list[list[str]]:
+    """The best sensor of each magnet size the sensor problem chose from (the reduction's, on
+    the nominal parts: the chosen size's is then designed for its tolerances), as [size, the
+    sensor in words or why there is none] pairs (``opt``: its
+    :class:`magtact.optimise.SensorOptimisation`; [] where it chose from one size)."""
+    from ..parts import SIZES
+
+    if opt is None or len(opt.sizes) < 2:
+        return []
+    rows = []
+    for name, d, note in zip(opt.sizes, opt.per_size, opt.size_notes, strict=True):
+        z = SIZES[name]
+        label = f"nominal best, ⌀{mm(2 * z.R_m):.3g} × {mm(z.H_m):.3g} mm magnet"
+        if d is None:
+            text = note
+        else:
+            text = (f"σ_F {_mN(d.sigma_r)} / {_mN(d.sigma_z)} (shear / normal) at H "
+                    f"{mm(d.H):.3g} mm, G {kpa(d.G):.3g} kPa ({d.silicone}), {d.grade}, chip "
+                    f"{mm(d.standoff):.3g} mm below"
+                    + ("; the chosen size" if name == opt.size else ""))
+        rows.append([label, text])
+    return rows
+
+
 def _kpa_range(lo: float, hi: float) -> str:
     return (f"{kpa(lo):.3g} kPa" if lo == hi else f"{kpa(lo):.3g}–{kpa(hi):.3g} kPa")
 
@@ -259,7 +283,8 @@ def _active(a, constraints, rtol: float) -> str:
 
 def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None,
                extra_rows: list[list[str]] | None = None,
-               silicones: list[list[str]] | None = None) -> Path:
+               silicones: list[list[str]] | None = None,
+               sizes: list[list[str]] | None = None) -> Path:
     """Write ``card.json`` (the card's rows and every number of each answer) into ``folder``.
 
     ``study`` names the study and its sensitivity definition, so that :func:`read_card` can add
@@ -275,6 +300,8 @@ def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None
         doc = {"verdict": answers[0].verdict.to_json(), "parts": parts_list(answers[0])} | doc
     if silicones:
         doc["silicones"] = silicones
+    if sizes:
+        doc["magnet_sizes"] = sizes
     if study is not None:
         doc |= {"study": study.name, "definition": study.sensitivity.definition}
     return write_json(Path(folder) / "card.json", doc, indent=1, ensure_ascii=False)

@@ -124,6 +124,7 @@ def study_from_dict(data: dict, source: str | None = None) -> Study:
     study = _apply_requirements(study, base, source)
     if not complete:  # a complete file writes every key: its silicone is no choice made
         study = _apply_silicone(study, data, source)
+        study = _apply_magnet_size(study, data)
     _check_standoff(study, source)
     try:
         _check_consistency(study, source)
@@ -193,6 +194,15 @@ def _apply_silicone(s: Study, given: dict, source) -> Study:
         return s
     name = s.material.silicone
     return replace(s, design=replace(s.design, silicones=() if name == "none" else (name,)))
+
+
+def _apply_magnet_size(s: Study, given: dict) -> Study:
+    """A study that sets its magnet's size (``[magnet] size``, ``R_m_mm`` or ``H_m_mm``) and
+    not the sizes to choose from (``[design] magnet_sizes``) keeps that magnet."""
+    magnet, design = given.get("magnet", {}), given.get("design", {})
+    if "magnet_sizes" in design or not {"size", "R_m_mm", "H_m_mm"} & set(magnet):
+        return s
+    return replace(s, design=replace(s.design, magnet_sizes=()))
 
 
 def _check_silicones(s: Study, source) -> None:

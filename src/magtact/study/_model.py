@@ -155,6 +155,12 @@ class Design:
             "range of its cited figures); []: G free over the design range, the body cast from "
             "[material] silicone; a study that sets [material] silicone and not this chooses "
             "that silicone alone", missing=())
+    magnet_sizes: tuple[str, ...] = setting(
+        tuple(SIZES), choices=tuple(SIZES),
+        doc="magnet sizes the sensor problem chooses from (catalogue names '<diameter>x"
+            "<height>' in mm; each answered from the bundled data that hold it); []: the "
+            "study's magnet only; a study that sets the magnet's size and not this keeps "
+            "that magnet", missing=())
     H_original: float = setting(3e-3, "mm", positive=True, doc="H of the original sensor")
     G_original: float = setting(29.4e3, "kPa", positive=True, doc="G of the original sensor")
 
@@ -615,6 +621,13 @@ class Study:
             body = replace(body, R=R, R_g=R if body.R_g == body.R else min(body.R_g, R))
         design = replace(self.design, **{k: (0.0, 0.0) for k in values})
         return replace(self, magnet=magnet, body=body, design=design)
+
+    def sized(self, name: str) -> Study:
+        """This problem with the magnet of catalogue size ``name`` (its R_m and H_m) and no
+        other size to choose from (``[design] magnet_sizes`` cleared)."""
+        z = SIZES[name]
+        return replace(self, magnet=replace(self.magnet, size=name, R_m=z.R_m, H_m=z.H_m),
+                       design=replace(self.design, magnet_sizes=()))
 
     # ---- DOE levels (SI) -------------------------------------------------------------------
     @property
