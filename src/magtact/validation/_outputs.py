@@ -7,6 +7,7 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
+from .._files import write_text
 from ..study import from_si, mm
 from ._stats import Validation
 
@@ -66,7 +67,7 @@ def write_outputs(validation: Validation, out: str | Path, *, sources=(),
                   for k, v in row.items()} for row in validation.rows()],
     }
     path = out / f"{stem}.json"
-    path.write_text(json.dumps(summary, indent=2, ensure_ascii=False), encoding="utf-8")
+    write_text(path, json.dumps(summary, indent=2, ensure_ascii=False))
     written.append(path)
     if figures is not None:
         written += figures(validation, out / stem)
