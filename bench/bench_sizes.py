@@ -489,6 +489,59 @@ def surrogate(models: list[str], cached: bool = False,
             _update("surrogate", result)
 
 
+def _lagrange(x: np.ndarray, x0: float) -> np.ndarray:
+    """The weights of the polynomial through the points ``x`` at ``x0`` (Lagrange)."""
+    return np.array([np.prod([(x0 - x[m]) / (x[k] - x[m]) for m in range(x.size) if m != k])
+                     for k in range(x.size)])
+
+
+def interpolate() -> None:
+    """Each size of the DOE predicted from the others at the same (t, θ, H) points, without
+    any model: (a) along the magnet's radius, the quadratic through the three other radii at
+    the same height; (b) along its height, the line through the two other heights at the same
+    radius (the middle height only: three levels leave nothing to check a quadratic with).
+    The error of a size: the largest |error| over its finite points / its range."""
+    import xarray as xr
+
+    with xr.open_dataset(_doe_file()) as ds:
+        ds = ds.load()
+    G = ds["G"].values.astype(float)
+    f = {k: (ds[f"F_{k[-1]}"].transpose("t", "theta", "H", "R_m", "H_m", "G").values / G
+             ).mean(axis=-1) for k in ("f_r", "f_z")}
+    Rs, Hs = ds["R_m"].values.astype(float), ds["H_m"].values.astype(float)
+
+    def error(pred, true):
+        ok = np.isfinite(pred) & np.isfinite(true)
+        span = float(np.nanmax(true) - np.nanmin(true))
+        err = np.abs(pred - true)[ok]
+        return {"max_error_of_range": float(err.max() / span),
+                "rms_error_of_range": float(np.sqrt(np.mean(err ** 2)) / span),
+                "points": int(ok.sum())}
+
+    out = {}
+    for i, R in enumerate(Rs):
+        for j, h in enumerate(Hs):
+            entry = {}
+            others = [m for m in range(Rs.size) if m != i]
+            w = _lagrange(Rs[others], R)
+            for name, v in f.items():
+                true = v[..., i, j]
+                entry[f"{name} along the radius (quadratic)"] = error(
+                    np.tensordot(v[..., others, j], w, axes=([-1], [0])), true)
+                if 0 < j < Hs.size - 1:
+                    wl = _lagrange(Hs[[j - 1, j + 1]], h)
+                    entry[f"{name} along the height (line)"] = error(
+                        v[..., i, j - 1] * wl[0] + v[..., i, j + 1] * wl[1], true)
+            out[_label(R, h)] = entry
+    for label, entry in out.items():
+        print(label, {k: round(e["max_error_of_range"], 4) for k, e in entry.items()})
+    _update("interpolation", {"command": "python bench/bench_sizes.py interpolate",
+                              "data": str(_doe_file().relative_to(ROOT)),
+                              "error_measure": "largest |error| over a size's finite points / "
+                                               "that size's range (and rms / range)",
+                              "sizes": out})
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="step", required=True)
@@ -496,6 +549,7 @@ def main(argv=None) -> None:
     d.add_argument("--workers", type=int, default=1)
     d.add_argument("--first", default="", help="sizes to solve first, e.g. 5x2,4x1")
     sub.add_parser("status")
+    sub.add_parser("interpolate")
     sh = sub.add_parser("ship")
     sh.add_argument("sizes", help="finished sizes to ship, e.g. 3x2,5x2")
     s = sub.add_parser("surrogate")
@@ -508,6 +562,8 @@ def main(argv=None) -> None:
         doe(args.workers, [x for x in args.first.split(",") if x])
     elif args.step == "status":
         status()
+    elif args.step == "interpolate":
+        interpolate()
     elif args.step == "ship":
         ship(args.sizes.split(","))
     else:
