@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import statistics
 from pathlib import Path
 
@@ -915,6 +916,162 @@ def sizes_section(r: Results) -> list[str]:
     return out + [""]
 
 
+#: A failed path of ``magtact doe`` as its data set records it (``failed_jobs``).
+FAILED_PATH = re.compile(
+    r"path θ=(?P<theta>[\d.]+) rad, H=(?P<H>[\d.]+) mm, R_m=(?P<R_m>[\d.]+) mm, "
+    r"H_m=(?P<H_m>[\d.]+) mm: (?P<error>\w+): structural path failed at t = (?P<t>[\d.]+)"
+    r".*?: (?P<why>[^(]+?) \(residual (?P<residual>[^)]+)\)"
+    r"(?: \(its levels up to t = (?P<kept>[\d.]+) kept\))?$")
+
+
+def _failed_rows(failed: list[str]) -> list[list[str]]:
+    """One row per failed path: the magnet, H, θ, where it stopped, why, the levels kept."""
+    rows = []
+    for text in failed:
+        m = FAILED_PATH.match(text)
+        if m is None:
+            rows.append([text, "", "", "", "", ""])
+            continue
+        g = m.groupdict()
+        rows.append([f"{2 * float(g['R_m']):g} × {float(g['H_m']):g}", f"{float(g['H']):g}",
+                     f"{float(g['theta']):.4f}", g["t"],
+                     f"{g['error']}: {g['why']} (residual {g['residual']})",
+                     g["kept"] or "none"])
+    return rows
+
+
+def _attributes_differing(names: list[str], a: dict, b: dict, same_keys: bool) -> str:
+    """The global attributes two runs of one DOE differ in, said in words."""
+    if not names:
+        return "none differ"
+    text = ", ".join(f"`{k}`" for k in names) + (" differs" if len(names) == 1 else " differ")
+    if "source_revision" in names and "source_revision" in a:
+        text += (f" (the checkout's revision: {a['source_revision']} for the uninterrupted run, "
+                 f"{b['source_revision']} for the resumed one, other work being committed "
+                 "meanwhile" + ("; the two caches hold the same keys, which include the model "
+                                "versions)" if same_keys else ")"))
+    return text
+
+
+def _interruption_cost(overhead: float) -> str:
+    """What the interrupted and resumed runs cost beyond the uninterrupted one, in words."""
+    lost = ("An interruption loses the work on the paths in flight and costs a second start-up"
+            f"; interrupted and resumed together took {pct(abs(overhead))} "
+            f"{'less' if overhead < 0 else 'more'} wall time than the uninterrupted run")
+    if overhead < 0:
+        return (lost + ", because on this machine, shared with other work, the wall time "
+                "of a run varies with the other work more than an interruption costs (each "
+                "run's load averages are in the file).")
+    return lost + " (each run's load averages are in the file)."
+
+
+def doe_cost_section(r: Results) -> list[str]:
+    if "sizes" not in r.files and "doe_resume" not in r.files:
+        return []
+    out = ["## What a DOE costs, and its resumption", ""]
+    d = r.files.get("sizes", {})
+    st, final, runs = d.get("status"), d.get("doe"), d.get("doe_runs", [])
+    if st and final:
+        cpus = d["machine"]["cpus"]
+        out += [f"**The magnet-size DOE** ({r.source('sizes')}, `bench/bench_sizes.py`, the "
+                f"{cpus}-core development machine shared with other work): "
+                f"{st['paths_total']} structural paths on the default mesh; the cache held "
+                f"{st['paths_cached']} finished paths (`{st['command']}`), "
+                f"{st['path_job_wall_time_s_sum']:,.0f} s of solver time "
+                f"({st['path_job_wall_time_s_sum'] / 3600:.1f} h), "
+                f"{st['path_job_wall_time_s_mean']:.0f} s a path on average."]
+        if runs:
+            solved = sum(v["paths_computed"] for run in runs for v in run["sizes"].values())
+            failed = sum(v["paths_failed"] for run in runs for v in run["sizes"].values())
+            wall = sum(v["wall_time_s"] for run in runs for v in run["sizes"].values())
+            workers = sorted({run["workers"] for run in runs})
+            out[-1] += (f" The {len(runs)} runs recorded ({' or '.join(map(str, workers))} "
+                        f"worker{'s' if workers != [1] else ''}; per size under \"The "
+                        f"magnet-size design space\") solved {solved} paths and failed {failed} "
+                        f"in {wall:,.0f} s ({wall / 3600:.1f} h) of wall time: "
+                        f"{wall / max(solved, 1):.0f} s per solved path, failed attempts "
+                        "included.")
+        n_failed = len(final["failed_jobs"])
+        out[-1] += (f" The last whole `magtact doe` run ({final['workers']} worker"
+                    f"{'s' if final['workers'] != 1 else ''}, `{final['command']}`) found "
+                    f"{final['paths_cached']} of {final['paths_total']} paths in the cache, "
+                    f"solved {final['paths_computed']} and tried the {n_failed} missing ones "
+                    f"again in {final['wall_time_s']:,.0f} s (load "
+                    f"{final['load_average_at_start'][0]:.1f} at its start, "
+                    f"{final['load_average_at_end'][0]:.1f} at its end); its data set "
+                    f"(`{final['dataset']}`, complete = {final['complete']}) records "
+                    f"{final['path_job_wall_time_s_sum']:,.0f} s of solver time, the finished "
+                    "paths' and this run's failed attempts'.")
+        if n_failed:
+            parsed = [m.groupdict() for m in map(FAILED_PATH.match, final["failed_jobs"]) if m]
+            where = ""
+            if len(parsed) == n_failed:
+                heights = sorted({float(g["H_m"]) for g in parsed})
+                bases = sorted({float(g["H"]) for g in parsed})
+                where = (f" (magnets {' or '.join(f'{h:g}' for h in heights)} mm high, bases "
+                         f"H = {' and '.join(f'{h:g}' for h in bases)} mm)")
+            out += ["", f"The {n_failed} paths that fail{where} stop before full compression; "
+                    "the levels of t each reached are kept in the data set (NaN beyond):", ""]
+            out += table(["magnet [mm]", "H [mm]", "θ [rad]", "failed at t", "why",
+                          "levels kept up to t"], _failed_rows(final["failed_jobs"]))
+        else:
+            out += [""]
+    if "doe_resume" in r.files:
+        e = r["doe_resume"]
+        ref, stop, res = e["uninterrupted"], e["interrupted"], e["resumed"]
+        same = e["resumed_equals_uninterrupted"]
+        diff = max(same["max_relative_difference"].values())
+        msg = res["message"]
+        out += [f"**Resumption after an interruption** ({r.source('doe_resume')}, "
+                f"`bench/bench_doe_resume.py`, commit {e['commit'][:7]}, "
+                f"{e['machine']['cpus']} cores, load {e['load_average_at_start'][0]:.1f} at the "
+                f"start and {e['load_average_at_end'][0]:.1f} at the end). A small real study "
+                f"({e['paths_total']} structural paths on the coarse mesh) runs as "
+                f"`{e['magtact_doe']}` three times: to its end in a fresh cache "
+                f"({ref['wall_time_s']:.1f} s); in a second fresh cache, stopped "
+                f"{stop['signal_sent_after_s']:.1f} s in, as soon as the cache held "
+                f"{stop['paths_cached_at_signal']} path"
+                f"{'s' if stop['paths_cached_at_signal'] != 1 else ''}, "
+                f"by {' then '.join(stop['signals'])} to its process group"
+                f"{' (what Ctrl-C in a terminal sends)' if stop['signals'][0] == 'SIGINT' else ''}"
+                f", which ended it in {stop['exit_after_signal_s']:.1f} s with exit "
+                f"status {stop['exit_status']}, {stop['paths_cached_at_exit']} path"
+                f"{'s' if stop['paths_cached_at_exit'] != 1 else ''} cached, no data set "
+                f"written{'' if not stop['doe_nc_written'] else ' (yet a doe.nc was written)'} "
+                f"and {stop['processes_left_in_its_group'] or 'none'} of its processes left"
+                "; then the "
+                f"same command again on that cache.", ""]
+        rows = [["uninterrupted, fresh cache", f"{ref['wall_time_s']:.1f}",
+                 str(ref["message"]["paths_computed"]), str(ref["message"]["paths_cached"])],
+                ["interrupted", f"{stop['wall_time_s']:.1f}",
+                 f"{stop['paths_cached_at_exit']} (cached by the signal's end)", "0"],
+                ["resumed", f"{res['wall_time_s']:.1f}", str(msg["paths_computed"]),
+                 str(msg["paths_cached"])],
+                ["interrupted + resumed", f"{e['interrupted_plus_resumed_wall_time_s']:.1f} "
+                 f"({spct(e['overhead_over_uninterrupted'])} against the uninterrupted run)",
+                 "", ""]]
+        out += table(["run", "wall [s]", "paths solved", "paths from the cache"], rows)
+        counts = {msg["paths_computed"], res["dataset_attrs"]["run_paths_computed"],
+                  res["paths_added_to_the_cache"]}
+        out += [f"The resumed run solved {' / '.join(str(c) for c in sorted(counts))} "
+                f"path{'s' if counts != {1} else ''} by its message, its data set's "
+                "`run_paths_computed` and the entries it added to the cache"
+                + (" (all three agree)" if len(counts) == 1 else " (they disagree)")
+                + ": " + ("exactly the paths the interruption left missing, by cache key"
+                          if res["solved_exactly_the_missing_paths"]
+                          else "not exactly the paths the interruption left missing")
+                + f". Its data set is {'identical' if same['data_identical'] else 'not identical'}"
+                " to the uninterrupted one (`xarray` `identical`: the variables and coordinates "
+                "with their attributes; largest relative difference of a variable "
+                + (f"{diff:.1e}" if diff else "0: every number the same to the bit") + "); "
+                "of the global attributes, besides those that describe a run (its counters, "
+                "times and date), "
+                + _attributes_differing(same["attributes_differing"], ref, res,
+                                        res["solved_exactly_the_missing_paths"])
+                + ". " + _interruption_cost(e["overhead_over_uninterrupted"]), ""]
+    return out
+
+
 def document(folder: Path) -> str:
     r = Results(folder)
     lines = ["# Verification of magtact", "",
@@ -929,7 +1086,7 @@ def document(folder: Path) -> str:
     for section in (field_section, mechanics_section, fit_section, gamma_section,
                     mesh_effect_section, frontier_section, optimise_section, geometry_section,
                     broad_section, sizes_section, robust_section, publication_section,
-                    timing_section,
+                    timing_section, doe_cost_section,
                     speed_section):
         lines += section(r)
     return "\n".join(lines).rstrip() + "\n"
