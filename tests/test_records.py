@@ -218,3 +218,22 @@ def test_a_document_without_a_required_key_names_it(drop):
     with pytest.raises(RecordError, match="missing key") as info:
         from_json(Sample, doc, "sample.json")
     assert any(f"missing key {k!r}" in str(info.value) for k in required)
+
+
+def test_the_sensor_is_written_with_its_chip_setting_and_read_back():
+    from dataclasses import replace
+
+    from magtact import Sensor
+    from magtact.parts import ChipSetting
+    from magtact.study import load_study
+
+    sensor = replace(Sensor.of_study(load_study("magone"), 3e-3, 29.4e3),
+                     setting=ChipSetting(7, 2, 2, 3), standoff=2.4e-3)
+    doc = json.loads(json.dumps(sensor.to_json()))
+    assert list(doc) == ["H_mm", "G_kPa", "R_mm", "silicone", "magnet_R_m_mm",
+                         "magnet_H_m_mm", "magnet_grade", "M_z_A_per_m", "chip",
+                         "chip_setting", "standoff_mm"]
+    assert doc["chip_setting"] == {"gain_sel": 7, "res": 2, "osr": 2, "dig_filt": 3}
+    assert doc["standoff_mm"] == from_si(2.4e-3, "mm") and doc["G_kPa"] == 29.4
+    assert Sensor.from_json(doc) == sensor
+    assert Sensor.from_json(doc | {"chip_setting": {"gain_sel": "7"}}) is None

@@ -60,7 +60,7 @@ class Entry:
     optional: bool
     null_nan: bool
     omit: str | None
-    shape: str | None
+    shape: str | type | None
     inline: bool
     array: bool
     key_units: Mapping[str, str] | None
@@ -69,7 +69,7 @@ class Entry:
 
 def entry(key: str | None = None, unit: str = "", *, kind=float, levels=(),
           optional: bool = False, null_nan: bool = False, omit: str | None = None,
-          shape: str | None = None, inline: bool = False, array: bool = False,
+          shape: str | type | None = None, inline: bool = False, array: bool = False,
           key_units: Mapping[str, str] | None = None, default=MISSING,
           default_factory=MISSING, kw_only=MISSING, doc: str = ""):
     """A field of a record with its JSON key.
@@ -80,8 +80,8 @@ def entry(key: str | None = None, unit: str = "", *, kind=float, levels=(),
         The JSON key; default: the field's name, followed by ``_<unit>`` where ``unit`` is
         given.
     unit : str
-        The user unit of the numbers in the file (a key of :data:`magtact.study._units.SCALE`,
-        or one of :data:`SUFFIX_ONLY`); the field holds SI.
+        The user unit of the numbers in the file (a unit of :func:`magtact.study.to_si`, or
+        one of :data:`SUFFIX_ONLY`); the field holds SI.
     kind : type
         ``float``, ``int``, ``bool``, ``str``, ``object`` (any JSON value, as is) or a record
         type (a dataclass declared with :func:`entry`).
@@ -94,9 +94,10 @@ def entry(key: str | None = None, unit: str = "", *, kind=float, levels=(),
     omit : {None, "none", "empty"}
         Leave the key out of the document when the value is None (``"none"``) or empty
         (``"empty"``); a document without the key reads as the field's default.
-    shape : {None, "tuple", "dict"}
-        A nested record held as the tuple of its fields' values, or as the dict of its
-        fields' names and values (an empty dict is an empty JSON object).
+    shape : {None, "tuple", "dict"} or type
+        A nested record held as the tuple of its fields' values, as the dict of its fields'
+        names and values (an empty dict is an empty JSON object), or as another type made of
+        (and read through) the attributes that the record's fields name.
     inline : bool
         A nested record whose keys stand in the enclosing record's object (an optional one
         writes them as null and reads as None where all are null).
@@ -141,10 +142,13 @@ def keys(cls) -> tuple[str, ...]:
 
 # ---- units -----------------------------------------------------------------------------------
 def _check_unit(unit: str) -> None:
-    from .study._units import SCALE
+    from .study import to_si
 
-    if unit and unit not in SCALE and unit not in SUFFIX_ONLY and unit != "deg":
-        raise KeyError(f"unknown unit {unit!r} in a record declaration")
+    if unit and unit not in SUFFIX_ONLY:
+        try:
+            to_si(1.0, unit)
+        except KeyError:
+            raise KeyError(f"unknown unit {unit!r} in a record declaration") from None
 
 
 def user_value(si, unit: str):
@@ -211,14 +215,15 @@ def _empty(value) -> bool:
 
 
 def _inner_record(e: Entry, value):
-    """The nested record of a value held as a tuple or a dict (None stays None)."""
-    if value is None or e.shape is None or is_dataclass(value):
+    """The nested record of a value held as a tuple, a dict or another type (None stays
+    None)."""
+    if value is None or isinstance(value, e.kind):
         return value
     if e.shape == "tuple":
         return e.kind(*value)
-    if not value:
-        return None
-    return e.kind(**value)
+    if e.shape == "dict":
+        return e.kind(**value) if value else None
+    return e.kind(**{f.name: getattr(value, f.name) for f, _ in declared(e.kind)})
 
 
 def _write(value, e: Entry, depth: int, unit: str):
@@ -328,6 +333,8 @@ def _shaped(record, e: Entry):
         return tuple(getattr(record, f.name) for f in fields(record))
     if e.shape == "dict":
         return {f.name: getattr(record, f.name) for f in fields(record)}
+    if e.shape is not None:
+        return e.shape(**{f.name: getattr(record, f.name) for f in fields(record)})
     return record
 
 

@@ -15,11 +15,24 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from ._errors import MagtactError
+from ._records import entry, from_json_or_none, keys, to_json
 from .parts import SILICONES, ChipSetting
 from .study import MU0, Study, from_si
 
+
+@dataclass(frozen=True)
+class SettingRecord:
+    """A chip's setting (:class:`magtact.parts.ChipSetting`) as the files hold it: the fields
+    in the order of the MLX90393's datasheet."""
+
+    gain_sel: int | None = entry(kind=int, optional=True)
+    res: int | None = entry(kind=int, optional=True)
+    osr: int | None = entry(kind=int, optional=True)
+    dig_filt: int | None = entry(kind=int, optional=True)
+
+
 #: The chip setting fields in the order of the MLX90393's datasheet.
-SETTING_FIELDS = ("gain_sel", "res", "osr", "dig_filt")
+SETTING_FIELDS = keys(SettingRecord)
 
 
 @dataclass(frozen=True)
@@ -54,17 +67,18 @@ class Sensor:
     >>> result.sensor.changed(grade="N42", standoff=1e-3)           # doctest: +SKIP
     """
 
-    H: float
-    G: float
-    R: float
-    silicone: str
-    R_m: float
-    H_m: float
-    grade: str
-    M_z: float
-    chip: str
-    setting: ChipSetting | None
-    standoff: float
+    H: float = entry(unit="mm")
+    G: float = entry(unit="kPa")
+    R: float = entry(unit="mm")
+    silicone: str = entry(kind=str)
+    R_m: float = entry("magnet_R_m_mm", "mm")
+    H_m: float = entry("magnet_H_m_mm", "mm")
+    grade: str = entry("magnet_grade", kind=str)
+    M_z: float = entry(unit="A_per_m")
+    chip: str = entry(kind=str)
+    setting: ChipSetting | None = entry("chip_setting", kind=SettingRecord, shape=ChipSetting,
+                                        optional=True)
+    standoff: float = entry(unit="mm")
 
     @classmethod
     def of_study(cls, study: Study, H: float, G: float, M_z: float | None = None,
@@ -120,14 +134,12 @@ class Sensor:
 
     def to_json(self) -> dict:
         """The sensor in user units, each key naming its unit."""
-        return {"H_mm": from_si(self.H, "mm"), "G_kPa": from_si(self.G, "kPa"),
-                "R_mm": from_si(self.R, "mm"), "silicone": self.silicone,
-                "magnet_R_m_mm": from_si(self.R_m, "mm"),
-                "magnet_H_m_mm": from_si(self.H_m, "mm"), "magnet_grade": self.grade,
-                "M_z_A_per_m": self.M_z, "chip": self.chip,
-                "chip_setting": None if self.setting is None else {
-                    k: getattr(self.setting, k) for k in SETTING_FIELDS},
-                "standoff_mm": from_si(self.standoff, "mm")}
+        return to_json(self)
+
+    @classmethod
+    def from_json(cls, data) -> Sensor | None:
+        """The sensor :meth:`to_json` wrote, back in SI; None for anything else."""
+        return from_json_or_none(cls, data)
 
     def words(self) -> str:
         """The sensor in one line (mm, kPa, MA/m; 3 significant figures)."""
