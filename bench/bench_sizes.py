@@ -542,6 +542,53 @@ def interpolate() -> None:
                               "sizes": out})
 
 
+def blend() -> None:
+    """What magtact ships across sizes, measured on sizes it never saw: the shipped per-size
+    fits of three sizes of a magnet's height blended along the radius
+    (:func:`magtact.doe.bundled_blend`, :func:`magtact.metamodel.blended_metamodels`), the
+    held-out size left out of the sizes it may blend, against (a) that size's FE paths in
+    this DOE and (b) for the 5 x 2 mm magnet, the bundled MagOne data set (another DOE: H 3-7
+    mm at 5 levels, 5 theta levels). Largest |error| / the size's force range, per response,
+    over every point and over the points of t <= 0.5."""
+    import xarray as xr
+
+    import magtact
+    from magtact.doe import BROAD_SIZES, bundled_blend
+    from magtact.metamodel import blended_metamodels
+
+    with xr.open_dataset(_doe_file()) as ds:
+        table = sizes_table(ds.load())
+    checks = {}
+    for target, H_range in (("5x2", (2.0, 10.0)), ("5x1", (2.0, 10.0)), ("4x1", (2.0, 10.0))):
+        size = _size(target)
+        study = magtact.load("magone", design={"H_mm": list(H_range)},
+                             magnet={"size": target})
+        ds, parts = bundled_blend(study, tuple(s for s in BROAD_SIZES if s != target))
+        models = blended_metamodels(study, parts).models
+        own = {k: v[np.isclose(table["R_m"], size["R_m"]) & np.isclose(table["H_m"], size["H_m"])]
+               for k, v in table.items()}
+        name = f"{_label(size['R_m'], size['H_m'])}"
+        tabs = {f"{name}, this DOE's FE paths": own}
+        if target == "5x2":
+            tabs[f"{name}, the bundled MagOne data set"] = magone_table()
+        for label, tab in tabs.items():
+            entry = {"blended_from": {n: w for n, w, _, _ in parts}}
+            for resp in ("f_z", "f_r"):
+                pred = np.asarray(models[resp].value(tab["t"], tab["theta"], tab["H"]), float)
+                entry[resp] = _errors(pred, tab, resp)
+                low = tab["t"] <= 0.5
+                entry[f"{resp}, t <= 0.5"] = _errors(pred[low], {k: v[low] for k, v in
+                                                                   tab.items()}, resp)
+            checks[label] = entry
+            print(label, {k: round(v["max_error_of_range"], 4) for k, v in entry.items()
+                          if k != "blended_from"}, flush=True)
+    _update("blend", {"command": "python bench/bench_sizes.py blend",
+                      "shipped_sizes": list(BROAD_SIZES),
+                      "error_measure": "largest |error| over the size's points / that size's "
+                                       "range of the response (and rms / range)",
+                      "checks": checks})
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="step", required=True)
@@ -550,6 +597,7 @@ def main(argv=None) -> None:
     d.add_argument("--first", default="", help="sizes to solve first, e.g. 5x2,4x1")
     sub.add_parser("status")
     sub.add_parser("interpolate")
+    sub.add_parser("blend")
     sh = sub.add_parser("ship")
     sh.add_argument("sizes", help="finished sizes to ship, e.g. 3x2,5x2")
     s = sub.add_parser("surrogate")
@@ -564,6 +612,8 @@ def main(argv=None) -> None:
         status()
     elif args.step == "interpolate":
         interpolate()
+    elif args.step == "blend":
+        blend()
     elif args.step == "ship":
         ship(args.sizes.split(","))
     else:

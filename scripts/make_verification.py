@@ -913,6 +913,46 @@ def sizes_section(r: Results) -> list[str]:
                          fit])
     out += table(["model", "held-out data", "f_z max error / range", "f_r max error / range",
                   "fit f_z + f_r [s]"], rows)
+    return out + [""] + _interpolation_rows(d) + _blend_rows(d)
+
+
+def _interpolation_rows(d: dict) -> list[str]:
+    ip = d.get("interpolation")
+    if not ip:
+        return []
+    out = [f"**The data across sizes, without a model** (`{ip['command']}`): each size of the "
+           "DOE predicted from the others at the same (t, θ, H) points, along the radius by the "
+           "quadratic through the three other radii at its height, along the height by the "
+           "line through the two other heights at its radius (the middle height only); "
+           "largest |error| / the size's range.", ""]
+    rows = []
+    for name, e in ip["sizes"].items():
+        def cell(key):
+            return pct(e[key]["max_error_of_range"], 2) if key in e else "–"
+        rows.append([name, cell("f_z along the radius (quadratic)"),
+                     cell("f_r along the radius (quadratic)"),
+                     cell("f_z along the height (line)"), cell("f_r along the height (line)")])
+    out += table(["size", "f_z, radius", "f_r, radius", "f_z, height", "f_r, height"], rows)
+    return out + [""]
+
+
+def _blend_rows(d: dict) -> list[str]:
+    bl = d.get("blend")
+    if not bl:
+        return []
+    out = [f"**The shipped blend across sizes, on sizes it never saw** (`{bl['command']}`): "
+           "the shipped per-size fits of three sizes of the magnet's height blended along the "
+           "radius (what `magtact` answers for a magnet between the bundled sizes), the "
+           "held-out size left out of the sizes it may blend; largest |error| / the size's "
+           "force range, over every point and over t ≤ 0.5 (the targets: 2 % for f_z, 5 % for "
+           "f_r).", ""]
+    rows = []
+    for label, e in bl["checks"].items():
+        parts = ", ".join(f"{n} × {w:.3g}" for n, w in e["blended_from"].items())
+        rows.append([label, parts] + [pct(e[k]["max_error_of_range"], 2) for k in
+                                      ("f_z", "f_r", "f_z, t <= 0.5", "f_r, t <= 0.5")])
+    out += table(["held-out data", "blend of", "f_z", "f_r", "f_z, t ≤ 0.5", "f_r, t ≤ 0.5"],
+                 rows)
     return out + [""]
 
 

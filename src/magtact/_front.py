@@ -580,8 +580,34 @@ def models_for(study: Study, *, data: str | Path | None = None,
                 f"model files in {models}", None)
     from .doe import bundled_for, load_dataset
 
-    ds = load_dataset(data) if data is not None else bundled_for(study)
+    if data is not None:
+        ds = load_dataset(data)
+    else:
+        try:
+            ds = bundled_for(study)
+        except MagtactError as exc:
+            if refit:
+                raise
+            try:
+                return _blend(study)
+            except MagtactError as why:
+                raise MagtactError(f"{exc}. {str(why)[0].upper()}{str(why)[1:]}") from None
     selection = select_metamodels(study, ds, refit=refit, log=log)
+    return selection.models, selection.source, ds
+
+
+def _blend(study: Study):
+    """:func:`models_for` of a magnet between the bundled sizes of its height: the data sets
+    and shipped fits of three sizes blended along the radius (:func:`magtact.doe.
+    bundled_blend`; its error where none is)."""
+    from .doe import bundled_blend
+    from .metamodel import blended_metamodels
+
+    ds, parts = bundled_blend(study)
+    selection = blended_metamodels(study, parts)
+    if selection is None:
+        raise MagtactError("nor is it a blend of bundled sizes: a size around it has no "
+                           "shipped fit")
     return selection.models, selection.source, ds
 
 

@@ -3,6 +3,7 @@
 from ._cache import CacheCorruptWarning, CacheError, JobCache
 from ._dataset import (
     BROAD_SIZES,
+    bundled_blend,
     bundled_for,
     bundled_path,
     differences,
@@ -23,6 +24,6 @@ from ._domain import Domain, check_design, domain_of
 from ._run import DOEFailed, JobFailure, RunStats, run_doe
 
 __all__ = [
-    "DOEFailed", "JobCache", "bundled_for", "check_design", "load_bundled", "load_dataset",
-    "run_doe", "save_dataset",
+    "DOEFailed", "JobCache", "bundled_blend", "bundled_for", "check_design", "load_bundled",
+    "load_dataset", "run_doe", "save_dataset",
 ]

@@ -8,6 +8,7 @@ netCDF-safe: strings and numbers, structured values as JSON text).
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from datetime import UTC, datetime
@@ -271,13 +272,20 @@ def matches_study(ds, study) -> bool:
 def data_study(ds):
     """The study a data set was computed for (from its ``study_toml`` attribute), or a string
     saying why there is none."""
+    text = ds.attrs.get("computed_for_study_toml", ds.attrs.get("study_toml"))
+    if text is None:
+        return "its study (the data set records none)"
+    return _study_of_toml(text)
+
+
+@functools.lru_cache(maxsize=64)
+def _study_of_toml(text: str):
+    """:func:`data_study` of a data set's study text (the same text, the same study: a
+    frozen value, read once per process)."""
     import tomllib
 
     from ..study import study_from_dict
 
-    text = ds.attrs.get("computed_for_study_toml", ds.attrs.get("study_toml"))
-    if text is None:
-        return "its study (the data set records none)"
     try:
         # only the sections a DOE depends on: settings added since the data set was written
         # (sensitivity, optimisation, ...) take their defaults
@@ -431,6 +439,70 @@ def _outline(name: str) -> xr.Dataset:
     # have it look for (and import) dask to tell what kind of array it was given
     coords = {k: pd.Index(v, name=k) if np.ndim(v) == 1 else v for k, v in coords.items()}
     return xr.Dataset(coords=coords, attrs=attrs)
+
+
+def radius_weights(radii, R_m: float) -> np.ndarray:
+    """The weights of the quadratic through three ``radii`` at ``R_m`` (Lagrange): a value at
+    ``R_m`` is the weighted sum of the values at the radii, derivatives alike."""
+    r = np.asarray(radii, dtype=float)
+    return np.array([np.prod([(R_m - r[m]) / (r[k] - r[m]) for m in range(r.size) if m != k])
+                     for k in range(r.size)])
+
+
+def bundled_blend(study, sizes: tuple[str, ...] = BROAD_SIZES) -> tuple[xr.Dataset, tuple]:
+    """The magnet of ``study`` as a blend along the radius of the broad bundled data sets of
+    its height: the three sizes of the same magnet height whose data describe ``study`` with
+    their magnet (:meth:`magtact.study.Study.sized`), their radii nearest ``study``'s and
+    around it, weighted by :func:`radius_weights` (docs/method.md §10: along the radius the
+    forces interpolate within 2 % of their range on the magnet-size DOE; along the height they
+    do not). Returns the blended data set (forces, displacements and fields, each the weighted
+    sum; rescaled to the study's G levels and magnetisation) and the parts ``(size name,
+    weight, data set, study at that size)``. ``sizes``: the broad sizes it may blend.
+
+    Raises
+    ------
+    MagtactError
+        Saying why no blend answers the study: its magnet's height is none of the bundled
+        sizes', or fewer than three sizes of that height describe it around its radius.
+    """
+    from ..parts import SIZES
+
+    heights = sorted({SIZES[size].H_m for size in sizes})
+    mine = f"{from_si(2 * study.magnet.R_m, 'mm'):.3g} × {from_si(study.magnet.H_m, 'mm'):.3g} mm"
+    if not any(np.isclose(h, study.magnet.H_m, rtol=1e-9) for h in heights):
+        raise MagtactError(
+            f"nor is the {mine} magnet a blend of bundled sizes: its height is none of theirs ("
+            + ", ".join(f"{from_si(h, 'mm'):.3g}" for h in heights) + " mm), and between "
+            "those heights the forces do not interpolate (docs/method.md §10)")
+    near = []
+    for size in sizes:
+        z = SIZES[size]
+        if not np.isclose(z.H_m, study.magnet.H_m, rtol=1e-9):
+            continue
+        sub = study.sized(size)
+        if bundled_path(f"broad_{size}_doe.nc").is_file() and \
+                not differences(_outline(f"broad_{size}_doe.nc"), sub):
+            near.append((abs(z.R_m - study.magnet.R_m), z.R_m, size, sub))
+    near = sorted(near)[:3]
+    radii = [r for _, r, _, _ in near]
+    if len(near) < 3 or not min(radii) < study.magnet.R_m < max(radii):
+        held = ", ".join(size for _, _, size, _ in sorted(near, key=lambda n: n[1])) or "none"
+        raise MagtactError(
+            f"nor is the {mine} magnet a blend of bundled sizes: a blend along the radius "
+            "takes three sizes of its height around it that describe the study (those that "
+            f"do: {held})")
+    w = radius_weights(radii, study.magnet.R_m)
+    parts = tuple((size, float(wk), rescaled_for(load_bundled(f"broad_{size}_doe.nc"), sub), sub)
+                  for wk, (_, _, size, sub) in zip(w, near, strict=True))
+    blend = sum(wk * ds[list(ds.data_vars)] for _, wk, ds, _ in parts)
+    blend.attrs = dict(parts[0][2].attrs) | {
+        "study_toml": study.to_toml(),
+        "blended_from": json.dumps({size: wk for size, wk, _, _ in parts}),
+        "blending": "the weighted sum along the magnet's radius of the bundled data sets of "
+                    "three sizes of its height (the quadratic through their radii)"}
+    for name in blend.data_vars:
+        blend[name].attrs = dict(parts[0][2][name].attrs)
+    return blend, parts
 
 
 def bundled_for(study, advice: str | None = None):

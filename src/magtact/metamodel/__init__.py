@@ -30,7 +30,7 @@ from ._prefitted import (
     prefitted_dir,
 )
 from ._quality import POOR_OVER_RANGE, POOR_R2, FitQuality, fit_quality, fit_quality_rows
-from ._select import Selection, select_metamodels
+from ._select import Selection, blended_metamodels, select_metamodels
 from ._symbols import H, feature_jacobian, features, p, q, q_hessian, t, theta
 
 __all__ = [

@@ -38,6 +38,8 @@ class Selection:
     shipped: Path | None
     fit: FitResult | None
     field_scale: float = 1.0
+    #: (size name, weight) of the shipped fits blended along the magnet's radius (empty: none).
+    blend: tuple[tuple[str, float], ...] = ()
 
     @property
     def quality(self) -> FitQuality:
@@ -53,6 +55,10 @@ class Selection:
     @property
     def source(self) -> str:
         """In words: the shipped fit or a new fit (and the verdict when the fit is poor)."""
+        if self.blend:
+            parts = ", ".join(f"{name} mm × {w:.3g}" for name, w in self.blend)
+            return ("the shipped fits of the magnet sizes around it blended along the "
+                    f"magnet's radius ({parts})")
         text = ("the fit shipped with magtact for this data set and these settings"
                 if self.shipped is not None else "fitted now to the data set")
         if self.shipped is not None and self.field_scale != 1.0:
@@ -72,3 +78,33 @@ def select_metamodels(study: Study, ds, *, refit: bool = False,
         log("fitting the metamodels (no shipped fit matches this data set and these settings)")
     fit = fit_models(ds, study, log=log)
     return Selection(fit.model_set(study), None, fit)
+
+
+def blended_metamodels(study: Study, parts) -> Selection | None:
+    """The models of ``study``'s magnet blended along the radius from the shipped fits of the
+    sizes around it (``parts``: :func:`magtact.doe.bundled_blend`'s): f_r and f_z the weighted
+    sums of the parts' force models (both forms, so values and derivatives blend alike), the
+    field the exact one of ``study``'s magnet. None where a part has no shipped fit."""
+    from ._exact_field import ExactField
+    from ._model import Metamodel
+
+    sets = []
+    for _, _, ds, sub in parts:
+        found = find_shipped(sub, ds)
+        if found is None:
+            return None
+        sets.append(shipped_models(found[0], sub, ds, found[1]))
+    weights = [w for _, w, _, _ in parts]
+    heaviest = int(max(range(len(weights)), key=lambda k: abs(weights[k])))
+    blend = tuple((name, w) for name, w, _, _ in parts)
+
+    def blended(name):
+        ms = [m[name] for m in sets]
+        info = dict(ms[heaviest].info) | {"blended_from": dict(blend)}
+        return Metamodel(name=name, units=ms[0].units, info=info,
+                         expr=sum(w * m.expr for w, m in zip(weights, ms, strict=True)),
+                         expr_pq=sum(w * m.expr_pq for w, m in zip(weights, ms, strict=True)))
+
+    models = ModelSet(B_r=ExactField(study, "B_r"), B_z=ExactField(study, "B_z"),
+                      f_r=blended("f_r"), f_z=blended("f_z"))
+    return Selection(models, None, None, 1.0, blend)

@@ -373,8 +373,10 @@ def yield_factors(models: ModelSet, answer, target: float, box: ToleranceBox | N
         sat = np.where(np.isinf(fig["F_sat"]), 1.0, fig["F_sat"] / fig["F_sat"][0])[1:]
     carry = fig["F_z_max"][1:] / fig["F_z_max"][0]
     q = 1.0 - target
+    # where that many units saturate at rest, no nominal part reads for the target: inf
+    low = float(np.quantile(sat, q))
     return WorstFactors(1.0, min(1.0, float(np.quantile(carry, q))),
-                        max(1.0, 1.0 / float(np.quantile(sat, q))))
+                        max(1.0, 1.0 / low) if low > 0 else math.inf)
 
 
 __all__ = ["RobustRequirement", "RobustVerdict", "WorstFactors", "robust_verdict",
