@@ -19,6 +19,7 @@ from magtact._records import (
     check_declarations,
     entry,
     from_json,
+    from_json_lenient,
     from_json_or_none,
     keys,
     si_value,
@@ -237,3 +238,55 @@ def test_the_sensor_is_written_with_its_chip_setting_and_read_back():
     assert doc["standoff_mm"] == from_si(2.4e-3, "mm") and doc["G_kPa"] == 29.4
     assert Sensor.from_json(doc) == sensor
     assert Sensor.from_json(doc | {"chip_setting": {"gain_sel": "7"}}) is None
+
+
+# ---- lenient reading --------------------------------------------------------------------------
+def test_a_lenient_read_takes_what_the_document_gives_and_defaults_for_the_rest():
+    doc = _doc()
+    doc.pop("count")
+    doc |= {"H_mm": "3", "title": 4, "note": [1]}
+    doc["parts"][1]["force_mN"] = "x"
+    s = from_json_lenient(Sample, doc)
+    assert s.count is None and s.H is None  # missing (no default) and of another type
+    assert s.title == "Sample" and s.note == [1]  # the default, and any JSON as is
+    assert s.ok is True and s.pair == (1e-3, 2e-3) and s.M_z == 1.1e6
+    assert s.parts[0] == Part("a", 1e-3) and s.parts[1] == Part("b", None)
+    with pytest.raises(RecordError, match="title: expected text"):
+        from_json(Sample, doc)  # the strict reader refuses the same document
+
+
+def test_a_lenient_read_of_an_inline_record_reads_its_keys_one_by_one():
+    doc = _doc()
+    doc.pop("pair_y_mm")
+    assert from_json_lenient(Sample, doc).pair == (1e-3, None)
+    doc["pair_x_mm"] = None
+    assert from_json_lenient(Sample, doc).pair is None  # every key null or missing
+
+
+@pytest.mark.parametrize("doc", [None, [], "x", 3.0])
+def test_a_lenient_read_of_no_object_is_none(doc):
+    assert from_json_lenient(Sample, doc) is None
+
+
+@dataclass(frozen=True)
+class WithOptional:
+    a: float = entry(unit="mm")
+    b: float | None = entry(unit="mm", optional=True, omit="none", default=None, kw_only=True)
+    c: str = entry(kind=str)
+
+
+@dataclass(frozen=True)
+class Holder:
+    inner: WithOptional = entry(kind=WithOptional, inline=True)
+    d: int = entry(kind=int)
+
+
+def test_an_inline_record_without_its_omitted_keys_reads_strictly():
+    doc = to_json(Holder(WithOptional(1e-3, c="x"), 2))
+    assert doc == {"a_mm": 1.0, "c": "x", "d": 2}
+    assert from_json(Holder, doc) == Holder(WithOptional(1e-3, c="x"), 2)
+    doc = to_json(Holder(WithOptional(1e-3, b=2e-3, c="x"), 2))
+    assert doc == {"a_mm": 1.0, "b_mm": 2.0, "c": "x", "d": 2}
+    assert from_json(Holder, doc).inner.b == 2e-3
+    with pytest.raises(RecordError, match=r"missing key 'c' \(WithOptional\)"):
+        from_json(Holder, {"a_mm": 1.0, "d": 2}, "holder.json")

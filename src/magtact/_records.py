@@ -14,7 +14,9 @@ written again is the same file.
 Reading is strict: a document that is not the record (a missing key, a value of another type)
 raises :class:`RecordError`, whose message names the file or record, the key's path in the
 document and what was found. A reader that takes a damaged file for none uses
-:func:`from_json_or_none`.
+:func:`from_json_or_none`. A reader that shows what a partial or forged file holds, field by
+field, uses :func:`from_json_lenient`: each value the document gives in its declared shape is
+read, every other field takes its default.
 
 Declarations
 ------------
@@ -287,6 +289,41 @@ def from_json_or_none(cls: type[R], doc, where: str | None = None) -> R | None:
         return None
 
 
+def from_json_lenient(cls: type[R], doc) -> R | None:
+    """The record of type ``cls`` read field by field from a document that may be partial or
+    forged.
+
+    Each field whose key ``doc`` gives with a value of the declared shape is read as
+    :func:`from_json` reads it (a nested record leniently too); a field whose key is missing or
+    whose value has another shape takes its default, and a field without a default None.
+
+    Parameters
+    ----------
+    cls : type
+        A record type declared with :func:`entry`.
+    doc : object
+        A parsed JSON document.
+
+    Returns
+    -------
+    cls or None
+        None where ``doc`` is not a JSON object or the values read make no ``cls``.
+    """
+    try:
+        return _record(cls, doc, cls.__name__, "", lenient=True)
+    except RecordError:
+        return None
+
+
+def _default(f):
+    """The default of a dataclass field (None where it has none)."""
+    if f.default is not MISSING:
+        return f.default
+    if f.default_factory is not MISSING:
+        return f.default_factory()
+    return None
+
+
 def _fail(where: str, path: str, problem: str):
     raise RecordError(f"{where}: {path or 'the document'}: {problem}")
 
@@ -296,35 +333,46 @@ def _shown(value) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _record(cls, doc, where: str, path: str):
+def _record(cls, doc, where: str, path: str, lenient: bool = False):
     if not isinstance(doc, dict):
         _fail(where, path, f"expected a JSON object ({cls.__name__}), got {_shown(doc)}")
     values = {}
     for f, e in declared(cls):
-        if e.inline:
-            values[f.name] = _inline(f, e, doc, where, path)
-            continue
-        key = key_of(f, e)
-        here = f"{path}.{key}" if path else key
-        if key not in doc:
-            if f.default is MISSING and f.default_factory is MISSING:
-                _fail(where, path, f"missing key {key!r} ({cls.__name__})")
-            continue
-        values[f.name] = _read(doc[key], e, 0, e.unit, where, here)
+        try:
+            if e.inline:
+                values[f.name] = _inline(e, doc, where, path, lenient)
+                continue
+            key = key_of(f, e)
+            here = f"{path}.{key}" if path else key
+            if key not in doc:
+                if not _has_default(f):
+                    _fail(where, path, f"missing key {key!r} ({cls.__name__})")
+                continue
+            values[f.name] = _read(doc[key], e, 0, e.unit, where, here, lenient)
+        except RecordError:
+            if not lenient:
+                raise
+            values[f.name] = _default(f)
     try:
         return cls(**values)
     except (TypeError, ValueError) as exc:
         _fail(where, path, f"not a {cls.__name__}: {exc}")
 
 
-def _inline(f, e: Entry, doc: dict, where: str, path: str):
+def _has_default(f) -> bool:
+    return f.default is not MISSING or f.default_factory is not MISSING
+
+
+def _inline(e: Entry, doc: dict, where: str, path: str, lenient: bool = False):
     inner = keys(e.kind)
-    missing = [k for k in inner if k not in doc]
-    if missing:
+    required = {key for g, d in declared(e.kind) if not _has_default(g)
+                for key in (keys(d.kind) if d.inline else (key_of(g, d),))}
+    missing = [k for k in inner if k not in doc and k in required]
+    if missing and not lenient:
         _fail(where, path, f"missing key {missing[0]!r} ({e.kind.__name__})")
-    if e.optional and all(doc[k] is None for k in inner):
+    if e.optional and all(doc.get(k) is None for k in inner):
         return None
-    record = _record(e.kind, {k: doc[k] for k in inner}, where, path)
+    record = _record(e.kind, {k: doc[k] for k in inner if k in doc}, where, path, lenient)
     return _shaped(record, e)
 
 
@@ -341,7 +389,8 @@ def _shaped(record, e: Entry):
 _KINDS = {float: "a number", int: "an integer", bool: "true or false", str: "text"}
 
 
-def _read(value, e: Entry, depth: int, unit: str, where: str, path: str):
+def _read(value, e: Entry, depth: int, unit: str, where: str, path: str,
+          lenient: bool = False):
     if value is None and e.optional and depth == 0:
         return None
     if depth < len(e.levels):
@@ -352,11 +401,11 @@ def _read(value, e: Entry, depth: int, unit: str, where: str, path: str):
             out = {}
             for k, v in value.items():
                 name, u = _name_unit(k, units, unit)
-                out[name] = _read(v, e, depth + 1, u, where, f"{path}.{k}")
+                out[name] = _read(v, e, depth + 1, u, where, f"{path}.{k}", lenient)
             return out
         if not isinstance(value, list):
             _fail(where, path, f"expected a JSON array, got {_shown(value)}")
-        items = [_read(v, e, depth + 1, unit, where, f"{path}[{i}]")
+        items = [_read(v, e, depth + 1, unit, where, f"{path}[{i}]", lenient)
                  for i, v in enumerate(value)]
         if e.array and depth == 0:
             import numpy as np
@@ -366,7 +415,7 @@ def _read(value, e: Entry, depth: int, unit: str, where: str, path: str):
     if is_dataclass(e.kind):
         if e.shape == "dict" and value == {}:
             return {}
-        return _shaped(_record(e.kind, value, where, path), e)
+        return _shaped(_record(e.kind, value, where, path, lenient), e)
     if e.kind is object:
         return value
     if e.kind is float:
