@@ -99,3 +99,23 @@ def test_the_card_lists_the_best_sensor_of_each_size(magone_design, magone_budge
         if note:
             assert text == note
     assert "nominal best, ⌀" in str(card)
+
+
+def test_the_report_shows_the_parts_compared(magone_design, magone_budgets, tmp_path):
+    import html
+    import re
+
+    from magtact._outputs import write_results_into
+    from magtact.report._html import build_report
+
+    folder = tmp_path / "res"
+    (folder / "optimise").mkdir(parents=True)
+    write_results_into(magone_design, folder / "optimise", figures=False, explorer=False,
+                       budgets=magone_budgets)
+    text = build_report(folder).read_text(encoding="utf-8")
+    card = magtact.card(magone_design, magone_budgets)
+    for key in ("magnet_sizes", "silicones"):
+        table = re.search(rf'<table class="choices" id="{key}">(.*?)</table>', text, re.S)
+        assert table is not None, key
+        rows = re.findall(r"<tr><th[^>]*>(.*?)</th><td[^>]*>(.*?)</td></tr>", table.group(1))
+        assert [html.unescape(k) for k, _ in rows] == [k for k, _ in card[key]]

@@ -86,7 +86,8 @@ ul.verdict-list{list-style:none;padding-left:0;margin:.3em 0}
 ul.verdict-list li{padding:.25em .5em;margin:.2em 0;border-left:5px solid #999}
 li.met{border-color:#2a8a3e!important;background:#eef8f0}
 li.unmet{border-color:#c0392b!important;background:#fcecea}
-table.parts td,table.parts th{text-align:left}
+table.parts td,table.parts th,table.choices td,table.choices th{text-align:left}
+#choices h3{margin:.6em 0 .2em;font-size:1em}
 .glance{display:grid;grid-template-columns:repeat(auto-fit,minmax(420px,1fr));gap:1em}
 .glance figure img{max-width:100%;max-height:440px}.glance .span{grid-column:1/-1}
 @media print{.glance{grid-template-columns:1fr 1fr}.glance figure img{max-height:300px}}
@@ -213,6 +214,7 @@ def _document_parts(folder: Path, shown: Path | None, evidence, interrupted
                      "section compares the model with a generated example data set (model plus "
                      "noise, drift and scatter), not with measurements.</div>")
     parts.append(_front(card))
+    parts.append(_choices(card))
     parts.append(_glance(folder, run_id))
     if optimise is not None:
         parts.append(explorer_section(optimise))
@@ -315,6 +317,26 @@ def _front(card: dict | None) -> str:
         right = (f'<div id="parts"><h2>Parts</h2><table class="parts">{rows}</table></div>'
                  if parts else "")
     return f'<section class="front">{left}{right}</section>'
+
+
+def _choices(card: dict | None) -> str:
+    """The parts the sensor problem chose among: the best sensor of each magnet size and of
+    each silicone, as the card lists them (nothing where it chose from one of each)."""
+    if not isinstance(card, dict):
+        return ""
+    tables = []
+    for key, title in (("magnet_sizes", "Best sensor of each magnet size"),
+                       ("silicones", "Best sensor of each silicone")):
+        rows = [r for r in card.get(key) or [] if isinstance(r, (list, tuple)) and len(r) == 2]
+        if rows:
+            body = "".join(f'<tr><th class="l">{_inline(str(k))}</th><td class="l">'
+                           f"{_inline(str(v))}</td></tr>" for k, v in rows)
+            tables.append(f'<h3>{title}</h3><table class="choices" id="{key}">'
+                          f"{body}</table>")
+    if not tables:
+        return ""
+    return ('<section id="choices"><h2>The parts compared</h2>' + "".join(tables)
+            + "</section>")
 
 
 def _glance(folder: Path, run_id: str | None) -> str:
