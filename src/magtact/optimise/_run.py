@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import time
 import warnings
 from collections.abc import Callable
@@ -12,10 +11,11 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import MagtactError
-from .._files import json_dict, json_number, json_text, significant, write_csv
+from .._files import significant, write_csv, write_json
+from .._records import declared, entry, from_json_lenient, keys, to_json
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
-from ..study import Study, from_si, to_si
+from ..study import Study, from_si
 from ._conditioning import shear_bound_conditioning
 from ._design import DesignMaps, DesignResult, as_responses, design_maps
 from ._pareto import (
@@ -48,6 +48,160 @@ class Timings:
     def total(self) -> float:
         """Sum of the parts [s]."""
         return self.constraints + self.sweep + self.nsga2 + self.decision + self.maps
+
+
+@dataclass(frozen=True)
+class TimingsRecord:
+    """:class:`Timings` as ``design.json``'s ``timings_s`` holds it (seconds), with the
+    total."""
+
+    constraints: float = entry()
+    sweep: float = entry()
+    nsga2: float = entry()
+    decision: float = entry()
+    maps: float = entry()
+    total: float = entry()
+
+
+@dataclass(frozen=True)
+class Extrema:
+    """A design's variables and force extrema as the files hold them (the leading columns of
+    ``pareto.csv``, the leading keys of a design in ``design.json`` and ``chosen.json``), in SI.
+
+    ``M_z`` [A/m] is None (left out of the file) where it is not a design variable; the
+    objectives ``Gamma_*`` [N/T] hold σ_F [N] where the study's objective is ``"sigma_F"``.
+    """
+
+    H: float = entry(unit="mm")
+    G: float = entry(unit="kPa")
+    M_z: float | None = entry(unit="A_per_m", optional=True, omit="none", default=None,
+                              kw_only=True)
+    Gamma_r_max: float = entry(unit="N_per_T")
+    Gamma_z_max: float = entry(unit="N_per_T")
+    F_r_min: float = entry(unit="N")
+    F_z_max: float = entry(unit="N")
+
+
+@dataclass(frozen=True)
+class DesignRecord(Extrema):
+    """A design (:class:`DesignResult`) in the files: its extrema, the stable region's bounds
+    t_m [1], θ_m [rad] and why the design is degenerate (None where it is not)."""
+
+    t_m: float = entry()
+    theta_m: float = entry(unit="rad")
+    degenerate: str | None = entry(kind=str, optional=True)
+
+
+@dataclass(frozen=True)
+class ChoiceRecord(DesignRecord):
+    """A chosen design (:class:`Choice`) in ``design.json``: the design, its margins to the
+    force constraints [N] and the active constraints."""
+
+    g_r: float = entry(unit="N")
+    g_z: float = entry(unit="N")
+    active_constraints: tuple[str, ...] = entry(kind=str, levels=("list",))
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The force constraints F_r,c, F_z,c [N] and where they come from."""
+
+    F_r_c: float = entry(unit="N")
+    F_z_c: float = entry(unit="N")
+    source: str = entry(kind=str)
+
+
+@dataclass(frozen=True)
+class ConstraintsRecord(Limits):
+    """The force constraints (:class:`ForceConstraints`) in ``design.json``, with the reference
+    design they were taken from (None: given as values)."""
+
+    reference: DesignRecord | None = entry(kind=DesignRecord, optional=True)
+
+
+@dataclass(frozen=True)
+class ParetoRecord:
+    """The Pareto set's size and how it was found, in ``design.json``."""
+
+    points: int = entry(kind=int)
+    seed: int = entry(kind=int)
+    population: int = entry(kind=int)
+    generations: int = entry(kind=int)
+    evaluations: int = entry(kind=int)
+    gap_to_exact_front: float = entry()
+
+
+@dataclass(frozen=True)
+class DesignFile:
+    """``design.json``: the optimisation stage's answer (:meth:`Optimisation.write`)."""
+
+    study: str = entry(kind=str)
+    sensitivity_definition: str = entry(kind=str)
+    objective: str = entry(kind=str)
+    objective_note: str = entry(kind=str)
+    constraints: ConstraintsRecord = entry(kind=ConstraintsRecord)
+    chosen: ChoiceRecord = entry(kind=ChoiceRecord)
+    exact_reduction_choice: ChoiceRecord = entry(kind=ChoiceRecord)
+    pareto: ParetoRecord = entry(kind=ParetoRecord)
+    timings: TimingsRecord = entry("timings_s", kind=TimingsRecord)
+
+
+@dataclass(frozen=True)
+class ParetoRow(Extrema):
+    """A row of ``pareto.csv``: a design of the Pareto set and its margins [N]."""
+
+    g_r: float = entry(unit="N")
+    g_z: float = entry(unit="N")
+
+
+@dataclass(frozen=True)
+class ReductionRow:
+    """A row of ``reduction.csv``: a height of the exact reduction, its smallest feasible
+    G*(H) and M_z*(H) (None where M_z is not a design variable), the objectives and extrema
+    along it and whether it is on the front."""
+
+    H: float = entry(unit="mm")
+    G_star: float = entry(unit="kPa")
+    M_z_star: float | None = entry(unit="A_per_m", optional=True, omit="none", default=None,
+                                   kw_only=True)
+    Gamma_r_max: float = entry(unit="N_per_T")
+    Gamma_z_max: float = entry(unit="N_per_T")
+    F_r_min: float = entry(unit="N")
+    F_z_max: float = entry(unit="N")
+    t_m: float = entry()
+    theta_m: float = entry(unit="rad")
+    on_front: int = entry(kind=int)
+
+
+@dataclass(frozen=True)
+class ShearBoundRow:
+    """A row of ``shear_bound.csv``: at a height, t_m, the smallest t within 1 % of the range
+    of F_r's minimum, and F_z,max's relative drop between the two."""
+
+    H: float = entry(unit="mm")
+    t_m: float = entry()
+    t_within_1_percent: float = entry()
+    dF_z_rel: float = entry("F_z_max_drop_percent", "pct")
+
+
+def _table(path: Path, cls, rows) -> Path:
+    """Write records of type ``cls`` as the rows of a CSV table, their keys as the header
+    (a key left out of the records, left out of the table)."""
+    docs = [to_json(r) for r in rows]
+    header = list(docs[0]) if docs else list(keys(cls))
+    return write_csv(path, header, ([d[k] for k in header] for d in docs),
+                     cell=significant(12))
+
+
+def _design_record(d, cls=DesignRecord, **more):
+    """The record ``cls`` (:class:`DesignRecord` or one that extends it) of a design ``d``
+    (a :class:`DesignResult`) with the further fields ``more``."""
+    return cls(**{f.name: getattr(d, f.name) for f, _ in declared(DesignRecord)}, **more)
+
+
+def _choice_record(c: Choice) -> ChoiceRecord:
+    return _design_record(c.design, ChoiceRecord, g_r=c.g_r, g_z=c.g_z,
+                          active_constraints=tuple(c.active))
 
 
 #: Relative distance of NSGA-II's Pareto set from the exact front above which the two answers
@@ -117,88 +271,59 @@ class Optimisation:
             files += figures(self, out)
         return files
 
+    def record(self) -> DesignFile:
+        """``design.json``'s record of this optimisation."""
+        c, p, study = self.constraints, self.pareto, self.study
+        reference = None if c.reference is None else _design_record(c.reference)
+        return DesignFile(
+            study.name, study.sensitivity.definition, study.optimise.objective,
+            OBJECTIVE_NOTE[study.optimise.objective],
+            ConstraintsRecord(c.F_r_c, c.F_z_c, c.source, reference),
+            _choice_record(self.choice), _choice_record(self.reduction_choice),
+            ParetoRecord(int(p.H.size), p.seed, study.optimise.population, p.generations,
+                         p.evaluations, self.gap),
+            TimingsRecord(**{f.name: getattr(self.timings, f.name)
+                             for f, _ in declared(TimingsRecord)}))
+
     def _write_json(self, path: Path) -> Path:
-        c = self.constraints
-        doc = {
-            "study": self.study.name,
-            "sensitivity_definition": self.study.sensitivity.definition,
-            "objective": self.study.optimise.objective,
-            "objective_note": OBJECTIVE_NOTE[self.study.optimise.objective],
-            "constraints": {
-                "F_r_c_N": c.F_r_c, "F_z_c_N": c.F_z_c, "source": c.source,
-                "reference": None if c.reference is None else _design_json(c.reference),
-            },
-            "chosen": _choice_json(self.choice),
-            "exact_reduction_choice": _choice_json(self.reduction_choice),
-            "pareto": {"points": int(self.pareto.H.size), "seed": self.pareto.seed,
-                       "population": self.study.optimise.population,
-                       "generations": self.pareto.generations,
-                       "evaluations": self.pareto.evaluations,
-                       "gap_to_exact_front": self.gap},
-            "timings_s": {"constraints": self.timings.constraints, "sweep": self.timings.sweep,
-                          "nsga2": self.timings.nsga2, "decision": self.timings.decision,
-                          "maps": self.timings.maps, "total": self.timings.total},
-        }
-        path.write_text(json.dumps(doc, indent=2) + "\n")
-        return path
+        return write_json(path, to_json(self.record()), indent=2)
 
     def _write_pareto(self, path: Path) -> Path:
         p = self.pareto
         g_r, g_z = self.constraints.margins(p.F_r_min, p.F_z_max)
-        cols = [from_si(p.H, "mm"), from_si(p.G, "kPa"), *self._M_z(p.M_z), p.Gamma_r_max,
-                p.Gamma_z_max, p.F_r_min, p.F_z_max, g_r, g_z]
-        return _csv(path, ["H_mm", "G_kPa", *self._M_z(["M_z_A_per_m"]),
-                           "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T", "F_r_min_N",
-                           "F_z_max_N", "g_r_N", "g_z_N"], zip(*cols, strict=True))
+        M_z = p.M_z if self.study.M_z_variable else [None] * p.H.size
+        return _table(path, ParetoRow, (
+            ParetoRow(*row[:2], *row[3:], M_z=row[2])
+            for row in zip(p.H, p.G, M_z, p.Gamma_r_max, p.Gamma_z_max, p.F_r_min, p.F_z_max,
+                           g_r, g_z, strict=True)))
 
     def _write_reduction(self, path: Path) -> Path:
         r = self.reduction
         t = r.table
-        cols = [from_si(r.H, "mm"), from_si(r.G_star, "kPa"), *self._M_z(r.M_z_star), r.Gamma_r,
-                r.Gamma_z, r.G_star * t.f_r_min, r.G_star * t.f_z_max, t.t_m, t.theta_m,
-                r.front.astype(int)]
-        return _csv(path, ["H_mm", "G_star_kPa", *self._M_z(["M_z_star_A_per_m"]),
-                           "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T", "F_r_min_N",
-                           "F_z_max_N", "t_m", "theta_m_rad", "on_front"], zip(*cols, strict=True))
-
-    def _M_z(self, column) -> list:
-        """``[column]`` where M_z is a design variable, else nothing."""
-        return [column] if self.study.M_z_variable else []
-
-
-def _csv(path: Path, header: list[str], rows) -> Path:
-    return write_csv(path, header, rows, cell=significant(12))
+        M_z = r.M_z_star if self.study.M_z_variable else [None] * r.H.size
+        return _table(path, ReductionRow, (
+            ReductionRow(*row[:2], *row[3:], M_z_star=row[2])
+            for row in zip(r.H, r.G_star, M_z, r.Gamma_r, r.Gamma_z, r.G_star * t.f_r_min,
+                           r.G_star * t.f_z_max, t.t_m, t.theta_m, r.front.astype(int),
+                           strict=True)))
 
 
 def design_json(d: DesignResult) -> dict:
-    """A design's variables and extrema in user units, each key naming its unit."""
-    return _design_json(d)
-
-
-def _design_json(d: DesignResult) -> dict:
-    out = {"H_mm": from_si(d.H, "mm"), "G_kPa": from_si(d.G, "kPa")}
-    if d.M_z is not None:  # a design variable
-        out["M_z_A_per_m"] = from_si(d.M_z, "A_per_m")
-    return out | {"Gamma_r_max_N_per_T": d.Gamma_r_max, "Gamma_z_max_N_per_T": d.Gamma_z_max,
-                  "F_r_min_N": d.F_r_min, "F_z_max_N": d.F_z_max, "t_m": d.t_m,
-                  "theta_m_rad": d.theta_m, "degenerate": d.degenerate}
-
-
-def _choice_json(c: Choice) -> dict:
-    return {**_design_json(c.design), "g_r_N": c.g_r, "g_z_N": c.g_z,
-            "active_constraints": list(c.active)}
+    """A design's variables and extrema in user units, each key naming its unit
+    (:class:`DesignRecord`)."""
+    return to_json(_design_record(d))
 
 
 @dataclass(frozen=True)
-class ChosenFile:
-    """``chosen.json`` read back, in SI: the chosen design as :func:`write_optimise_outputs`,
-    :meth:`magtact.optimise.SensorOptimisation.write` and (its ``choice``) ``geometry.json``
-    write it. A field the file does not give (or gives with the wrong type) is None.
+class ChosenFile(DesignRecord):
+    """``chosen.json``: the chosen design as flat values, in SI, as
+    :func:`write_optimise_outputs` writes it; read back (:meth:`from_json`) also from the
+    ``chosen.json`` of :meth:`magtact.optimise.SensorOptimisation.write` and from the choice of
+    ``geometry.json``. A field the file does not give (or gives with the wrong type) reads as
+    None.
 
     Attributes
     ----------
-    design : str or None
-        The design in words (over geometric design variables).
     H, G, M_z : float or None
         Base height [m], shear modulus [Pa], magnetisation [A/m].
     Gamma_r_max, Gamma_z_max : float or None
@@ -207,73 +332,57 @@ class ChosenFile:
         Force extrema [N].
     t_m, theta_m : float or None
         The stable region's bounds [1, rad].
+    degenerate : str or None
     g_r, g_z : float or None
         Margins to the force constraints [N] (≤ 0: met).
-    F_r_c, F_z_c : float or None
-        The force constraints [N]; ``constraints_source`` where they come from; all None where
-        the file has no constraints.
-    active_constraints, degenerate, sensitivity_definition, objective : str or None
+    active_constraints, sensitivity_definition, objective : str or None
+    constraints : Limits or None
+        The force constraints (None where the file has none).
+    design : str or None
+        The design in words (over geometric design variables; not written here).
     """
 
-    design: str | None = None
-    H: float | None = None
-    G: float | None = None
-    M_z: float | None = None
-    Gamma_r_max: float | None = None
-    Gamma_z_max: float | None = None
-    F_r_min: float | None = None
-    F_z_max: float | None = None
-    t_m: float | None = None
-    theta_m: float | None = None
-    g_r: float | None = None
-    g_z: float | None = None
-    F_r_c: float | None = None
-    F_z_c: float | None = None
-    constraints_source: str | None = None
-    has_constraints: bool = False
-    active_constraints: str | None = None
-    degenerate: str | None = None
-    sensitivity_definition: str | None = None
-    objective: str | None = None
+    g_r: float | None = entry(unit="N")
+    g_z: float | None = entry(unit="N")
+    active_constraints: str | None = entry(kind=str)
+    sensitivity_definition: str | None = entry(kind=str)
+    objective: str | None = entry(kind=str)
+    constraints: Limits | None = entry(kind=Limits, optional=True, default=None)
+    design: str | None = entry(kind=str, optional=True, omit="none", default=None)
+
+    @property
+    def has_constraints(self) -> bool:
+        """Whether the file gives the force constraints."""
+        return self.constraints is not None
+
+    @property
+    def F_r_c(self) -> float | None:
+        """The shear force constraint [N] (None where the file has none)."""
+        return None if self.constraints is None else self.constraints.F_r_c
+
+    @property
+    def F_z_c(self) -> float | None:
+        """The normal force constraint [N] (None where the file has none)."""
+        return None if self.constraints is None else self.constraints.F_z_c
+
+    @property
+    def constraints_source(self) -> str | None:
+        """Where the force constraints come from (None where the file has none)."""
+        return None if self.constraints is None else self.constraints.source
 
     @classmethod
     def from_json(cls, data) -> ChosenFile | None:
-        """The chosen design of ``chosen.json``'s document; None for anything but a non-empty
-        JSON object."""
+        """The chosen design of ``chosen.json``'s document, field by field; None for anything
+        but a non-empty JSON object."""
         if not isinstance(data, dict) or not data:
             return None
-
-        def num(key: str, unit: str | None = None) -> float | None:
-            v = json_number(data.get(key))
-            return v if v is None or unit is None else to_si(v, unit)
-
-        def text(key: str) -> str | None:
-            v = data.get(key)
-            return None if v is None else json_text(v)
-
-        c = data.get("constraints")
-        given = isinstance(c, dict)
-        c = json_dict(c)
-        active = data.get("active_constraints")
-        return cls(design=text("design"), H=num("H_mm", "mm"), G=num("G_kPa", "kPa"),
-                   M_z=num("M_z_A_per_m", "A_per_m"), Gamma_r_max=num("Gamma_r_max_N_per_T"),
-                   Gamma_z_max=num("Gamma_z_max_N_per_T"), F_r_min=num("F_r_min_N"),
-                   F_z_max=num("F_z_max_N"), t_m=num("t_m"), theta_m=num("theta_m_rad"),
-                   g_r=num("g_r_N"), g_z=num("g_z_N"), F_r_c=json_number(c.get("F_r_c_N")),
-                   F_z_c=json_number(c.get("F_z_c_N")),
-                   constraints_source=None if c.get("source") is None
-                   else json_text(c.get("source")), has_constraints=given,
-                   active_constraints=None if active is None else json_text(
-                       ", ".join(map(str, active)) if isinstance(active, list) else active),
-                   degenerate=text("degenerate"),
-                   sensitivity_definition=text("sensitivity_definition"),
-                   objective=text("objective"))
+        return from_json_lenient(cls, data)
 
 
 def design_file_definition(data) -> str | None:
     """The sensitivity definition recorded in ``design.json``'s document (None if none)."""
-    v = data.get("sensitivity_definition") if isinstance(data, dict) else None
-    return None if v is None else json_text(v)
+    record = from_json_lenient(DesignFile, data)
+    return None if record is None else record.sensitivity_definition
 
 
 def optimise(models: Responses | ModelSet, study: Study,
@@ -372,20 +481,16 @@ def write_optimise_outputs(result: Optimisation, models: Responses | ModelSet,
     study = result.study
     files = result.write(folder, figures=figures)
     cond = shear_bound_conditioning(models, study, np.linspace(*study.design.H, 9))
-    files.append(_csv(folder / "shear_bound.csv",
-                      ["H_mm", "t_m", "t_within_1_percent", "F_z_max_drop_percent"],
-                      zip(from_si(cond.H, "mm"), cond.t_m, cond.t_tol, 100 * cond.dF_z_rel,
-                          strict=True)))
-    c = result.choice
-    flat = {k: v for k, v in _choice_json(c).items() if k != "active_constraints"}
-    flat["active_constraints"] = ", ".join(c.active) or "none"
-    flat["sensitivity_definition"] = study.sensitivity.definition
-    flat["objective"] = study.optimise.objective
-    flat["constraints"] = {"F_r_c_N": result.constraints.F_r_c,
-                           "F_z_c_N": result.constraints.F_z_c,
-                           "source": result.constraints.source}
+    files.append(_table(folder / "shear_bound.csv", ShearBoundRow, (
+        ShearBoundRow(*row) for row in zip(cond.H, cond.t_m, cond.t_tol, cond.dF_z_rel,
+                                           strict=True))))
+    c, limits = result.choice, result.constraints
+    chosen = _design_record(
+        c.design, ChosenFile, g_r=c.g_r, g_z=c.g_z,
+        active_constraints=", ".join(c.active) or "none",
+        sensitivity_definition=study.sensitivity.definition, objective=study.optimise.objective,
+        constraints=Limits(limits.F_r_c, limits.F_z_c, limits.source))
     captions = CAPTIONS if result.pareto.generations else CAPTIONS | EXACT_CAPTIONS
-    for name, doc in (("chosen.json", flat), ("captions.json", captions)):
-        (folder / name).write_text(json.dumps(doc, indent=2) + "\n")
-        files.append(folder / name)
+    files.append(write_json(folder / "chosen.json", to_json(chosen), indent=2))
+    files.append(write_json(folder / "captions.json", captions, indent=2))
     return files
