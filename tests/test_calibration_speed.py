@@ -1,22 +1,51 @@
 """What keeps ``magtact calibrate`` quick: the calibration figure's frontier panel labelled in
 plain text and without a comb of minor ticks, and the figure drawn by a second process
 (``FigureProcess``) that the command starts before its design, with the same files as one
-drawn in the command's own process."""
+drawn in the command's own process; the firmware sweep's shared work (the basis built at once,
+the two-stage candidates' samples and force fits shared, the tables' Newton in the mirror plane
+in two features, the table's rows inverted once for the file and the builds, the builds
+compiled at once), each giving what the work done apart gives; the command's exit left to the
+system."""
 
 from __future__ import annotations
 
+import atexit
+import csv
+import gc
 import pickle
+import shutil
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
+from numpy.polynomial.chebyshev import chebvander
 from PIL import Image
 
-from magtact.cli._calibrate import FigureProcess
+from magtact.calibration import SensorMap, sensor_map
+from magtact.calibration._firmware import (
+    BUILDS,
+    _basis,
+    _FeatureSamples,
+    _samples,
+    basis_terms,
+    c_source,
+    fit_features,
+    fit_poly,
+    fit_table,
+    region_polygon,
+    run_header,
+    run_headers,
+    table_readings,
+    write_table_csv,
+)
+from magtact.calibration._map import _newton_step
+from magtact.cli._calibrate import FigureProcess, freeze_at_exit
+from magtact.optimise import per_design
 from magtact.report import MINOR_TICK_DECADES, calibration_figures, draw_calibration
+from magtact.study import load_study
 
 SUPERSCRIPT = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻", "0123456789-")
 
@@ -181,3 +210,114 @@ def test_a_command_that_stops_before_its_figure_ends_the_process():
         raise KeyError("the design failed")
     if proc is not None:
         assert not proc.is_alive()
+
+
+# ---- the firmware sweep's shared work --------------------------------------------------------
+@pytest.fixture(scope="module")
+def smap(models):
+    study = load_study(None)
+    H, G = 3e-3, 22.57e3
+    return sensor_map(models, study, H, G, design=per_design(models, H, G, study))
+
+
+def test_the_basis_is_the_products_of_the_polynomials_in_c_order():
+    xi, eta = np.random.default_rng(1).uniform(-1.0, 1.0, (2, 40, 3))
+    Tx, Ty = chebvander(xi, 6), chebvander(eta, 6)
+    A = _basis(xi, eta, 6)
+    np.testing.assert_array_equal(
+        A, np.stack([Tx[..., i] * Ty[..., j] for i, j in basis_terms(6)], axis=-1))
+    assert A.flags.c_contiguous  # the layout its products with the coefficients are made in
+
+
+def test_candidates_from_shared_samples_are_those_fitted_alone(smap):
+    samples = _FeatureSamples(smap, 0)
+    for degree, transform in ((4, "B_z"), (6, "1/B_z"), (6, "B_z^(-1/3)")):
+        shared = fit_features(smap, degree, transform, 0, samples)
+        alone = fit_features(smap, degree, transform, 0)
+        assert shared.limits == alone.limits
+        for a, b in ((shared.coef_r, alone.coef_r), (shared.coef_z, alone.coef_z),
+                     *((shared.stage[k], alone.stage[k]) for k in alone.stage)):
+            np.testing.assert_array_equal(a, b)
+    assert sorted(samples._force_fits) == [4, 6]  # one force fit per degree
+
+
+def test_forces_are_those_of_the_evaluation(smap):
+    polygon = region_polygon(smap)
+    B, _ = _samples(smap, 300, 7)
+    for a in (fit_features(smap, 6, "B_z", 0),
+              fit_poly(smap, 6, "1/B_z", _samples(smap, 400, 1), polygon),
+              fit_table(smap, 16, polygon)):
+        F, inside = a.evaluate(B)
+        np.testing.assert_array_equal(a.forces(B), F)
+        assert inside.any()
+
+
+def test_the_newton_step_in_the_mirror_plane_is_the_full_step(smap):
+    # features and readings with q_y = 0 and b_y = 0 (a table's nodes): the 2 x 2 system's
+    # step is the 3 x 3 system's, whose q_y step vanishes
+    t = np.linspace(0.1, 0.9, 12)
+    w = smap.features(t, 0.2)
+    target, _ = smap.at_load(t * 1.03, 0.22)
+    res = smap.B_of(w) - target
+    assert not res[:, 1].any()
+    full = _newton_step(smap.B_of, w, res, planar=False)
+    plane = _newton_step(smap.B_of, w, res, planar=True)
+    assert not plane[:, 2].any() and np.abs(full[:, 2]).max() <= 1e-15
+    np.testing.assert_allclose(plane[:, :2], full[:, :2], rtol=1e-12, atol=0.0)
+    # the inversion of such readings lands in the plane, on the loads they come from
+    r = smap.force(target)
+    assert not r.phi.any()
+    np.testing.assert_allclose(r.t, t * 1.03, atol=1e-9)
+
+
+def test_the_table_rows_are_inverted_once_for_the_file_and_the_builds(smap, tmp_path,
+                                                                      monkeypatch):
+    fresh = replace(smap)  # a map without rows kept
+    inverted = []
+    force = SensorMap.force
+    monkeypatch.setattr(SensorMap, "force",
+                        lambda self, B: inverted.append(np.shape(B)) or force(self, B))
+    write_table_csv(fresh, tmp_path / "table.csv", n=16)
+    B, F = table_readings(fresh, n=16)
+    assert inverted == [(16, 16, 3)]
+    with (tmp_path / "table.csv").open() as fh:
+        rows = [r for r in csv.DictReader(fh) if r["inside"] == "1"]
+    assert len(rows) == len(B) > 0
+    np.testing.assert_array_equal(F[:, 0], [float(r["F_r_N"]) for r in rows])
+
+
+@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None,
+                    reason="no C compiler on this machine")
+def test_builds_compiled_at_once_read_as_each_alone(smap):
+    a = fit_features(smap, 6, "B_z", 0)
+    header = c_source(a, smap)
+    B, _ = table_readings(smap, n=16)
+    together = run_headers(header, B, [(real, acc) for _, real, acc in BUILDS])
+    assert len(together) == len(BUILDS)
+    for (_, real, acc), (rc, out) in zip(BUILDS, together, strict=True):
+        alone = run_header(header, B, real, acc)
+        np.testing.assert_array_equal(rc, alone[0])
+        np.testing.assert_array_equal(out, alone[1])
+    assert not np.array_equal(together[0][1], together[-1][1])  # double and float differ
+
+
+@pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None,
+                    reason="no C compiler on this machine")
+def test_a_build_that_does_not_compile_says_so(smap):
+    import subprocess
+
+    header = c_source(fit_features(smap, 4, "B_z", 0), smap) + "\nnot C;\n"
+    with pytest.raises(subprocess.CalledProcessError):
+        run_headers(header, np.zeros((1, 3)), [(real, acc) for _, real, acc in BUILDS])
+
+
+def test_the_exit_is_left_to_the_system_once(monkeypatch):
+    registered = []
+    monkeypatch.setattr(atexit, "register", registered.append)
+    freeze_at_exit.cache_clear()
+    try:
+        freeze_at_exit()
+        freeze_at_exit()
+    finally:
+        freeze_at_exit.cache_clear()
+    assert registered == [gc.freeze]

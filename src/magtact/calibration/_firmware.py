@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import csv
 import json
+import weakref
 from dataclasses import dataclass, field, replace
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -118,13 +120,21 @@ class Approximation:
         B = np.asarray(B, dtype=float)
         if self.kind == "features":
             return _evaluate_features(self, B)
+        return self.forces(B), in_polygon(self.polygon, np.hypot(B[..., 0], B[..., 1]),
+                                          B[..., 2])
+
+    def forces(self, B) -> np.ndarray:
+        """F (..., 3) [N] of readings B (..., 3) [T], as :meth:`evaluate` gives them, without
+        the region test."""
+        B = np.asarray(B, dtype=float)
+        if self.kind == "features":
+            return _evaluate_features(self, B)[0]
         b_r = np.hypot(B[..., 0], B[..., 1])
         F_r, F_z = self.planar(b_r, B[..., 2])
         with np.errstate(invalid="ignore", divide="ignore"):
             cx = np.where(b_r > 0, B[..., 0] / np.where(b_r > 0, b_r, 1.0), 0.0)
             cy = np.where(b_r > 0, B[..., 1] / np.where(b_r > 0, b_r, 1.0), 0.0)
-        return (np.stack([F_r * cx, F_r * cy, F_z], axis=-1),
-                in_polygon(self.polygon, b_r, B[..., 2]))
+        return np.stack([F_r * cx, F_r * cy, F_z], axis=-1)
 
     def to_json(self) -> dict:
         return {
@@ -146,9 +156,19 @@ def basis_terms(n: int) -> list[tuple[int, int]]:
     return [(i, j) for i in range(n + 1) for j in range(n + 1 - i)]
 
 
+@cache
+def _basis_index(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The i and the j of :func:`basis_terms` as two index arrays."""
+    terms = np.array(basis_terms(n), dtype=np.intp).reshape(-1, 2)
+    return terms[:, 0], terms[:, 1]
+
+
 def _basis(xi, eta, n) -> np.ndarray:
-    Tx, Ty = cheb.chebvander(xi, n), cheb.chebvander(eta, n)
-    return np.stack([Tx[..., i] * Ty[..., j] for i, j in basis_terms(n)], axis=-1)
+    """The basis T_i(ξ) T_j(η) of :func:`basis_terms` at (ξ, η) (...), shape (..., terms), in
+    C order (the layout its products with the coefficients are computed in)."""
+    i, j = _basis_index(n)
+    return (np.take(cheb.chebvander(xi, n), i, axis=-1)
+            * np.take(cheb.chebvander(eta, n), j, axis=-1))
 
 
 def _bilinear(cr, cz, b_r, b_z, limits):
@@ -265,7 +285,7 @@ def _measured(a: Approximation, test) -> Approximation:
     """``a`` with its largest errors on the readings ``test`` = (B, F): |ΔF_xy| (the shear
     force's error, ``err_r``) and |ΔF_z|."""
     B, F = test
-    approx, _ = a.evaluate(B)
+    approx = a.forces(B)
     return replace(a, err_r=float(np.hypot(*(approx[:, :2] - F[:, :2]).T).max()),
                    err_z=float(np.abs(approx[:, 2] - F[:, 2]).max()))
 
@@ -285,7 +305,48 @@ def _cheb_eval(lim, coef, x, y, degree):
     return [A @ c for c in coef]
 
 
-def fit_features(smap: SensorMap, degree: int, transform: str, seed: int = 0) -> Approximation:
+class _FeatureSamples:
+    """The samples :func:`fit_features` fits to, the same for each degree and transform of one
+    map and seed: the load features w (with a margin around the region) and the design's field
+    there, and the force's samples with its fit of each degree (which the transform of b_z does
+    not enter).
+
+    Parameters
+    ----------
+    smap : SensorMap
+        The map (a built unit's: its chip offset moves the features).
+    seed : int
+        As :func:`fit_features`.
+    """
+
+    def __init__(self, smap: SensorMap, seed: int):
+        base = replace(smap, unit=type(smap.unit)())
+        a, _ = smap._path
+        d = smap.unit.chip_offset
+        self.delta = np.array([-d[2] / a, d[0] / a, d[1] / a])
+        margin = float(np.abs(self.delta).max()) + 0.02 * smap.t_m
+        rng = np.random.default_rng(seed + 5)
+        n = N_TRAIN
+        self.p = rng.uniform(-margin, smap.t_m + margin, n)
+        self.q = rng.uniform(0.0, 1.0, n) * (np.maximum(self.p, 0.0) * np.tan(smap.theta_m)
+                                             + margin)
+        self.B0 = base.B_of(np.stack([self.p, self.q, np.zeros(n)], axis=-1))
+        # the force per unit of the unit's g, over the region (with the same margin)
+        self.pf = rng.uniform(0.0, smap.t_m + margin, n)
+        self.qf = rng.uniform(0.0, 1.0, n) * (self.pf * np.tan(smap.theta_m) + margin)
+        self.F0 = base.F_of(np.stack([self.pf, self.qf, np.zeros(n)], axis=-1))
+        self._force_fits: dict[int, tuple] = {}
+
+    def force_fit(self, degree: int) -> tuple:
+        """(limits, [c_r, c_z]) of the force's Chebyshev fit of ``degree`` in (p, |q|)."""
+        if degree not in self._force_fits:
+            self._force_fits[degree] = _cheb_fit(self.pf, self.qf, degree,
+                                                 [self.F0[:, 0], self.F0[:, 2]])
+        return self._force_fits[degree]
+
+
+def fit_features(smap: SensorMap, degree: int, transform: str, seed: int = 0,
+                 samples: _FeatureSamples | None = None) -> Approximation:
     """A two-stage candidate, for a design and for a built unit (docs/method.md §13.2).
 
     A unit's field is its design's field at shifted load features, scaled and offset:
@@ -295,30 +356,17 @@ def fit_features(smap: SensorMap, degree: int, transform: str, seed: int = 0) ->
     (|B'_xy|, B'_z), a Chebyshev polynomial of degree ``degree`` as in ``poly``, and
     q' = q' B'_xy / |B'_xy|; (3) w = w' − δ; (4) F = g (f_r(p, |q|) q / |q|, f_z(p, |q|)), the
     design's force per Chebyshev polynomial of the same degree in (p, |q|). The region test is
-    exact in the features: 0 ≤ p ≤ t_m, |q| ≤ p tan θ_m.
+    exact in the features: 0 ≤ p ≤ t_m, |q| ≤ p tan θ_m. ``samples``: the map's samples for
+    ``seed`` where the caller fits several candidates (drawn here otherwise).
     """
     unit = smap.unit
-    base = replace(smap, unit=type(unit)())
-    a, _ = smap._path
-    d = unit.chip_offset
-    delta = np.array([-d[2] / a, d[0] / a, d[1] / a])
-    margin = float(np.abs(delta).max()) + 0.02 * smap.t_m
-    rng = np.random.default_rng(seed + 5)
-    n = N_TRAIN
-    p = rng.uniform(-margin, smap.t_m + margin, n)
-    q = rng.uniform(0.0, 1.0, n) * (np.maximum(p, 0.0) * np.tan(smap.theta_m) + margin)
-    w = np.stack([p, q, np.zeros(n)], axis=-1)
-    B0 = base.B_of(w)
-    b_r, v = B0[:, 0], TRANSFORMS[transform][0](B0[:, 2])
-    lim_b, (c_p, c_q) = _cheb_fit(b_r, v, degree, [p, q])
-    # the force per unit of the unit's g, over the region (with the same margin)
-    pf = rng.uniform(0.0, smap.t_m + margin, n)
-    qf = rng.uniform(0.0, 1.0, n) * (pf * np.tan(smap.theta_m) + margin)
-    F0 = base.F_of(np.stack([pf, qf, np.zeros(n)], axis=-1))
-    lim_f, (c_r, c_z) = _cheb_fit(pf, qf, degree, [F0[:, 0], F0[:, 2]])
+    s = _FeatureSamples(smap, seed) if samples is None else samples
+    b_r, v = s.B0[:, 0], TRANSFORMS[transform][0](s.B0[:, 2])
+    lim_b, (c_p, c_q) = _cheb_fit(b_r, v, degree, [s.p, s.q])
+    lim_f, (c_r, c_z) = s.force_fit(degree)
     stage = {"coef_p": c_p, "coef_q": c_q, "limits_pq": np.array(lim_f),
              "B_scale": unit.B_scale, "field_offset": np.array(unit.field_offset),
-             "G_scale": unit.G_scale, "delta": delta,
+             "G_scale": unit.G_scale, "delta": s.delta,
              "region": np.array([smap.t_m, np.tan(smap.theta_m)])}
     return Approximation("features", degree, transform, lim_b, c_r, c_z, np.zeros((0, 2)),
                          stage=stage)
@@ -467,7 +515,8 @@ def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
     train = _samples(smap, N_TRAIN, seed + 1)
     test = _test_set(smap, n_test, seed + 2)
     axisymmetric = not any(smap.unit.chip_offset) and not any(smap.unit.field_offset[:2])
-    cands = [fit_features(smap, n, tr, seed) for tr in TRANSFORMS for n in degrees]
+    samples = _FeatureSamples(smap, seed)
+    cands = [fit_features(smap, n, tr, seed, samples) for tr in TRANSFORMS for n in degrees]
     if axisymmetric:  # the planar forms need a map that is the same at every azimuth
         cands += [fit_poly(smap, n, tr, train, polygon) for tr in TRANSFORMS for n in degrees]
         cands += fit_tables(smap, tuple(table_sizes), polygon)
@@ -716,6 +765,23 @@ def run_header(header: str, B: np.ndarray, real: str = "double", acc: str = "dou
     """(rc (k,), out (k, 3)) of ``magtact_force`` of the C header ``header`` compiled with
     MAGTACT_REAL = ``real``, MAGTACT_ACC = ``acc`` and ``flags`` on readings B (k, 3) [T];
     None where no C compiler is found."""
+    got = run_headers(header, B, ((real, acc),), flags)
+    return None if got is None else got[0]
+
+
+def run_headers(header: str, B: np.ndarray, builds, flags: tuple[str, ...] = ()
+                ) -> list[tuple[np.ndarray, np.ndarray]] | None:
+    """:func:`run_header` for each (MAGTACT_REAL, MAGTACT_ACC) of ``builds``, the builds
+    compiled at once (a compiler process each); None where no C compiler is found.
+
+    Raises
+    ------
+    subprocess.CalledProcessError
+        If a build does not compile or its program fails.
+    subprocess.TimeoutExpired
+        If a compiler or a program takes over two minutes (the compilers still running are
+        ended).
+    """
     import subprocess
     import tempfile
 
@@ -726,14 +792,27 @@ def run_header(header: str, B: np.ndarray, real: str = "double", acc: str = "dou
         folder = Path(tmp)
         (folder / "force.h").write_text(header, encoding="utf-8")
         (folder / "m.c").write_text(_C_DRIVER, encoding="utf-8")
-        subprocess.run([cc, "-std=c99", "-O2", *flags, f"-DMAGTACT_REAL={real}",
-                        f"-DMAGTACT_ACC={acc}", "-o", str(folder / "m"), str(folder / "m.c"),
-                        "-lm"], check=True, capture_output=True, timeout=120)
+        programs = [folder / f"m{k}" for k in range(len(builds))]
+        jobs = [subprocess.Popen([cc, "-std=c99", "-O2", *flags, f"-DMAGTACT_REAL={real}",
+                                  f"-DMAGTACT_ACC={acc}", "-o", str(program),
+                                  str(folder / "m.c"), "-lm"],
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                for program, (real, acc) in zip(programs, builds, strict=True)]
+        try:
+            for job in jobs:
+                out, err = job.communicate(timeout=120)
+                if job.returncode:
+                    raise subprocess.CalledProcessError(job.returncode, job.args, out, err)
+        finally:
+            for job in jobs:
+                if job.poll() is None:
+                    job.kill()
+                    job.wait()
         text = "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in np.asarray(B, float).tolist())
-        out = subprocess.run([str(folder / "m")], input=text, capture_output=True, text=True,
-                             check=True, timeout=120).stdout.split()
-    values = np.array(out, dtype=float).reshape(-1, 4)
-    return values[:, 0].astype(int), values[:, 1:]
+        runs = [subprocess.run([str(program)], input=text, capture_output=True, text=True,
+                               check=True, timeout=120).stdout.split() for program in programs]
+    values = [np.array(out, dtype=float).reshape(-1, 4) for out in runs]
+    return [(v[:, 0].astype(int), v[:, 1:]) for v in values]
 
 
 def measure_builds(header: str, smap: SensorMap, a: Approximation) -> dict:
@@ -742,9 +821,10 @@ def measure_builds(header: str, smap: SensorMap, a: Approximation) -> dict:
     ``outside`` (points the build reads as outside the region), ``how``}; a float build is None
     where no C compiler is found (the double build is then NumPy's evaluation of the map)."""
     B, F = table_readings(smap)
+    runs = run_headers(header, B, [(real, acc) for _, real, acc in BUILDS])
     out = {}
-    for name, real, acc in BUILDS:
-        got = run_header(header, B, real, acc)
+    for k, (name, real, _) in enumerate(BUILDS):
+        got = None if runs is None else runs[k]
         if got is None and real != "double":
             out[name] = None
             continue
@@ -944,9 +1024,22 @@ def _c_features(a: Approximation) -> tuple[str, str]:
     return helper, block
 
 
-def _table_rows(smap: SensorMap, n: int = 64) -> list[list]:
+#: The rows of ``force_table.csv`` of each map, by size (:func:`_table_rows`).
+_ROWS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _table_rows(smap: SensorMap, n: int = 64) -> tuple[tuple, ...]:
     """The rows of ``force_table.csv`` (:func:`write_table_csv`) as written: text cells, the
-    last the ``inside`` flag (int)."""
+    last the ``inside`` flag (int). Kept with the map: the file and the measurement of its
+    header's builds (:func:`table_readings`) read the same rows, the map inverted once."""
+    by_size = _ROWS.setdefault(smap, {})
+    if n not in by_size:
+        by_size[n] = _grid_rows(smap, n)
+    return by_size[n]
+
+
+def _grid_rows(smap: SensorMap, n: int) -> tuple[tuple, ...]:
+    """:func:`_table_rows` computed."""
     polygon = region_polygon(smap)
     R, Z = np.meshgrid(np.linspace(0.0, polygon[:, 0].max(), n),
                        np.linspace(polygon[:, 1].min(), polygon[:, 1].max(), n), indexing="ij")
@@ -956,10 +1049,10 @@ def _table_rows(smap: SensorMap, n: int = 64) -> list[list]:
         ok = r.flag[k] == OK
         # fields to 12 digits: at 6, the rounding of B alone moves the force by ~Γ × 1e-6 B,
         # tens of µN, more than a map's error at a small noise
-        rows.append([f"{from_si(R[k], 'mT'):.12g}", f"{from_si(Z[k], 'mT'):.12g}",
+        rows.append((f"{from_si(R[k], 'mT'):.12g}", f"{from_si(Z[k], 'mT'):.12g}",
                      f"{r.F[k][0]:.9g}" if ok else "", f"{r.F[k][2]:.9g}" if ok else "",
-                     int(ok)])
-    return rows
+                     int(ok)))
+    return tuple(rows)
 
 
 def write_table_csv(smap: SensorMap, path: Path, n: int = 64) -> Path:

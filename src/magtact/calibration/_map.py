@@ -332,6 +332,10 @@ class SensorMap:
         cy = np.where(r_xy > 0, sign * shifted[:, 1] / np.where(r_xy > 0, r_xy, 1.0), 0.0)
         q0 = w[:, 1]
         w[:, 1], w[:, 2] = q0 * cx, q0 * cy
+        # readings in the plane of the map's mirror symmetry (b_y = 0 without a sideways chip
+        # offset: a table's nodes) keep q_y = 0: Newton in (p, q_x) alone, the same steps
+        planar = (not self.unit.chip_offset[1] and not shifted[:, 1].any()
+                  and not w[:, 2].any())
         yg = np.max(np.abs(fun(grid)), axis=0)
         yscale = np.array([yg[0], yg[0], yg[2]]) + 1e-300
         tol = RTOL * yscale.max()
@@ -343,11 +347,7 @@ class SensorMap:
             if not act.any():
                 break
             wa = w[act]
-            J = _jacobian(fun, wa)
-            try:
-                step = np.linalg.solve(J, -res[act][..., None])[..., 0]
-            except np.linalg.LinAlgError:  # a singular Jacobian somewhere in the batch
-                step = (np.linalg.pinv(J) @ -res[act][..., None])[..., 0]
+            step = _newton_step(fun, wa, res[act], planar)
             step = np.where(np.isfinite(step), step, 0.0)
             big = np.max(np.abs(step), axis=-1, keepdims=True)
             step *= np.minimum(1.0, 0.25 / np.maximum(big, 1e-300))  # at most 0.25 in t per step
@@ -436,14 +436,30 @@ class SensorMap:
         }
 
 
-def _jacobian(fun, w) -> np.ndarray:
-    """∂fun/∂w (n, 3, 3) by central differences of step FD_STEP."""
-    J = np.empty(w.shape[:-1] + (3, 3))
-    for k in range(3):
+def _jacobian(fun, w, columns: int = 3) -> np.ndarray:
+    """∂fun/∂w (n, 3, columns) by central differences of step FD_STEP: the derivatives along
+    the first ``columns`` features."""
+    J = np.empty(w.shape[:-1] + (3, columns))
+    for k in range(columns):
         e = np.zeros(3)
         e[k] = FD_STEP
         J[..., k] = (fun(w + e) - fun(w - e)) / (2 * FD_STEP)
     return J
+
+
+def _newton_step(fun, w, res, planar: bool) -> np.ndarray:
+    """The Newton step (n, 3) of features w (n, 3) whose residuals fun(w) − target are ``res``
+    (n, 3). ``planar``: every w and target in the mirror plane q_y = 0, b_y = 0, where
+    ∂(b_x, b_z)/∂q_y and ∂b_y/∂(p, q_x) vanish and b_y's residual is 0: the step in (p, q_x)
+    from their 2 × 2 system (that of the full system, whose q_y step is 0)."""
+    rows = [0, 2] if planar else [0, 1, 2]
+    J = _jacobian(fun, w, len(rows))[:, rows]
+    r = -res[:, rows, None]
+    try:
+        step = np.linalg.solve(J, r)[..., 0]
+    except np.linalg.LinAlgError:  # a singular Jacobian somewhere in the batch
+        step = (np.linalg.pinv(J) @ r)[..., 0]
+    return np.concatenate([step, np.zeros((len(w), 3 - len(rows)))], axis=-1)
 
 
 def _planar_det(fun, g) -> np.ndarray:

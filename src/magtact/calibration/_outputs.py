@@ -253,7 +253,7 @@ def error_grid(smap: SensorMap, choice: FirmwareChoice, n: int = N_GRID) -> dict
     T, TH = np.meshgrid(np.linspace(0.0, smap.t_m, n), np.linspace(0.0, smap.theta_m, n),
                         indexing="ij")
     B, F = smap.at_load(T, TH, 0.0)
-    approx, _ = choice.chosen.evaluate(B)
+    approx = choice.chosen.forces(B)
     return {"t": T, "theta": TH, "err_r": np.abs(approx[..., 0] - F[..., 0]),
             "err_z": np.abs(approx[..., 2] - F[..., 2])}
 

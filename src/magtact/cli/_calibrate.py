@@ -4,6 +4,7 @@ calibration from presses (docs/method.md §13)."""
 from __future__ import annotations
 
 import sys
+from functools import cache
 from pathlib import Path
 from typing import Annotated
 
@@ -56,6 +57,22 @@ def fit_names(text: str, presses: bool) -> tuple[str, ...]:
         twice = next(n for n in names if names.count(n) > 1)
         raise MagtactError(f"--fit names {twice!r} twice")
     return tuple(names)
+
+
+@cache
+def freeze_at_exit() -> None:
+    """Have the interpreter's exit leave the objects alive then to the process's end.
+
+    Its last garbage collection would walk every object of the libraries the command imported
+    (SymPy's, xarray's, SciPy's: a second of the command's time on a loaded machine) to free
+    memory that the system takes back at once; :func:`gc.freeze` at exit (an :mod:`atexit`
+    handler, registered once) moves them out of its reach. Objects are still freed as their
+    references go, and what is made after the handler is collected as before.
+    """
+    import atexit
+    import gc
+
+    atexit.register(gc.freeze)
 
 
 def _draw_figures(conn, parent_end) -> None:
@@ -205,6 +222,7 @@ def calibrate_command(
     from .. import calibrate, design
     from ..calibration import DEFAULT_FIT, read_presses, write_calibration_outputs
 
+    freeze_at_exit()
     s = get_study(study)
     if force_source not in ("auto", "fe", "models"):
         raise MagtactError(f"--force-source must be auto, fe or models, got {force_source!r}")
