@@ -81,7 +81,6 @@ PENDING: dict[str, str] = {
     "optimise/_design.py": "chosen.json's design",
     "optimise/_geometry.py": "geometry.json",
     "optimise/_pareto.py": "design.json's front",
-    "designer/_answer.py": "sensor.json's answers",
     "_result.py": "reads design.json, chosen.json",
     "_display.py": "reads sensor.json's answers",
     "_outputs.py": "reads sensor.json",

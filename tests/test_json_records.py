@@ -82,3 +82,22 @@ def test_a_frontier_point_round_trips():
                 doc | {"error_over_sigma": None}):
         assert FrontierPoint.from_json(bad) is None
     assert FrontierPoint.from_json(doc | {"on_frontier": 1}).on_frontier is False
+
+
+def test_an_answer_is_written_from_its_record_and_read_back(magone_design):
+    import json
+
+    from magtact._records import RecordError, from_json, keys, to_json
+    from magtact.designer import answer_json
+    from magtact.designer._answer import AnswerRecord
+
+    for a in (magone_design.chosen, magone_design.original):
+        doc = json.loads(json.dumps(answer_json(a)))
+        assert set(doc) <= set(keys(AnswerRecord))
+        back = from_json(AnswerRecord, doc, "card.json")
+        assert back.H == pytest.approx(a.H, rel=1e-15) and back.chip == a.chip.name
+        assert json.dumps(to_json(back)) == json.dumps(doc)
+    assert back.parts.magnet_grade == a.parts.grade
+    with pytest.raises(RecordError, match="card.json: the document: missing key 'standoff_mm'"):
+        from_json(AnswerRecord, {k: v for k, v in doc.items() if k != "standoff_mm"},
+                  "card.json")

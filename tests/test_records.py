@@ -290,3 +290,20 @@ def test_an_inline_record_without_its_omitted_keys_reads_strictly():
     assert from_json(Holder, doc).inner.b == 2e-3
     with pytest.raises(RecordError, match=r"missing key 'c' \(WithOptional\)"):
         from_json(Holder, {"a_mm": 1.0, "d": 2}, "holder.json")
+
+
+@dataclass(frozen=True)
+class Grouped:
+    name: str = entry(kind=str)
+    group: WithOptional | None = entry(kind=WithOptional, inline=True, omit="none",
+                                       default=None)
+
+
+def test_an_inline_record_left_out_reads_as_the_default():
+    assert to_json(Grouped("g")) == {"name": "g"}
+    assert from_json(Grouped, {"name": "g"}) == Grouped("g")
+    doc = to_json(Grouped("g", WithOptional(1e-3, c="x")))
+    assert doc == {"name": "g", "a_mm": 1.0, "c": "x"}
+    assert from_json(Grouped, doc) == Grouped("g", WithOptional(1e-3, c="x"))
+    with pytest.raises(RecordError, match=r"missing key 'c' \(WithOptional\)"):
+        from_json(Grouped, {"name": "g", "a_mm": 1.0})  # a part of the group is no group

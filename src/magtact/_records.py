@@ -102,7 +102,8 @@ def entry(key: str | None = None, unit: str = "", *, kind=float, levels=(),
         (and read through) the attributes that the record's fields name.
     inline : bool
         A nested record whose keys stand in the enclosing record's object (an optional one
-        writes them as null and reads as None where all are null).
+        writes them as null and reads as None where all are null; with ``omit`` its keys are
+        left out, and a document without any of them reads as the field's default).
     array : bool
         A list of numbers held as a numpy array.
     key_units : mapping of str to str, optional
@@ -340,6 +341,8 @@ def _record(cls, doc, where: str, path: str, lenient: bool = False):
     for f, e in declared(cls):
         try:
             if e.inline:
+                if e.omit is not None and not any(k in doc for k in keys(e.kind)):
+                    continue  # an inline record left out: the field's default
                 values[f.name] = _inline(e, doc, where, path, lenient)
                 continue
             key = key_of(f, e)

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.optimize import minimize
 
+from .._records import entry, to_json
 from .._sensor import Sensor
 from ..chip import (
     Saturation,
@@ -23,7 +24,7 @@ from ..metamodel import ModelSet
 from ..optimise import DesignResult, per_design
 from ..parts import SettingFigures, grade, silicones_around
 from ..sensitivity import force_noise
-from ..study import MU0, HallChip, Study, from_si, hall_chip, mm, mt
+from ..study import MU0, HallChip, Study, hall_chip
 from ._verdict import Verdict, verdict
 
 if TYPE_CHECKING:
@@ -223,68 +224,179 @@ def resolution(models: ModelSet, study: Study, design: DesignResult, chip: HallC
     return Resolution(float(s0[0]), float(s0[1]), worst[0], worst[1], where[0], where[1])
 
 
+@dataclass(frozen=True)
+class VerdictPart:
+    """The verdict of an answer: each requirement met or not (:meth:`Verdict.to_json`), all
+    met or not, and σ_F [N] worst over the required loads."""
+
+    verdict: object = entry(kind=object)
+    meets_requirements: bool = entry(kind=bool)
+    sigma_Fr_required_loads: float = entry(unit="mN")
+    sigma_Fz_required_loads: float = entry(unit="mN")
+
+
+@dataclass(frozen=True)
+class FiguresPart:
+    """The chip at its setting: the setting's fields and words, its rate [Hz], conversion time
+    [ms] (the units module has no ms: the field holds ms), LSB and noise interval [T]."""
+
+    setting: dict = entry(kind=int, levels=("map",))
+    setting_words: str = entry(kind=str)
+    sample_rate: float = entry(unit="Hz")
+    conversion_time_ms: float = entry()
+    LSB_x: float = entry(unit="uT")
+    LSB_z: float = entry(unit="uT")
+    noise_x_interval: tuple = entry("noise_x_uT_interval", "uT", levels=("list",))
+    noise_z_interval: tuple = entry("noise_z_uT_interval", "uT", levels=("list",))
+    noise_source: str = entry(kind=str)
+
+
+@dataclass(frozen=True)
+class ChoicePart:
+    """The setting chosen for the design: whether it holds the field, how many were compared,
+    and the largest field [T] over the stable region."""
+
+    setting_holds_field: bool = entry(kind=bool)
+    settings_compared: int = entry(kind=int)
+    B_max_stable_x: float = entry(unit="mT")
+    B_max_stable_z: float = entry(unit="mT")
+
+
+@dataclass(frozen=True)
+class PartsPart:
+    """The parts of an answer (:class:`Parts`) in the file."""
+
+    magnet_grade: str = entry(kind=str)
+    magnet_size: str = entry(kind=str)
+    silicone: str = entry(kind=str)
+    silicones_holding_G: tuple[str, ...] = entry(kind=str, levels=("list",))
+    silicone_softer: str | None = entry(kind=str, optional=True)
+    silicone_stiffer: str | None = entry(kind=str, optional=True)
+
+
+@dataclass(frozen=True)
+class GradePart:
+    """The catalogue's remanence (least, nominal, most) [T] of the magnet's grade and the
+    magnetisations [A/m] they give."""
+
+    magnet_B_r: tuple = entry(unit="T", levels=("list",))
+    magnet_M_z_spread: tuple = entry(unit="A_per_m", levels=("list",))
+
+
+@dataclass(frozen=True)
+class ResolutionPart:
+    """σ_F [N] at rest and worst over the stable box, and (t, θ [rad]) of each worst value."""
+
+    sigma_Fr_0: float = entry(unit="mN")
+    sigma_Fz_0: float = entry(unit="mN")
+    sigma_Fr_worst: float = entry(unit="mN")
+    sigma_Fz_worst: float = entry(unit="mN")
+    sigma_Fr_worst_at: tuple = entry(levels=("list",))
+    sigma_Fz_worst_at: tuple = entry(levels=("list",))
+
+
+@dataclass(frozen=True)
+class LowPart:
+    """σ_F [N] at the lower end of the setting's noise interval."""
+
+    sigma_Fr_0: float = entry("sigma_Fr_0_mN_low", "mN")
+    sigma_Fz_0: float = entry("sigma_Fz_0_mN_low", "mN")
+    sigma_Fr_worst: float = entry("sigma_Fr_worst_mN_low", "mN")
+    sigma_Fz_worst: float = entry("sigma_Fz_worst_mN_low", "mN")
+
+
+def _part(kind: type, optional: bool = True):
+    """An inline part of an answer, left out of the file where the answer has none."""
+    return entry(kind=kind, inline=True, optional=optional, omit="none", default=None)
+
+
+@dataclass(frozen=True)
+class AnswerRecord:
+    """Every number of a :class:`DesignAnswer` as a file holds it (:func:`answer_json`), in
+    SI; each part that the answer lacks (verdict, robust verdict, setting figures, the
+    chosen setting, parts, grade, σ_F at the low end of the noise, σ_F) is left out.
+
+    ``saturation_F_z`` [N] is where the chip saturates along the normal path, or, with a
+    verdict, the verdict's saturation force (None: never).
+    """
+
+    label: str = entry(kind=str)
+    H: float = entry(unit="mm")
+    G: float = entry(unit="kPa")
+    M_z: float | None = entry(unit="A_per_m", optional=True)
+    chip: str = entry(kind=str)
+    chip_setting: str = entry(kind=str)
+    chip_source: str = entry(kind=str)
+    noise_x: float | None = entry(unit="uT", optional=True)
+    noise_z: float | None = entry(unit="uT", optional=True)
+    range_x: float = entry(unit="mT")
+    range_z: float = entry(unit="mT")
+    F_r_min: float = entry(unit="N")
+    F_z_max: float = entry(unit="N")
+    Gamma_r_max: float = entry(unit="N_per_T")
+    Gamma_z_max: float = entry(unit="N_per_T")
+    t_m: float = entry()
+    theta_m: float = entry(unit="rad")
+    B_max_x: float = entry(unit="mT")
+    B_max_z: float = entry(unit="mT")
+    saturates: bool = entry(kind=bool)
+    saturation_t: float | None = entry(optional=True)
+    saturation_theta: float | None = entry(unit="rad", optional=True)
+    saturation_axis: str | None = entry(kind=str, optional=True)
+    saturation_F_r: float | None = entry(unit="N", optional=True)
+    saturation_F_z: float | None = entry(unit="N", optional=True)
+    chip_margin_stable_region: float = entry()
+    saturates_in_stable_region: bool = entry(kind=bool)
+    G_tolerance: float = entry()
+    worst_case_factor: float = entry()
+    missing: tuple[str, ...] = entry(kind=str, levels=("list",))
+    standoff: float = entry(unit="mm")
+    verdict: VerdictPart | None = _part(VerdictPart)
+    robust_verdict: object = entry(kind=object, omit="none", default=None)
+    figures: FiguresPart | None = _part(FiguresPart)
+    choice: ChoicePart | None = _part(ChoicePart)
+    parts: PartsPart | None = _part(PartsPart)
+    grade: GradePart | None = _part(GradePart)
+    resolution_low: LowPart | None = _part(LowPart)
+    resolution: ResolutionPart | None = _part(ResolutionPart)
+
+
+def answer_record(a: DesignAnswer) -> AnswerRecord:
+    """The record of an answer (:class:`AnswerRecord`)."""
+    d, s, chip, v, f, p = a.design, a.saturation, a.chip, a.verdict, a.chip.figures, a.parts
+    saturation_F_z = s.F_z if v is None else None if np.isinf(v.F_saturation) \
+        else v.F_saturation
+    low, r = a.resolution_low, a.resolution
+    return AnswerRecord(
+        a.label, a.H, a.G, d.M_z, chip.name, chip.setting, chip.source, chip.noise_x,
+        chip.noise_z, chip.range_x, chip.range_z, d.F_r_min, d.F_z_max, d.Gamma_r_max,
+        d.Gamma_z_max, d.t_m, d.theta_m, s.B_max_x, s.B_max_z, s.saturates, s.t, s.theta,
+        s.axis, s.F_r, saturation_F_z, s.region_margin, s.in_region, a.tolerance,
+        a.worst_factor, tuple(chip.missing), a.standoff,
+        verdict=None if v is None else VerdictPart(v.to_json(), v.met, v.sigma_r, v.sigma_z),
+        robust_verdict=None if a.robust is None else a.robust.to_json(),
+        figures=None if f is None else FiguresPart(
+            {k: x for k, x in f.setting.__dict__.items() if x is not None}, f.words, f.rate,
+            f.conversion_time * 1e3, f.lsb_x, f.lsb_z, tuple(f.sigma_x), tuple(f.sigma_z),
+            f.noise_source),
+        choice=None if a.choice is None else ChoicePart(
+            a.choice.holds, a.choice.considered, a.choice.B_max_x, a.choice.B_max_z),
+        parts=None if p is None else PartsPart(p.grade, p.size, p.silicone, tuple(p.inside),
+                                               p.softer, p.stiffer),
+        grade=None if p is None or p.grade == "custom" else _grade_part(p.grade),
+        resolution_low=None if low is None else LowPart(
+            low.sigma_r_0, low.sigma_z_0, low.sigma_r_worst, low.sigma_z_worst),
+        resolution=None if r is None else ResolutionPart(
+            r.sigma_r_0, r.sigma_z_0, r.sigma_r_worst, r.sigma_z_worst, tuple(r.where_r),
+            tuple(r.where_z)))
+
+
+def _grade_part(name: str) -> GradePart:
+    g = grade(name)
+    return GradePart((g.B_r_min, g.B_r, g.B_r_max), tuple(g.M_z(MU0)))
+
+
 def answer_json(a: DesignAnswer) -> dict:
-    """Every number of an answer, in user units with the unit in each key (for files)."""
-    r, s = a.resolution, a.saturation
-    out = {
-        "label": a.label, "H_mm": mm(a.H), "G_kPa": from_si(a.G, "kPa"),
-        "M_z_A_per_m": None if a.design.M_z is None else from_si(a.design.M_z, "A_per_m"),
-        "chip": a.chip.name, "chip_setting": a.chip.setting, "chip_source": a.chip.source,
-        "noise_x_uT": None if a.chip.noise_x is None else from_si(a.chip.noise_x, "uT"),
-        "noise_z_uT": None if a.chip.noise_z is None else from_si(a.chip.noise_z, "uT"),
-        "range_x_mT": mt(a.chip.range_x), "range_z_mT": mt(a.chip.range_z),
-        "F_r_min_N": a.design.F_r_min, "F_z_max_N": a.design.F_z_max,
-        "Gamma_r_max_N_per_T": a.design.Gamma_r_max, "Gamma_z_max_N_per_T": a.design.Gamma_z_max,
-        "t_m": a.design.t_m, "theta_m_rad": a.design.theta_m,
-        "B_max_x_mT": mt(s.B_max_x), "B_max_z_mT": mt(s.B_max_z),
-        "saturates": s.saturates, "saturation_t": s.t, "saturation_theta_rad": s.theta,
-        "saturation_axis": s.axis, "saturation_F_r_N": s.F_r, "saturation_F_z_N": s.F_z,
-        "chip_margin_stable_region": s.region_margin,
-        "saturates_in_stable_region": s.in_region,
-        "G_tolerance": a.tolerance, "worst_case_factor": a.worst_factor,
-        "missing": list(a.chip.missing), "standoff_mm": mm(a.standoff),
-    }
-    if a.verdict is not None:
-        v = a.verdict
-        out |= {"verdict": v.to_json(), "meets_requirements": v.met,
-                "sigma_Fr_required_loads_mN": from_si(v.sigma_r, "mN"),
-                "sigma_Fz_required_loads_mN": from_si(v.sigma_z, "mN"),
-                "saturation_F_z_N": None if np.isinf(v.F_saturation) else v.F_saturation}
-    if a.robust is not None:
-        out["robust_verdict"] = a.robust.to_json()
-    f = a.chip.figures
-    if f is not None:
-        out |= {"setting": {k: v for k, v in f.setting.__dict__.items() if v is not None},
-                "setting_words": f.words, "sample_rate_Hz": f.rate,
-                "conversion_time_ms": f.conversion_time * 1e3,
-                "LSB_x_uT": from_si(f.lsb_x, "uT"), "LSB_z_uT": from_si(f.lsb_z, "uT"),
-                "noise_x_uT_interval": [from_si(v, "uT") for v in f.sigma_x],
-                "noise_z_uT_interval": [from_si(v, "uT") for v in f.sigma_z],
-                "noise_source": f.noise_source}
-    if a.choice is not None:
-        out |= {"setting_holds_field": a.choice.holds,
-                "settings_compared": a.choice.considered,
-                "B_max_stable_x_mT": mt(a.choice.B_max_x),
-                "B_max_stable_z_mT": mt(a.choice.B_max_z)}
-    if a.parts is not None:
-        p = a.parts
-        out |= {"magnet_grade": p.grade, "magnet_size": p.size, "silicone": p.silicone,
-                "silicones_holding_G": list(p.inside), "silicone_softer": p.softer,
-                "silicone_stiffer": p.stiffer}
-        if p.grade != "custom":
-            g = grade(p.grade)
-            out["magnet_B_r_T"] = [g.B_r_min, g.B_r, g.B_r_max]
-            out["magnet_M_z_spread_A_per_m"] = list(g.M_z(MU0))
-    low = a.resolution_low
-    if low is not None:
-        out |= {"sigma_Fr_0_mN_low": from_si(low.sigma_r_0, "mN"),
-                "sigma_Fz_0_mN_low": from_si(low.sigma_z_0, "mN"),
-                "sigma_Fr_worst_mN_low": from_si(low.sigma_r_worst, "mN"),
-                "sigma_Fz_worst_mN_low": from_si(low.sigma_z_worst, "mN")}
-    if r is not None:
-        out |= {"sigma_Fr_0_mN": from_si(r.sigma_r_0, "mN"),
-                "sigma_Fz_0_mN": from_si(r.sigma_z_0, "mN"),
-                "sigma_Fr_worst_mN": from_si(r.sigma_r_worst, "mN"),
-                "sigma_Fz_worst_mN": from_si(r.sigma_z_worst, "mN"),
-                "sigma_Fr_worst_at": list(r.where_r), "sigma_Fz_worst_at": list(r.where_z)}
-    return out
+    """Every number of an answer, in user units with the unit in each key (for files):
+    :class:`AnswerRecord`'s document."""
+    return to_json(answer_record(a))
