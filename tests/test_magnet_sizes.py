@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import magtact
-from magtact.optimise import optimise_sensor, sweep
+from magtact.optimise import force_table, optimise_sensor, sweep
 from magtact.parts import SILICONES, SIZES
 from magtact.study import StudyError, study_from_dict
 
@@ -67,8 +67,9 @@ def test_the_chosen_size_has_the_least_noise_of_every_size(magone_design):
 
 def test_each_sizes_best_is_its_own_problems_answer(magone_design):
     """A size's row is the reduction's answer of the problem at that size, solved here on its
-    own through the public API (its bundled models, the same coarse sweep)."""
-    from magtact._front import SIZE_SWEEP_COARSE, SIZE_SWEEP_N
+    own through the public API (its bundled models, the same force table); the force table
+    gives the full sweep's answer."""
+    from magtact._front import SIZE_HEIGHTS
 
     opt = magone_design.sensor_design
     study = magtact.load("magone")
@@ -76,13 +77,14 @@ def test_each_sizes_best_is_its_own_problems_answer(magone_design):
                 if d is not None and n != opt.size)
     st = study.sized(name)
     models = magtact.models_for(st)[0]
-    coarse = replace(st, optimise=replace(st.optimise, sweep_n=SIZE_SWEEP_N,
-                                          sweep_coarse=SIZE_SWEEP_COARSE))
-    own = optimise_sensor(models, st, sweep(models, coarse), nsga2=False).choice
+    own = optimise_sensor(models, st, force_table(models, st, SIZE_HEIGHTS), nsga2=False).choice
     row = opt.per_size[opt.sizes.index(name)]
     assert (row.grade, row.silicone, row.standoff) == (own.grade, own.silicone, own.standoff)
     np.testing.assert_allclose([row.H, row.G, row.sigma_r, row.sigma_z],
                                [own.H, own.G, own.sigma_r, own.sigma_z], rtol=1e-12)
+    full = optimise_sensor(models, st, sweep(models, st), nsga2=False).choice
+    np.testing.assert_allclose([full.H, full.sigma_r, full.sigma_z],
+                               [own.H, own.sigma_r, own.sigma_z], rtol=1e-3)
 
 
 def test_the_card_lists_the_best_sensor_of_each_size(magone_design, magone_budgets):

@@ -365,7 +365,7 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
     (the study's own magnet then says why)."""
     from dataclasses import replace
 
-    from .optimise import InfeasibleError, optimise, optimise_sensor, sweep
+    from .optimise import InfeasibleError, force_table, optimise, optimise_sensor
 
     names, best, notes, solved = study.design.magnet_sizes, [], [], {}
     for name in names:
@@ -376,13 +376,9 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
             best.append(None)
             notes.append("no bundled data hold this size")
             continue
-        try:  # the heights' extrema on a coarser sweep than the chosen size's
-            o = st.optimise
-            coarse = replace(o, sweep_n=min(o.sweep_n, SIZE_SWEEP_N),
-                             sweep_coarse=min(o.sweep_coarse, SIZE_SWEEP_COARSE))
+        try:  # the stable box and force extrema on fewer heights than the chosen size's
             sensor = optimise_sensor(m, _required(st, constraints),
-                                     sweep(m, replace(st, optimise=coarse)), constraints,
-                                     nsga2=False)
+                                     force_table(m, st, SIZE_HEIGHTS), constraints, nsga2=False)
         except InfeasibleError:
             best.append(None)
             notes.append("no sensor of this size meets the requirements")
@@ -404,8 +400,9 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
     return replace(result, sensor_design=per)
 
 
-#: Heights of the sweep (and of its coarse start) on which every magnet size is compared.
-SIZE_SWEEP_N, SIZE_SWEEP_COARSE = 41, 11
+#: Heights of the force table (:func:`magtact.optimise.force_table`) on which every magnet size
+#: is compared.
+SIZE_HEIGHTS = 21
 
 
 def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_source: str,

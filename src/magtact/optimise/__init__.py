@@ -17,6 +17,7 @@ from ._design import (
     as_responses,
     design_maps,
     force_extrema,
+    force_table,
     heights_batch,
     per_design,
     per_height,

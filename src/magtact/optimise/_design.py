@@ -310,6 +310,17 @@ def force_extrema(models: Responses | ModelSet, H, study: Study
     return fr.t, fr.theta, fr.value, fz.value
 
 
+def force_table(models: Responses | ModelSet, study: Study, n: int) -> HeightTable:
+    """The table of :func:`force_extrema` on ``n`` equally spaced heights over the H bounds:
+    the stable box and the force extrema, the sensitivities' maxima NaN (what the sensor
+    problem reads of a table, :meth:`SensorSpace.box`, at a fraction of a sweep's cost)."""
+    H = np.linspace(*study.design.H, n)
+    t_m, theta_m, f_r_min, f_z_max = force_extrema(models, H, study)
+    nan, loc = np.full(n, np.nan), np.full((n, 2), np.nan)
+    return HeightTable(H, t_m, theta_m, f_r_min, f_z_max, nan, nan.copy(), loc, loc.copy(),
+                       loc.copy(), np.ones(n, bool))
+
+
 def _extrema(R: Responses, H: np.ndarray, geo: dict, study: Study,
              warm: HeightTable | None = None, coarse_start: bool = True, maxiter: int = 100,
              starts: int = 1, maximised: tuple[str, ...] = MAXIMISED
