@@ -107,7 +107,6 @@ PENDING: dict[str, str] = {
     "publication/_file.py": "publication.json",
     "publication/_reference.py": "publication.json's reference",
     "publication/_run.py": "publication.json",
-    "viscoelastic/_design.py": "budget.json's time entry (TimeRecord)",
     "_runfolder.py": "run.json (RunManifest) and the folder's bookkeeping",
     "validation/_outputs.py": "validation_synthetic.json",
 }

@@ -101,3 +101,30 @@ def test_an_answer_is_written_from_its_record_and_read_back(magone_design):
     with pytest.raises(RecordError, match="card.json: the document: missing key 'standoff_mm'"):
         from_json(AnswerRecord, {k: v for k, v in doc.items() if k != "standoff_mm"},
                   "card.json")
+
+
+def test_a_time_entry_is_written_from_its_record_and_reads_back_strictly(models):
+    import json
+    from dataclasses import replace
+
+    from magtact._records import from_json, to_json
+    from magtact.study import load_study
+    from magtact.viscoelastic import relaxation_of, time_json, time_response
+    from magtact.viscoelastic._design import TimeEntry
+
+    study = load_study("magone")
+    study = replace(study, material=replace(study.material, relaxation_g1=0.3,
+                                            relaxation_tau1=0.8))
+    prony, _ = relaxation_of(study, 26e3)
+    r = time_response(models, study, 3e-3, 26e3, 0.9, 0.4, prony)
+    sweep = SiliconeSweep.of(r.sweeps[0.0], "given")
+    doc = json.loads(json.dumps(time_json(r, source="given", silicones={"x": sweep})))
+    entry = from_json(TimeEntry, doc, "budget.json")
+    assert json.dumps(to_json(entry)) == json.dumps(doc)
+    assert entry.measured.hysteresis == r.measured.hysteresis and entry.t_m == 0.9
+    t = TimeRecord.from_json(doc)
+    assert [p.theta for p in t.presses] == [0.0, 0.4]
+    loop = r.loops[0.0]
+    k = slice(None, None, -(-len(loop.time) // 201))  # thinned to about 200 samples
+    np.testing.assert_allclose(t.normal_press.F_read, loop.F_read[k], rtol=1e-12)
+    np.testing.assert_allclose(t.silicones["x"].hysteresis, sweep.hysteresis, rtol=1e-12)

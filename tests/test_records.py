@@ -307,3 +307,15 @@ def test_an_inline_record_left_out_reads_as_the_default():
     assert from_json(Grouped, doc) == Grouped("g", WithOptional(1e-3, c="x"))
     with pytest.raises(RecordError, match=r"missing key 'c' \(WithOptional\)"):
         from_json(Grouped, {"name": "g", "a_mm": 1.0})  # a part of the group is no group
+
+
+@dataclass(frozen=True)
+class Table:
+    rows: np.ndarray = entry(unit="mN", levels=("list", "list"), array=True)
+
+
+def test_an_array_of_rows_reads_as_a_matrix_and_ragged_rows_are_refused():
+    t = from_json(Table, {"rows_mN": [[1.0, 2.0], [3.0, 4.0]]})
+    np.testing.assert_array_equal(t.rows, [[1e-3, 2e-3], [3e-3, 4e-3]])
+    with pytest.raises(RecordError, match="table.json: rows_mN: expected an array of rows"):
+        from_json(Table, {"rows_mN": [[1.0, 2.0], [3.0]]}, "table.json")

@@ -413,7 +413,10 @@ def _read(value, e: Entry, depth: int, unit: str, where: str, path: str,
         if e.array and depth == 0:
             import numpy as np
 
-            return np.asarray(items, dtype=float)
+            try:
+                return np.asarray(items, dtype=float)
+            except ValueError:  # rows of unequal length
+                _fail(where, path, "expected an array of rows of equal length")
         return tuple(items)
     if is_dataclass(e.kind):
         if e.shape == "dict" and value == {}:

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from .._files import json_dict, json_list, json_number, json_text
+from .._records import entry, from_json_lenient, from_json_or_none, to_json
 from ..parts import SILICONES
-from ..study import Study, from_si, to_si
+from ..study import Study
 from ._prony import Prony
 from ._sensor import (
     MEASURED_HYSTERESIS,
@@ -80,7 +80,7 @@ class TimeResponse:
     sweeps : dict θ → RateSweep
     hysteresis, creep : (2,) [N]
         The largest gap and |creep| per component (F_r, F_z) over both presses.
-    measured : dict
+    measured : MeasuredPart
         The MagOne's measured hysteresis (fraction and source) against this design's at the
         study's press time, and the smallest single-term ratio g that reaches it at any τ.
     """
@@ -96,7 +96,7 @@ class TimeResponse:
     sweeps: dict
     hysteresis: np.ndarray
     creep: np.ndarray
-    measured: dict
+    measured: MeasuredPart
 
 
 def implied_ratio(f_of_load, t_peak: float, press_time: float, target: float,
@@ -150,79 +150,15 @@ def time_response(models, study: Study, H: float, G: float, t_m: float, theta_m:
     predicted = float(normal.gap[1] / normal.peak[1])
     g_min, tau_at = implied if implied is not None else implied_ratio(
         design_forces(models, H, 0.0), t_m, T, MEASURED_HYSTERESIS, cal)
-    measured = {"fraction": MEASURED_HYSTERESIS, "source": MEASURED_SOURCE,
-                "predicted_fraction": predicted, "peak_F_z": float(normal.peak[1]),
-                "measured_F_z": MEASURED_HYSTERESIS * float(normal.peak[1]),
-                "single_term_g_min": g_min, "single_term_tau": tau_at}
+    measured = MeasuredPart(MEASURED_HYSTERESIS, MEASURED_SOURCE, g_min, tau_at,
+                            predicted=predicted,
+                            measured_at_this_range=MEASURED_HYSTERESIS * float(normal.peak[1]))
     return TimeResponse(prony, T, hold, cal, float(t_m), float(theta_m), loops, creeps, sweeps,
                         hyst, creep, measured)
 
 
 def _every(n: int, most: int = 201) -> slice:
     return slice(None, None, max(1, -(-n // most)))
-
-
-def time_json(r: TimeResponse, *, source: str | None = None,
-              silicones: dict[str, SiliconeSweep] | None = None) -> dict:
-    """Every number of a :class:`TimeResponse` in user units (mN, s), the unit in each key;
-    the loops and creeps thinned to about 200 samples. With ``source`` (where the relaxation
-    comes from, first) and ``silicones`` (the catalogue silicones' sweeps, last): the ``time``
-    entry of a budget (read back by :meth:`TimeRecord.from_json`)."""
-    def mN(a):
-        return from_si(np.asarray(a, dtype=float), "mN").tolist()
-
-    def loop(lp: Loop) -> dict:
-        k = _every(len(lp.time))
-        return {"time_s": lp.time[k].tolist(), "load_t": lp.load[k].tolist(),
-                "F_true_mN": mN(lp.F_true[k]), "F_read_mN": mN(lp.F_read[k]),
-                "hysteresis_mN": mN(lp.gap), "loop_area_mN2": (lp.area * 1e6).tolist(),
-                "largest_error_mN": mN(lp.error), "peak_mN": mN(lp.peak)}
-
-    def creep(c: Creep) -> dict:
-        k = _every(len(c.time))
-        return {"time_s": c.time[k].tolist(), "F_true_mN": mN(c.F_true[k]),
-                "F_read_mN": mN(c.F_read[k]), "creep_mN": mN(c.creep),
-                "error_at_end_mN": mN(c.error)}
-
-    def sweep(s: RateSweep) -> dict:
-        return {"press_time_s": s.press_times.tolist(), "hysteresis_mN": mN(s.gap),
-                "loop_area_mN2": (s.area * 1e6).tolist(), "largest_error_mN": mN(s.error),
-                "peak_mN": mN(s.peak)}
-
-    p = r.prony
-    m = r.measured
-    head = {} if source is None else {"source": source}
-    tail = {} if silicones is None else {
-        "silicones": {name: sw.to_json() for name, sw in silicones.items()}}
-    return head | {
-        "relaxation": {"G_inf_kPa": from_si(p.G_inf, "kPa"), "g": list(p.ratios),
-                       "tau_s": list(p.tau), "source": p.source},
-        "press_time_s": r.press_time, "hold_s": r.hold, "calibrated_on": r.calibrated_on,
-        "t_m": r.t_m, "theta_m_rad": r.theta_m, "components": list(COMPONENTS),
-        "hysteresis_mN": mN(r.hysteresis), "creep_mN": mN(r.creep),
-        "presses": [{"theta_rad": th, "loop": loop(r.loops[th]), "creep": creep(r.creeps[th]),
-                     "rate_sweep": sweep(r.sweeps[th])} for th in r.loops],
-        "measured": {"hysteresis_pct": 100 * m["fraction"], "source": m["source"],
-                     "predicted_pct": 100 * m["predicted_fraction"],
-                     "measured_mN_at_this_range": from_si(m["measured_F_z"], "mN"),
-                     "single_term_g_min": None if not np.isfinite(m["single_term_g_min"])
-                     else m["single_term_g_min"],
-                     "single_term_tau_s": None if not np.isfinite(m["single_term_tau"])
-                     else m["single_term_tau"]},
-    } | tail
-
-
-def unknown_time_json(source: str, press_time: float, hold: float, calibrated_on: str,
-                      g_min: float, tau: float) -> dict:
-    """The ``time`` entry of a budget whose silicone's relaxation is not known: why
-    (``source``), the study's load history [s] and the MagOne's measured hysteresis with the
-    smallest single-term ratio ``g_min`` (at ``tau`` [s]) that reaches it (None where none
-    does)."""
-    return {"source": source, "press_time_s": press_time, "hold_s": hold,
-            "calibrated_on": calibrated_on,
-            "measured": {"hysteresis_pct": 100 * MEASURED_HYSTERESIS, "source": MEASURED_SOURCE,
-                         "single_term_g_min": None if not np.isfinite(g_min) else g_min,
-                         "single_term_tau_s": None if not np.isfinite(tau) else tau}}
 
 
 @dataclass(frozen=True)
@@ -239,9 +175,9 @@ class SiliconeSweep:
         The hysteresis of F_z at each press time, as a fraction of the peak F_z [1].
     """
 
-    source: str
-    press_times: np.ndarray
-    hysteresis: np.ndarray
+    source: str = entry(kind=str)
+    press_times: np.ndarray = entry("press_time_s", "s", levels=("list",), array=True)
+    hysteresis: np.ndarray = entry(unit="pct", levels=("list",), array=True)
 
     @classmethod
     def of(cls, sweep: RateSweep, source: str) -> SiliconeSweep:
@@ -251,19 +187,171 @@ class SiliconeSweep:
 
     def to_json(self) -> dict:
         """In user units (s, % of the peak F_z)."""
-        return {"source": self.source, "press_time_s": self.press_times.tolist(),
-                "hysteresis_pct": (100 * self.hysteresis).tolist()}
+        return to_json(self)
 
     @classmethod
     def from_json(cls, data) -> SiliconeSweep | None:
-        """The sweep :meth:`to_json` wrote; None for anything but a JSON object with press
-        times and hysteresis of equal length."""
-        if not isinstance(data, dict):
-            return None
-        T, pct = _numbers(data.get("press_time_s")), _numbers(data.get("hysteresis_pct"))
-        if T is None or pct is None or T.shape != pct.shape:
-            return None
-        return cls(json_text(data.get("source")), T, pct / 100)
+        """The sweep :meth:`to_json` wrote; None for anything else (press times and
+        hysteresis of unequal length included)."""
+        return _sweep_or_none(from_json_or_none(cls, data))
+
+
+def _sweep_or_none(sw: SiliconeSweep | None) -> SiliconeSweep | None:
+    """``sw`` where it holds press times and hysteresis of equal length, else None."""
+    if sw is None or sw.press_times is None or sw.hysteresis is None or \
+            sw.press_times.shape != sw.hysteresis.shape:
+        return None
+    return sw
+
+
+@dataclass(frozen=True)
+class RelaxationPart:
+    """The relaxation of a time entry: G_∞ [Pa], the Prony ratios and times [s], its source."""
+
+    G_inf: float = entry(unit="kPa")
+    g: tuple = entry(levels=("list",))
+    tau: tuple = entry(unit="s", levels=("list",))
+    source: str = entry(kind=str)
+
+
+@dataclass(frozen=True)
+class LoopPart:
+    """A press and release (:class:`Loop`) in a time entry, thinned to about 200 samples:
+    time [s], load t, true and read force (F_r, F_z) [N], the hysteresis, loop area (held in
+    mN², the unit of the file: the units module has no squared forces), largest error and
+    peak per component [N]."""
+
+    time: np.ndarray = entry(unit="s", levels=("list",), array=True)
+    load_t: np.ndarray = entry(levels=("list",), array=True)
+    F_true: np.ndarray = entry(unit="mN", levels=("list", "list"), array=True)
+    F_read: np.ndarray = entry(unit="mN", levels=("list", "list"), array=True)
+    hysteresis: np.ndarray = entry(unit="mN", levels=("list",), array=True)
+    loop_area_mN2: np.ndarray = entry(levels=("list",), array=True)
+    largest_error: np.ndarray = entry(unit="mN", levels=("list",), array=True)
+    peak: np.ndarray = entry(unit="mN", levels=("list",), array=True)
+
+
+@dataclass(frozen=True)
+class CreepPart:
+    """A press held (:class:`Creep`) in a time entry, thinned: time [s], true and read force
+    [N], the creep and the error at the end per component [N]."""
+
+    time: np.ndarray = entry(unit="s", levels=("list",), array=True)
+    F_true: np.ndarray = entry(unit="mN", levels=("list", "list"), array=True)
+    F_read: np.ndarray = entry(unit="mN", levels=("list", "list"), array=True)
+    creep: np.ndarray = entry(unit="mN", levels=("list",), array=True)
+    error_at_end: np.ndarray = entry(unit="mN", levels=("list",), array=True)
+
+
+@dataclass(frozen=True)
+class SweepPart:
+    """A rate sweep (:class:`RateSweep`) in a time entry: press times [s] and, per press time
+    and component, the hysteresis [N], loop area [mN², as :class:`LoopPart`], largest error and
+    peak [N]."""
+
+    press_time: np.ndarray = entry(unit="s", levels=("list",), array=True)
+    hysteresis: np.ndarray = entry(unit="mN", levels=("list", "list"), array=True)
+    loop_area_mN2: np.ndarray = entry(levels=("list", "list"), array=True)
+    largest_error: np.ndarray = entry(unit="mN", levels=("list", "list"), array=True)
+    peak: np.ndarray = entry(unit="mN", levels=("list", "list"), array=True)
+
+
+@dataclass(frozen=True)
+class PressPart:
+    """One press of a time entry: its shear angle [rad], loop, creep and rate sweep."""
+
+    theta: float = entry(unit="rad")
+    loop: LoopPart = entry(kind=LoopPart)
+    creep: CreepPart = entry(kind=CreepPart)
+    rate_sweep: SweepPart = entry(kind=SweepPart)
+
+
+@dataclass(frozen=True)
+class MeasuredPart:
+    """The MagOne's measured hysteresis (a fraction of the peak F_z) and its source, this
+    design's predicted one and its measured force at this range [N] (None: not computed), and
+    the smallest single-term ratio g reaching it with its τ [s] (NaN, null in the file: none
+    does)."""
+
+    hysteresis: float = entry(unit="pct")
+    source: str = entry(kind=str)
+    predicted: float | None = entry(unit="pct", optional=True, omit="none", default=None,
+                                    kw_only=True)
+    measured_at_this_range: float | None = entry(
+        "measured_mN_at_this_range", "mN", optional=True, omit="none", default=None,
+        kw_only=True)
+    single_term_g_min: float = entry(null_nan=True)
+    single_term_tau: float = entry(unit="s", null_nan=True)
+
+
+def _known(**kw):
+    """A part of a time entry that only a known relaxation gives (left out otherwise)."""
+    return entry(optional=True, omit="none", default=None, kw_only=True, **kw)
+
+
+@dataclass(frozen=True)
+class TimeEntry:
+    """The ``time`` entry of a budget as written (:func:`time_json`, :func:`unknown_time_json`),
+    in SI: where the relaxation comes from, the relaxation, the study's load history, the
+    presses with their largest hysteresis and creep per component [N], the comparison with the
+    measured hysteresis and the catalogue silicones' sweeps."""
+
+    source: str | None = entry(kind=str, optional=True, omit="none", default=None,
+                               kw_only=True)
+    relaxation: RelaxationPart | None = _known(kind=RelaxationPart)
+    press_time: float = entry(unit="s")
+    hold: float = entry(unit="s")
+    calibrated_on: str = entry(kind=str)
+    t_m: float | None = _known()
+    theta_m: float | None = _known(unit="rad")
+    components: tuple | None = _known(kind=str, levels=("list",))
+    hysteresis: np.ndarray | None = _known(unit="mN", levels=("list",), array=True)
+    creep: np.ndarray | None = _known(unit="mN", levels=("list",), array=True)
+    presses: tuple | None = _known(kind=PressPart, levels=("list",))
+    measured: MeasuredPart | None = entry(kind=MeasuredPart, optional=True, default=None,
+                                          kw_only=True)
+    silicones: dict | None = _known(kind=SiliconeSweep, levels=("map",))
+
+
+def time_json(r: TimeResponse, *, source: str | None = None,
+              silicones: dict[str, SiliconeSweep] | None = None) -> dict:
+    """Every number of a :class:`TimeResponse` in user units (mN, s), the unit in each key;
+    the loops and creeps thinned to about 200 samples. With ``source`` (where the relaxation
+    comes from, first) and ``silicones`` (the catalogue silicones' sweeps, last): the ``time``
+    entry of a budget (:class:`TimeEntry`, read back by :meth:`TimeRecord.from_json`)."""
+    def loop(lp: Loop) -> LoopPart:
+        k = _every(len(lp.time))
+        return LoopPart(lp.time[k], lp.load[k], lp.F_true[k], lp.F_read[k], lp.gap,
+                        lp.area * 1e6, lp.error, lp.peak)
+
+    def creep(c: Creep) -> CreepPart:
+        k = _every(len(c.time))
+        return CreepPart(c.time[k], c.F_true[k], c.F_read[k], c.creep, c.error)
+
+    def sweep(s: RateSweep) -> SweepPart:
+        return SweepPart(s.press_times, s.gap, s.area * 1e6, s.error, s.peak)
+
+    p = r.prony
+    return to_json(TimeEntry(
+        source=source,
+        relaxation=RelaxationPart(p.G_inf, tuple(p.ratios), tuple(p.tau), p.source),
+        press_time=r.press_time, hold=r.hold, calibrated_on=r.calibrated_on, t_m=r.t_m,
+        theta_m=r.theta_m, components=COMPONENTS, hysteresis=r.hysteresis, creep=r.creep,
+        presses=tuple(PressPart(th, loop(r.loops[th]), creep(r.creeps[th]),
+                                sweep(r.sweeps[th])) for th in r.loops),
+        measured=r.measured,
+        silicones=silicones))
+
+
+def unknown_time_json(source: str, press_time: float, hold: float, calibrated_on: str,
+                      g_min: float, tau: float) -> dict:
+    """The ``time`` entry of a budget whose silicone's relaxation is not known
+    (:class:`TimeEntry`): why (``source``), the study's load history [s] and the MagOne's
+    measured hysteresis with the smallest single-term ratio ``g_min`` (at ``tau`` [s]) that
+    reaches it (None where none does)."""
+    return to_json(TimeEntry(
+        source=source, press_time=press_time, hold=hold, calibrated_on=calibrated_on,
+        measured=MeasuredPart(MEASURED_HYSTERESIS, MEASURED_SOURCE, g_min, tau)))
 
 
 @dataclass(frozen=True)
@@ -290,27 +378,33 @@ class TimePress:
     peak: np.ndarray
 
     @classmethod
+    def of(cls, p: PressPart | None) -> TimePress | None:
+        """The press of a :class:`PressPart` read field by field; None where it lacks the
+        angle, the loop or the sweep (or gives arrays of the wrong shape)."""
+        if p is None or p.loop is None or p.rate_sweep is None:
+            return None
+        loop, sweep = p.loop, p.rate_sweep
+        arrays = (loop.F_true, loop.F_read, sweep.press_time, sweep.hysteresis, sweep.peak)
+        if p.theta is None or any(a is None for a in arrays):
+            return None
+        true, read, T, gap, peak = arrays
+        if not (true.ndim == read.ndim == gap.ndim == peak.ndim == 2 and T.ndim == 1) or \
+                true.shape != read.shape or true.shape[1] != 2 or gap.shape[1] != 2 or \
+                peak.shape[1] != 2 or not len(T) == len(gap) == len(peak):
+            return None
+        return cls(p.theta, true, read, T, gap, peak)
+
+    @classmethod
     def from_json(cls, data) -> TimePress | None:
         """The press :func:`time_json` wrote; None where it lacks the angle, the loop or the
         sweep (or gives arrays of the wrong shape)."""
-        if not isinstance(data, dict):
-            return None
-        theta = json_number(data.get("theta_rad"))
-        loop, sweep = json_dict(data.get("loop")), json_dict(data.get("rate_sweep"))
-        true, read = (_numbers(loop.get(k), 2) for k in ("F_true_mN", "F_read_mN"))
-        T = _numbers(sweep.get("press_time_s"))
-        gap, peak = (_numbers(sweep.get(k), 2) for k in ("hysteresis_mN", "peak_mN"))
-        if theta is None or any(a is None for a in (true, read, T, gap, peak)) or \
-                true.shape != read.shape or not (len(T) == len(gap) == len(peak)):
-            return None
-        return cls(theta, to_si(true, "mN"), to_si(read, "mN"), T, to_si(gap, "mN"),
-                   to_si(peak, "mN"))
+        return cls.of(from_json_lenient(PressPart, data))
 
 
 @dataclass(frozen=True)
 class TimeRecord:
-    """The ``time`` entry of a budget (:func:`time_json` with its source and silicones, or
-    :func:`unknown_time_json`) read back, in SI; a value the entry does not give is None.
+    """The ``time`` entry of a budget (:class:`TimeEntry`) read back, in SI; a value the entry
+    does not give is None.
 
     Attributes
     ----------
@@ -342,34 +436,16 @@ class TimeRecord:
 
     @classmethod
     def from_json(cls, data) -> TimeRecord | None:
-        """The entry :func:`time_json` or :func:`unknown_time_json` wrote; None for anything
-        but a non-empty JSON object (a press or silicone that does not read is left out)."""
+        """The entry :func:`time_json` or :func:`unknown_time_json` wrote, read field by
+        field; None for anything but a non-empty JSON object (a press or silicone that does
+        not read is left out)."""
         if not isinstance(data, dict) or not data:
             return None
-        gap = _numbers(data.get("hysteresis_mN"))
-        pct = json_number(json_dict(data.get("measured")).get("hysteresis_pct"))
-        silicones = {name: sw for name, sw in ((n, SiliconeSweep.from_json(v)) for n, v in
-                                              json_dict(data.get("silicones")).items())
-                     if sw is not None}
-        return cls(json_text(data.get("source")), json_number(data.get("press_time_s")),
-                   None if gap is None or gap.shape != (2,) else to_si(gap, "mN"),
-                   None if pct is None else pct / 100,
-                   tuple(p for p in map(TimePress.from_json, json_list(data.get("presses")))
-                         if p is not None), silicones)
-
-
-def _numbers(value, columns: int | None = None) -> np.ndarray | None:
-    """A JSON array of numbers (with ``columns``: of rows of that many numbers) as floats;
-    None for anything else (a null reads as NaN)."""
-    if not isinstance(value, list):
-        return None
-    try:
-        a = np.asarray([np.nan if v is None else v for v in value] if columns is None
-                       else [[np.nan if v is None else v for v in row] for row in value],
-                       dtype=float)
-    except (TypeError, ValueError):
-        return None
-    if a.ndim != (1 if columns is None else 2) or (columns is not None
-                                                   and a.shape[1] != columns):
-        return None
-    return a
+        e = from_json_lenient(TimeEntry, data)
+        gap = e.hysteresis
+        measured = e.measured.hysteresis if e.measured is not None else None
+        return cls(e.source or "", e.press_time,
+                   None if gap is None or gap.shape != (2,) else gap, measured,
+                   tuple(p for p in map(TimePress.of, e.presses or ()) if p is not None),
+                   {name: sw for name, sw in (e.silicones or {}).items()
+                    if _sweep_or_none(sw) is not None})
