@@ -365,6 +365,7 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
     (the study's own magnet then says why)."""
     from dataclasses import replace
 
+    from .metamodel import fit_quality
     from .optimise import InfeasibleError, force_table, optimise, optimise_sensor
 
     names, best, notes, solved = study.design.magnet_sizes, [], [], {}
@@ -384,7 +385,10 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
             notes.append("no sensor of this size meets the requirements")
             continue
         best.append(sensor.choice)
-        notes.append("")
+        quality = fit_quality(m)
+        notes.append("" if not quality.is_poor else "its fit is poor (" + "; ".join(
+            f"{k}: held-out error {quality.held_out[k][1]:.1%} of the range"
+            for k in quality.poor) + ")")
         solved[name] = (m, st)
     if not solved:
         return None

@@ -758,7 +758,8 @@ class SensorOptimisation:
         The reduction's best sensor of each size of :attr:`sizes` (nominal parts), None where
         the size has none; :attr:`size_notes` says why.
     size_notes : tuple of str
-        Why a size of :attr:`sizes` has no sensor ("" where it has one).
+        Why a size of :attr:`sizes` has no sensor, or a caution on the one it has (its models
+        a poor fit); "" where there is none.
     size : str
         The chosen size (of :attr:`sizes`; "" where it chose from none).
     """
@@ -802,7 +803,7 @@ class SensorOptimisation:
         """The answer in user units (``sensor.json``)."""
         p = self.pareto
         sizes = {"magnet_size": self.size, "magnet_sizes": [
-            {"size": name, "best": None if d is None else d.to_json(), "why_none": note or None}
+            {"size": name, "best": None if d is None else d.to_json(), "note": note or None}
             for name, d, note in zip(self.sizes, self.per_size, self.size_notes, strict=True)]
         } if self.sizes else {}
         return {"chosen": self.choice.to_json(),

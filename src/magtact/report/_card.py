@@ -250,6 +250,7 @@ def size_table(opt) -> list[list[str]]:
             text = (f"σ_F {_mN(d.sigma_r)} / {_mN(d.sigma_z)} (shear / normal) at H "
                     f"{mm(d.H):.3g} mm, G {kpa(d.G):.3g} kPa ({d.silicone}), {d.grade}, chip "
                     f"{mm(d.standoff):.3g} mm below"
+                    + (f"; {note}" if note else "")
                     + ("; the chosen size" if name == opt.size else ""))
         rows.append([label, text])
     return rows
