@@ -319,3 +319,10 @@ def test_an_array_of_rows_reads_as_a_matrix_and_ragged_rows_are_refused():
     np.testing.assert_array_equal(t.rows, [[1e-3, 2e-3], [3e-3, 4e-3]])
     with pytest.raises(RecordError, match="table.json: rows_mN: expected an array of rows"):
         from_json(Table, {"rows_mN": [[1.0, 2.0], [3.0]]}, "table.json")
+
+
+def test_a_table_row_keeps_its_numbers_that_are_not_finite():
+    s = _sample(parts=(Part("b", math.nan),))
+    assert to_json(s)["parts"] == [{"name": "b", "force_mN": None}]
+    row = to_json(s, null_nan=False)["parts"][0]
+    assert row["name"] == "b" and math.isnan(row["force_mN"])

@@ -93,6 +93,18 @@ def test_vanishing_denominator_everywhere_gives_nan_and_says_so(tmp_path):
     v = validate(exp, zero, filter=FilterSettings(f_hi=None), n_grid=4)
     assert math.isnan(v.stats["B_r"].eps) and v.stats["B_r"].eps_excluded.all()
     assert v.rows()[0]["eps_excluded"] == "all points (denominator vanishes)"
+    # the summary file writes the ε that is not a number as null and reads back as its record
+    import json
+
+    from magtact._records import from_json
+    from magtact.validation._outputs import ValidationSummary, write_outputs
+
+    path = next(f for f in write_outputs(v, tmp_path / "out") if f.suffix == ".json")
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    assert doc["rows"][0]["eps_percent"] is None and doc["filter_cycles_per_mm"][1] is None
+    back = from_json(ValidationSummary, doc, path.name)
+    assert math.isnan(back.rows[0].eps) and back.theta == v.theta
+    assert back.rows[1].c_v_at_u_z == pytest.approx(v.stats["B_z"].c_v_at, rel=1e-15)
 
 
 def test_filter_removes_high_frequency_sinusoid_and_keeps_slow_ramp():

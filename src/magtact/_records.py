@@ -183,13 +183,16 @@ def si_value(user: float, unit: str) -> float:
 
 
 # ---- writing ---------------------------------------------------------------------------------
-def to_json(record) -> dict:
+def to_json(record, *, null_nan: bool = True) -> dict:
     """The JSON document (a dict) of a record, every number in its user unit.
 
     Parameters
     ----------
     record : dataclass instance
         A record declared with :func:`entry`.
+    null_nan : bool
+        Write a number that is not finite as null where its field is declared ``null_nan``;
+        False keeps every number as it is (the rows of a table, where NaN is a cell).
 
     Returns
     -------
@@ -203,9 +206,10 @@ def to_json(record) -> dict:
             continue
         if e.inline:
             inner = _inner_record(e, value)
-            out |= (dict.fromkeys(keys(e.kind)) if inner is None else to_json(inner))
+            out |= (dict.fromkeys(keys(e.kind)) if inner is None
+                    else to_json(inner, null_nan=null_nan))
             continue
-        out[key_of(f, e)] = _write(value, e, 0, e.unit)
+        out[key_of(f, e)] = _write(value, e, 0, e.unit, null_nan)
     return out
 
 
@@ -229,7 +233,7 @@ def _inner_record(e: Entry, value):
     return e.kind(**{f.name: getattr(value, f.name) for f, _ in declared(e.kind)})
 
 
-def _write(value, e: Entry, depth: int, unit: str):
+def _write(value, e: Entry, depth: int, unit: str, null_nan: bool = True):
     if depth < len(e.levels):
         if value is None and e.optional and depth == 0:
             return None
@@ -239,17 +243,17 @@ def _write(value, e: Entry, depth: int, unit: str):
             for name, v in value.items():
                 u = units.get(name, unit) if e.key_units is not None and depth == 0 else unit
                 k = f"{name}_{u}" if e.key_units is not None and depth == 0 and u else name
-                out[k] = _write(v, e, depth + 1, u)
+                out[k] = _write(v, e, depth + 1, u, null_nan)
             return out
-        return [_write(v, e, depth + 1, unit) for v in value]
+        return [_write(v, e, depth + 1, unit, null_nan) for v in value]
     if value is None and (e.optional or e.null_nan):
         return None
     if is_dataclass(e.kind):
         if e.shape == "dict" and not value:
             return {}
-        return to_json(_inner_record(e, value))
+        return to_json(_inner_record(e, value), null_nan=null_nan)
     if e.kind is float:
-        if e.null_nan and not math.isfinite(value):
+        if e.null_nan and null_nan and not math.isfinite(value):
             return None
         return user_value(value, unit)
     return value

@@ -3,13 +3,36 @@
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from .._files import write_text
-from ..study import from_si, mm
-from ._stats import Validation
+from .._records import entry, to_json
+from ._stats import Validation, ValidationRow
+
+
+@dataclass(frozen=True)
+class ValidationSummary:
+    """``validation[_synthetic].json``: the validation's setting and its table, in SI.
+
+    ``filter`` holds the band-pass's lower and upper cut-off [1/m] (None: no upper one);
+    ``u_z_range`` the common grid's least and largest u_z [m].
+    """
+
+    title: str = entry(kind=str)
+    synthetic: bool = entry(kind=bool)
+    theta: float = entry(unit="rad")
+    n_tests: int = entry(kind=int)
+    sensors: tuple[str, ...] = entry(kind=str, levels=("list",))
+    model: str = entry(kind=str)
+    filter: tuple = entry("filter_cycles_per_mm", "per_mm", levels=("list",), null_nan=True)
+    floor: float = entry()
+    n_grid: int = entry(kind=int)
+    u_z_range: tuple = entry(unit="mm", levels=("list",))
+    notes: tuple[str, ...] = entry(kind=str, levels=("list",))
+    sources: tuple[str, ...] = entry(kind=str, levels=("list",))
+    rows: tuple[ValidationRow, ...] = entry(kind=ValidationRow, levels=("list",))
 
 
 def output_stem(synthetic: bool) -> str:
@@ -48,26 +71,15 @@ def write_outputs(validation: Validation, out: str | Path, *, sources=(),
     out.mkdir(parents=True, exist_ok=True)
     stem = output_stem(validation.synthetic)
     written = [validation.write_csv(out / f"{stem}.csv")]
-    summary = {
-        "title": validation.title,
-        "synthetic": validation.synthetic,
-        "theta_rad": validation.theta,
-        "n_tests": validation.n_tests,
-        "sensors": list(validation.sensors),
-        "model": validation.model_label,
-        "filter_cycles_per_mm": [from_si(validation.filter.f_lo, "per_mm"),
-                                 None if validation.filter.f_hi is None
-                                 else from_si(validation.filter.f_hi, "per_mm")],
-        "floor": validation.floor,
-        "n_grid": int(validation.u_z.size),
-        "u_z_range_mm": [float(mm(validation.u_z.min())), float(mm(validation.u_z.max()))],
-        "notes": list(validation.notes),
-        "sources": [str(s) for s in sources],
-        "rows": [{k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                  for k, v in row.items()} for row in validation.rows()],
-    }
+    f = validation.filter
+    summary = ValidationSummary(
+        validation.title, validation.synthetic, validation.theta, validation.n_tests,
+        tuple(validation.sensors), validation.model_label, (f.f_lo, f.f_hi),
+        validation.floor, int(validation.u_z.size),
+        (float(validation.u_z.min()), float(validation.u_z.max())), tuple(validation.notes),
+        tuple(str(s) for s in sources), tuple(validation.row_records()))
     path = out / f"{stem}.json"
-    write_text(path, json.dumps(summary, indent=2, ensure_ascii=False))
+    write_text(path, json.dumps(to_json(summary), indent=2, ensure_ascii=False))
     written.append(path)
     if figures is not None:
         written += figures(validation, out / stem)

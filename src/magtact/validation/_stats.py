@@ -10,6 +10,7 @@ import numpy as np
 from .._errors import MagtactError
 from .._files import significant, write_csv
 from .._floor import RELATIVE_FLOOR, above_floor
+from .._records import entry, to_json
 from ..geometry import shear_displacement
 from ..study import mm
 from ._filter import FilterSettings, bandpass
@@ -61,6 +62,25 @@ class ResponseStats:
     eps_at: float
     cv_excluded: np.ndarray
     eps_excluded: np.ndarray
+
+
+@dataclass(frozen=True)
+class ValidationRow:
+    """A row of a validation's table (CSV and JSON): the response, its c_v and ε [%] with the
+    u_z [m] where each is largest, the u_z ranges left out of each, in words (mm), and the
+    model. A c_v or ε that is not a number is null in the JSON file."""
+
+    data: str = entry(kind=str)
+    response: str = entry(kind=str)
+    unit: str = entry(kind=str)
+    n_tests: int = entry(kind=int)
+    c_v: float = entry("c_v_percent", null_nan=True)
+    c_v_at_u_z: float = entry(unit="mm", null_nan=True)
+    eps: float = entry("eps_percent", null_nan=True)
+    eps_at_u_z: float = entry(unit="mm", null_nan=True)
+    c_v_excluded: str = entry(kind=str)
+    eps_excluded: str = entry(kind=str)
+    model: str = entry(kind=str)
 
 
 @dataclass(frozen=True)
@@ -117,21 +137,17 @@ class Validation:
         s = self.stats[response]
         return _ranges_text(self.u_z, s.eps_excluded if measure == "eps" else s.cv_excluded)
 
+    def row_records(self) -> list[ValidationRow]:
+        """The table of c_v and ε: one record per response."""
+        data = "synthetic" if self.synthetic else "experiment"
+        return [ValidationRow(data, r, s.unit, self.n_tests, s.c_v, s.c_v_at, s.eps, s.eps_at,
+                              self.excluded(r, "c_v"), self.excluded(r, "eps"),
+                              self.model_label)
+                for r, s in ((r, self.stats[r]) for r in RESPONSES)]
+
     def rows(self) -> list[dict[str, object]]:
         """The table of c_v and ε: one dict per response, user units (mm, %)."""
-        out = []
-        for r in RESPONSES:
-            s = self.stats[r]
-            out.append({
-                "data": "synthetic" if self.synthetic else "experiment",
-                "response": r, "unit": s.unit, "n_tests": self.n_tests,
-                "c_v_percent": s.c_v, "c_v_at_u_z_mm": mm(s.c_v_at),
-                "eps_percent": s.eps, "eps_at_u_z_mm": mm(s.eps_at),
-                "c_v_excluded": self.excluded(r, "c_v"),
-                "eps_excluded": self.excluded(r, "eps"),
-                "model": self.model_label,
-            })
-        return out
+        return [to_json(r, null_nan=False) for r in self.row_records()]
 
     def write_csv(self, path: str | Path) -> Path:
         """Write :meth:`rows` as CSV; return the path."""
