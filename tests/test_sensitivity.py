@@ -181,6 +181,15 @@ def test_gamma_from_data_agrees_with_exact_formulas():
         above = g > 0.05 * g.max()
         assert v["within_5_percent_above_floor"] == np.mean(np.abs(g - d)[above] / g[above] <= 0.05)
         assert v["max_abs_over_max"] == pytest.approx(np.max(np.abs(g - d)) / g.max(), rel=1e-12)
+    # the check is its record's document, and a floor above every point leaves that spread out
+    from magtact._records import from_json, to_json
+    from magtact.sensitivity._check import GammaCheck
+
+    for v in check.values():
+        assert to_json(from_json(GammaCheck, v)) == v
+    empty = compare_with_data(analytic_set(), ds, t_min=0.2, floor=1.5)["gamma_z"]
+    assert "median_above_floor" not in empty and "median_interior" in empty
+    assert from_json(GammaCheck, empty).above_floor is None
 
 
 def test_gamma_from_data_needs_three_levels():

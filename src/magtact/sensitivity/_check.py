@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .._errors import MagtactError
 from .._floor import RELATIVE_FLOOR, above_floor
+from .._records import entry, to_json
 from ..metamodel import ModelSet
 from ._gamma import gamma, row_norms, through_displacement
 
@@ -86,15 +89,66 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
         scale = np.nanmax(np.abs(gm[keep]))
         rel_all = diff / np.abs(gm)
         above = keep & above_floor(gm, scale, floor)
-        stats = {}
-        for suffix, mask in (("", keep), ("_interior", interior), ("_above_floor", above)):
+        spreads = []
+        for cls, mask in ((Spread, keep), (InteriorSpread, interior), (AboveFloorSpread, above)):
             rel = rel_all[mask]
             rel = rel[np.isfinite(rel)]
-            if rel.size:
-                stats |= {"median" + suffix: float(np.median(rel)),
-                          "p95" + suffix: float(np.percentile(rel, 95)),
-                          "max" + suffix: float(rel.max()), "n_points" + suffix: int(rel.size)}
-        stats |= {"within_5_percent_above_floor": float(np.mean(rel_all[above] <= 0.05)),
-                  "max_abs_over_max": float(np.nanmax(diff[keep]) / scale)}
-        out[name] = stats | {"t_min": t_min, "floor": floor}
+            spreads.append(cls(float(np.median(rel)), float(np.percentile(rel, 95)),
+                               float(rel.max()), int(rel.size)) if rel.size else None)
+        out[name] = to_json(GammaCheck(float(np.mean(rel_all[above] <= 0.05)),
+                                       float(np.nanmax(diff[keep]) / scale), t_min, floor,
+                                       all=spreads[0], interior=spreads[1],
+                                       above_floor=spreads[2]))
     return out
+
+
+@dataclass(frozen=True)
+class Spread:
+    """The median, 95th percentile and largest relative difference |γ_model − γ_data| /
+    |γ_model| over the points t ≥ t_min, and how many points."""
+
+    median: float = entry()
+    p95: float = entry()
+    max: float = entry()
+    n_points: int = entry(kind=int)
+
+
+@dataclass(frozen=True)
+class InteriorSpread:
+    """:class:`Spread` over the points where both differences of the data are central."""
+
+    median: float = entry("median_interior")
+    p95: float = entry("p95_interior")
+    max: float = entry("max_interior")
+    n_points: int = entry("n_points_interior", kind=int)
+
+
+@dataclass(frozen=True)
+class AboveFloorSpread:
+    """:class:`Spread` over the points where |γ_model| is above the floor."""
+
+    median: float = entry("median_above_floor")
+    p95: float = entry("p95_above_floor")
+    max: float = entry("max_above_floor")
+    n_points: int = entry("n_points_above_floor", kind=int)
+
+
+def _spread(kind: type):
+    """A spread of a :class:`GammaCheck`, left out where no point is left to it."""
+    return entry(kind=kind, inline=True, optional=True, omit="none", default=None,
+                 kw_only=True)
+
+
+@dataclass(frozen=True)
+class GammaCheck:
+    """The check of one model's γ against the data's (:func:`compare_with_data`): the spreads
+    of the relative difference, the fraction of the points above the floor within 5 %, the
+    largest absolute difference over the largest |γ_model|, and the settings t_min, floor."""
+
+    all: Spread | None = _spread(Spread)
+    interior: InteriorSpread | None = _spread(InteriorSpread)
+    above_floor: AboveFloorSpread | None = _spread(AboveFloorSpread)
+    within_5_percent_above_floor: float = entry()
+    max_abs_over_max: float = entry()
+    t_min: float = entry()
+    floor: float = entry()
