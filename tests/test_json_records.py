@@ -128,3 +128,23 @@ def test_a_time_entry_is_written_from_its_record_and_reads_back_strictly(models)
     k = slice(None, None, -(-len(loop.time) // 201))  # thinned to about 200 samples
     np.testing.assert_allclose(t.normal_press.F_read, loop.F_read[k], rtol=1e-12)
     np.testing.assert_allclose(t.silicones["x"].hysteresis, sweep.hysteresis, rtol=1e-12)
+
+
+def test_a_run_manifest_round_trips_and_a_forged_one_reads_field_by_field():
+    import json
+
+    from magtact._runfolder import RunManifest, StageRecord
+
+    m = RunManifest("id", "study", "magtact run", "now", stages=[
+        StageRecord("doe", "DOE", "ok", 1.5, "done", ["a note"])], doe_source="bundled",
+        wall_time_s=2.0, finished="later")
+    doc = json.loads(json.dumps(m.to_json()))
+    assert "interrupted" not in doc and RunManifest.from_json(doc) == m
+    forged = {"stages": [{"key": "doe", "status": 3, "wall_time_s": "x", "notes": 5}, 1, None],
+              "versions": 3, "run_id": 7, "wall_time_s": "long", "study": "S", "refit": "yes"}
+    r = RunManifest.from_json(forged)
+    assert (r.run_id, r.study, r.command, r.versions, r.refit, r.wall_time_s) == \
+        (None, "S", "", {}, False, None)
+    assert r.stages == [StageRecord("doe", "", "unknown", None, "", [])]
+    assert RunManifest.from_json({"command": "x"}).study == "unknown study"
+    assert RunManifest.from_json({}) is None and RunManifest.from_json([1]) is None

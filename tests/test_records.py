@@ -326,3 +326,26 @@ def test_a_table_row_keeps_its_numbers_that_are_not_finite():
     assert to_json(s)["parts"] == [{"name": "b", "force_mN": None}]
     row = to_json(s, null_nan=False)["parts"][0]
     assert row["name"] == "b" and math.isnan(row["force_mN"])
+
+
+@dataclass(frozen=True)
+class Stage:
+    name: str = entry(kind=str, fallback="unknown")
+    status: str = entry(kind=str, default="pending", fallback="unknown")
+
+
+@dataclass(frozen=True)
+class Run:
+    stages: tuple = entry(kind=Stage, levels=("list",))
+    by_name: dict = entry(kind=Stage, levels=("map",), default_factory=dict)
+
+
+def test_a_lenient_read_gives_the_fallback_and_keeps_the_items_that_read():
+    doc = {"stages": [{"name": "a", "status": "ok"}, 3, {"status": 4}, None],
+           "by_name": {"x": {"name": "x"}, "y": "no"}}
+    run = from_json_lenient(Run, doc)
+    assert run.stages == (Stage("a", "ok"), Stage("unknown", "unknown"))
+    assert run.by_name == {"x": Stage("x", "unknown")}
+    assert from_json(Stage, {"name": "b"}).status == "pending"  # a strict read: the default
+    with pytest.raises(RecordError, match=r"stages\[1\]: expected a JSON object"):
+        from_json(Run, doc)

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from contextlib import contextmanager
 from dataclasses import MISSING, dataclass, field, fields, is_dataclass
 from typing import Any, TypeVar
 
@@ -67,13 +68,14 @@ class Entry:
     array: bool
     key_units: Mapping[str, str] | None
     doc: str
+    fallback: Any = MISSING
 
 
 def entry(key: str | None = None, unit: str = "", *, kind=float, levels=(),
           optional: bool = False, null_nan: bool = False, omit: str | None = None,
           shape: str | type | None = None, inline: bool = False, array: bool = False,
           key_units: Mapping[str, str] | None = None, default=MISSING,
-          default_factory=MISSING, kw_only=MISSING, doc: str = ""):
+          default_factory=MISSING, kw_only=MISSING, doc: str = "", fallback=MISSING):
     """A field of a record with its JSON key.
 
     Parameters
@@ -113,9 +115,12 @@ def entry(key: str | None = None, unit: str = "", *, kind=float, levels=(),
         As :func:`dataclasses.field`; a field with a default may be missing from a document.
     doc : str
         What the value is (for the reader of the declaration).
+    fallback : optional
+        The value a lenient read (:func:`from_json_lenient`) gives where the document lacks the
+        key or gives a value of another shape (default: the field's default).
     """
     meta = Entry(key, unit, kind, tuple(levels), optional, null_nan, omit, shape, inline,
-                 array, key_units, doc)
+                 array, key_units, doc, fallback)
     extra = {} if kw_only is MISSING else {"kw_only": kw_only}
     return field(default=default, default_factory=default_factory, metadata={_META: meta},
                  **extra)
@@ -299,8 +304,9 @@ def from_json_lenient(cls: type[R], doc) -> R | None:
     forged.
 
     Each field whose key ``doc`` gives with a value of the declared shape is read as
-    :func:`from_json` reads it (a nested record leniently too); a field whose key is missing or
-    whose value has another shape takes its default, and a field without a default None.
+    :func:`from_json` reads it (a nested record leniently too, and a list or map of records
+    keeps the items that read as records); a field whose key is missing or whose value has
+    another shape takes its ``fallback``, else its default, and a field without either None.
 
     Parameters
     ----------
@@ -320,8 +326,11 @@ def from_json_lenient(cls: type[R], doc) -> R | None:
         return None
 
 
-def _default(f):
-    """The default of a dataclass field (None where it has none)."""
+def _default(f, e: Entry | None = None):
+    """The value of a field that a lenient read does not find: its declared fallback, else its
+    default (None where it has neither)."""
+    if e is not None and e.fallback is not MISSING:
+        return e.fallback
     if f.default is not MISSING:
         return f.default
     if f.default_factory is not MISSING:
@@ -352,14 +361,14 @@ def _record(cls, doc, where: str, path: str, lenient: bool = False):
             key = key_of(f, e)
             here = f"{path}.{key}" if path else key
             if key not in doc:
-                if not _has_default(f):
+                if not _has_default(f) or lenient and e.fallback is not MISSING:
                     _fail(where, path, f"missing key {key!r} ({cls.__name__})")
                 continue
             values[f.name] = _read(doc[key], e, 0, e.unit, where, here, lenient)
         except RecordError:
             if not lenient:
                 raise
-            values[f.name] = _default(f)
+            values[f.name] = _default(f, e)
     try:
         return cls(**values)
     except (TypeError, ValueError) as exc:
@@ -393,6 +402,17 @@ def _shaped(record, e: Entry):
     return record
 
 
+@contextmanager
+def _skipped(skip: bool):
+    """Leave out an item of a list or map that is not the record asked for (``skip``: a
+    lenient read), else let its error through."""
+    try:
+        yield
+    except RecordError:
+        if not skip:
+            raise
+
+
 _KINDS = {float: "a number", int: "an integer", bool: "true or false", str: "text"}
 
 
@@ -408,12 +428,15 @@ def _read(value, e: Entry, depth: int, unit: str, where: str, path: str,
             out = {}
             for k, v in value.items():
                 name, u = _name_unit(k, units, unit)
-                out[name] = _read(v, e, depth + 1, u, where, f"{path}.{k}", lenient)
+                with _skipped(lenient and is_dataclass(e.kind)):
+                    out[name] = _read(v, e, depth + 1, u, where, f"{path}.{k}", lenient)
             return out
         if not isinstance(value, list):
             _fail(where, path, f"expected a JSON array, got {_shown(value)}")
-        items = [_read(v, e, depth + 1, unit, where, f"{path}[{i}]", lenient)
-                 for i, v in enumerate(value)]
+        items = []
+        for i, v in enumerate(value):
+            with _skipped(lenient and is_dataclass(e.kind)):
+                items.append(_read(v, e, depth + 1, unit, where, f"{path}[{i}]", lenient))
         if e.array and depth == 0:
             import numpy as np
 

@@ -39,7 +39,7 @@ import signal
 import time
 import uuid
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -47,14 +47,11 @@ from ._errors import MagtactError
 from ._files import (
     MAX_BYTES,
     UnreadableFile,
-    json_dict,
-    json_list,
-    json_number,
-    json_text,
     read_json_capped,
     write_json,
     write_text,
 )
+from ._records import entry, from_json_lenient, from_json_or_none, to_json
 
 #: The lock file of a results folder.
 LOCK = ".magtact-lock"
@@ -98,18 +95,35 @@ def _now() -> str:
     return datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
+@dataclass(frozen=True)
+class LockInfo:
+    """What the lock file (:data:`LOCK`) says of its holder: process, host, start, command and
+    the top-level entries of the folder it writes."""
+
+    pid: int = entry(kind=int)
+    host: str = entry(kind=str)
+    started: str = entry(kind=str)
+    command: str = entry(kind=str, default="")
+    writes: tuple[str, ...] = entry(kind=str, levels=("list",), default=())
+
+
+def _lock_info(path: Path) -> LockInfo | None:
+    """The holder a lock file records; None where it is unreadable or not written yet."""
+    try:
+        return from_json_or_none(LockInfo, _read_json(path))
+    except UnreadableFile:
+        return None
+
+
 def _holder_text(path: Path) -> str:
     """The holder recorded in a lock file, in words."""
-    try:
-        info = _read_json(path)
-        pid, host = int(info["pid"]), str(info["host"])
-        started, command = str(info["started"]), str(info.get("command", ""))
-    except (UnreadableFile, ValueError, KeyError, TypeError):
+    info = _lock_info(path)
+    if info is None:
         return "another magtact process (its details are not written yet)"
-    alive = _pid_alive(pid) if host == platform.node() else None
+    alive = _pid_alive(info.pid) if info.host == platform.node() else None
     state = "" if alive is not False else ", no longer running: a worker it started still holds"
-    cmd = f" ({command})" if command else ""
-    return f"process {pid} on {host}, started {started}{cmd}{state}"
+    cmd = f" ({info.command})" if info.command else ""
+    return f"process {info.pid} on {info.host}, started {info.started}{cmd}{state}"
 
 
 def _pid_alive(pid: int) -> bool:
@@ -173,11 +187,10 @@ class RunLock:
                                   "another --out")
             time.sleep(0.1)
         self.fd = fd
-        info = {"pid": os.getpid(), "host": platform.node(), "started": _now(),
-                "command": self.command, "writes": self.writes}
+        info = LockInfo(os.getpid(), platform.node(), _now(), self.command, tuple(self.writes))
         os.ftruncate(fd, 0)
         os.lseek(fd, 0, os.SEEK_SET)
-        os.write(fd, (json.dumps(info) + "\n").encode())
+        os.write(fd, (json.dumps(to_json(info)) + "\n").encode())
         _HELD[key] = (os.getpid(), 1)
         return self
 
@@ -252,35 +265,39 @@ def _files(root: Path) -> Iterator[Path]:
             yield Path(top, name)
 
 
+@dataclass
+class Stamp:
+    """The stamp of a results folder (:data:`OWNED`): the run that wrote it, the files it
+    holds (relative path -> SHA-256) and the per-stage commands that wrote some of them
+    (relative path -> command; the other files are a run's or its report's; left out of the
+    file where there are none)."""
+
+    run_id: str | None = entry(kind=str, optional=True, default=None)
+    files: dict[str, str] = entry(kind=str, levels=("map",), default_factory=dict)
+    commands: dict[str, str] = entry(kind=str, levels=("map",), omit="empty",
+                                     default_factory=dict)
+
+
 def write_stamp(folder: Path, run_id: str) -> Path:
     """Record every file in ``folder`` (a staging folder) with its SHA-256 in the stamp."""
     files = {p.relative_to(folder).as_posix(): sha256(p) for p in sorted(_files(folder))
              if p.name != OWNED}
-    return write_json(folder / OWNED, {"run_id": run_id, "files": files}, indent=1)
+    return _write_stamp_doc(folder, Stamp(run_id, files))
 
 
-def _stamp_doc(folder: Path) -> dict:
-    """The stamp of ``folder``: ``run_id``, ``files`` (relative path -> SHA-256) and
-    ``commands`` (relative path -> the per-stage command that wrote it; the other files are a
-    run's or its report's). Empty tables if there is none or it is unreadable."""
-    doc = {"run_id": None, "files": {}, "commands": {}}
+def _stamp_doc(folder: Path) -> Stamp:
+    """The stamp of ``folder``, read field by field (empty tables where there is none or it is
+    unreadable)."""
     try:
         data = _read_json(folder / OWNED)
     except UnreadableFile:
-        return doc
-    if not isinstance(data, dict):
-        return doc
-    doc["run_id"] = data.get("run_id") if isinstance(data.get("run_id"), str) else None
-    for key in ("files", "commands"):
-        table = data.get(key)
-        if isinstance(table, dict):
-            doc[key] = {str(k): str(v) for k, v in table.items()}
-    return doc
+        return Stamp()
+    return from_json_lenient(Stamp, data) or Stamp()
 
 
 def _stamp(folder: Path) -> dict[str, str]:
     """The files the stamp of ``folder`` records (empty if none or unreadable)."""
-    return _stamp_doc(folder)["files"]
+    return _stamp_doc(folder).files
 
 
 def _is_magtacts(folder: Path, name: str, owned: dict[str, str],
@@ -323,7 +340,7 @@ def check_replaceable(folder: str | os.PathLike, names: Iterable[str]) -> None:
     """
     folder = Path(folder)
     doc = _stamp_doc(folder)
-    owned, commands = doc["files"], doc["commands"]
+    owned, commands = doc.files, doc.commands
     bad = [n for n in names if n != OWNED and os.path.lexists(folder / n)
            and not _is_magtacts(folder, n, owned, commands)]
     if bad:
@@ -345,16 +362,14 @@ def claim(folder: Path, name: str, text: str) -> Path:
     check_replaceable(folder, [name])
     path = write_text(folder / name, text)
     data = _stamp_doc(folder)
-    data["files"][name] = sha256(path)
-    data["commands"].pop(name, None)
+    data.files[name] = sha256(path)
+    data.commands.pop(name, None)
     _write_stamp_doc(folder, data)
     return path
 
 
-def _write_stamp_doc(folder: Path, doc: dict) -> Path:
-    if not doc.get("commands"):
-        doc = {k: v for k, v in doc.items() if k != "commands"}
-    return write_json(folder / OWNED, doc, indent=1)
+def _write_stamp_doc(folder: Path, doc: Stamp) -> Path:
+    return write_json(folder / OWNED, to_json(doc), indent=1)
 
 
 # ---- staging and swap ------------------------------------------------------------------------
@@ -384,7 +399,7 @@ def swap(folder: Path, stage: Path, run_id: str) -> None:
     except NotMagtactsFile as exc:
         raise NotMagtactsFile(f"{exc}. This run's complete results are in {stage}") from None
     doc = _stamp_doc(folder)
-    owned, commands = doc["files"], doc["commands"]
+    owned, commands = doc.files, doc.commands
     earlier = sorted({k.split("/", 1)[0] for k in owned} - set(names) - {OWNED})
     remove = [n for n in earlier
               if os.path.lexists(folder / n) and _is_magtacts(folder, n, owned, commands)]
@@ -393,12 +408,12 @@ def swap(folder: Path, stage: Path, run_id: str) -> None:
             if k.split("/", 1)[0] not in gone and os.path.lexists(folder / k)}
     if kept:  # what the folder keeps (a command's outputs) stays recorded
         new = _stamp_doc(stage)
-        new["files"] = kept | new["files"]
-        new["commands"] = {k: c for k, c in commands.items() if k in kept} | new["commands"]
+        new.files = kept | new.files
+        new.commands = {k: c for k, c in commands.items() if k in kept} | new.commands
         _write_stamp_doc(stage, new)
-    journal = {"run_id": run_id, "staging": stage.name, "old": f"{OLD}{run_id}",
-               "names": names, "remove": remove}
-    write_json(folder / JOURNAL, journal, indent=1)
+    journal = SwapJournal(stage.name, f"{OLD}{run_id}", tuple(names), tuple(remove),
+                          run_id=run_id)
+    write_json(folder / JOURNAL, to_json(journal), indent=1)
     with _signals_held():
         _roll_forward(folder, journal)
 
@@ -423,14 +438,26 @@ def _signals_held():
             signal.raise_signal(sig)
 
 
-def _roll_forward(folder: Path, journal: dict) -> None:
+@dataclass(frozen=True)
+class SwapJournal:
+    """The journal of a swap (:data:`JOURNAL`): the run, its staging folder, the folder the
+    previous entries go to, the entries put in place and the previous ones removed."""
+
+    run_id: str | None = entry(kind=str, optional=True, default=None, kw_only=True)
+    staging: str = entry(kind=str)
+    old: str = entry(kind=str)
+    names: tuple[str, ...] = entry(kind=str, levels=("list",))
+    remove: tuple[str, ...] = entry(kind=str, levels=("list",))
+
+
+def _roll_forward(folder: Path, journal: SwapJournal) -> None:
     """Carry out (or finish) the swap a journal describes; idempotent."""
-    stage, old = folder / journal["staging"], folder / journal["old"]
+    stage, old = folder / journal.staging, folder / journal.old
     old.mkdir(exist_ok=True)
-    for name in journal["remove"]:
+    for name in journal.remove:
         if os.path.lexists(folder / name):
             _replace(folder / name, old / name)
-    for name in journal["names"]:
+    for name in journal.names:
         if not os.path.lexists(stage / name):
             continue  # moved already
         if os.path.lexists(folder / name):
@@ -455,15 +482,14 @@ def recover(folder: Path) -> bool:
     try:
         if not os.path.lexists(folder / JOURNAL):
             return False
-        journal = _read_json(folder / JOURNAL)
-        if isinstance(journal, dict) and journal.get("kind") == "place":
-            return _recover_place(folder, journal)
-        ok = all(isinstance(journal.get(k), str) for k in ("staging", "old")) and all(
-            isinstance(journal.get(k), list) for k in ("names", "remove"))
-    except (UnreadableFile, AttributeError):
-        ok = False
-    if not ok or not _plain_names([journal["staging"], journal["old"], *journal["names"],
-                                   *journal["remove"]]):
+        doc = _read_json(folder / JOURNAL)
+        if isinstance(doc, dict) and doc.get("kind") == "place":
+            return _recover_place(folder, doc)
+        journal = from_json_or_none(SwapJournal, doc)
+    except UnreadableFile:
+        journal = None
+    if journal is None or not _plain_names([journal.staging, journal.old, *journal.names,
+                                            *journal.remove]):
         raise MagtactError(f"{folder / JOURNAL}: not a swap journal magtact can finish; remove it "
                            "(and any .magtact-staging-* or .magtact-old-* folder) by hand")
     _roll_forward(folder, journal)
@@ -500,29 +526,30 @@ class StageRecord:
         Further remarks (shown in the report).
     """
 
-    key: str
-    title: str
-    status: str = "pending"
-    wall_time_s: float | None = 0.0
-    message: str = ""
-    notes: list[str] = field(default_factory=list)
+    key: str | None = entry(kind=str)
+    title: str = entry(kind=str, fallback="")
+    status: str = entry(kind=str, default="pending", fallback="unknown")
+    wall_time_s: float | None = entry(optional=True, default=0.0, fallback=None)
+    message: str = entry(kind=str, default="")
+    notes: list[str] = entry(kind=str, levels=("list",), default_factory=list)
+
+    def __post_init__(self):
+        self.notes = list(self.notes)  # a list to add to, also where read from a file
 
     def to_json(self) -> dict:
-        return {"key": self.key, "title": self.title, "status": self.status,
-                "wall_time_s": self.wall_time_s, "message": self.message,
-                "notes": list(self.notes)}
+        return to_json(self)
 
     @classmethod
     def from_json(cls, data) -> StageRecord | None:
-        """The record :meth:`to_json` wrote, every field of its type (None for anything but a
-        JSON object; the key is kept as the file gives it, None where missing)."""
-        if not isinstance(data, dict):
-            return None
-        key = data.get("key")
-        return cls(None if key is None else json_text(key), json_text(data.get("title")),
-                   json_text(data.get("status"), "unknown"), json_number(data.get("wall_time_s")),
-                   json_text(data.get("message")), [json_text(n) for n in
-                                                     json_list(data.get("notes"))])
+        """The record :meth:`to_json` wrote, read field by field (None for anything but a
+        JSON object; the key as the file gives it, None where missing or not text; a status
+        the file does not give is ``"unknown"``)."""
+        return from_json_lenient(cls, data)
+
+
+def _unwritten():
+    """A field of a manifest that the run has not reached yet: None, and not written."""
+    return entry(kind=str, optional=True, omit="none", default=None)
 
 
 @dataclass
@@ -531,50 +558,34 @@ class RunManifest:
     stage's record, the data set's source, and at its end its finish or interruption and
     total wall time [s]. A field the run has not reached yet is None and not written."""
 
-    run_id: str | None
-    study: str
-    command: str
-    started: str | None
-    recompute: bool = False
-    refit: bool = False
-    versions: dict[str, str] = field(default_factory=dict)
-    stages: list[StageRecord] = field(default_factory=list)
-    doe_source: str | None = None
-    wall_time_s: float | None = None
-    interrupted: str | None = None
-    finished: str | None = None
+    run_id: str | None = entry(kind=str, optional=True)
+    study: str = entry(kind=str, fallback="unknown study")
+    command: str = entry(kind=str, fallback="")
+    started: str | None = entry(kind=str, optional=True)
+    recompute: bool = entry(kind=bool, default=False)
+    refit: bool = entry(kind=bool, default=False)
+    versions: dict[str, str] = entry(kind=str, levels=("map",), default_factory=dict)
+    stages: list[StageRecord] = entry(kind=StageRecord, levels=("list",),
+                                      default_factory=list)
+    doe_source: str | None = _unwritten()
+    wall_time_s: float | None = entry(optional=True, omit="none", default=None)
+    interrupted: str | None = _unwritten()
+    finished: str | None = _unwritten()
+
+    def __post_init__(self):
+        self.stages = list(self.stages)  # a list to add to, also where read from a file
 
     def to_json(self) -> dict:
-        doc = {"run_id": self.run_id, "study": self.study, "command": self.command,
-               "started": self.started, "recompute": self.recompute, "refit": self.refit,
-               "versions": self.versions, "stages": [s.to_json() for s in self.stages]}
-        for key, value in (("doe_source", self.doe_source), ("wall_time_s", self.wall_time_s),
-                           ("interrupted", self.interrupted), ("finished", self.finished)):
-            if value is not None:
-                doc[key] = value
-        return doc
+        return to_json(self)
 
     @classmethod
     def from_json(cls, data) -> RunManifest | None:
-        """The manifest :meth:`to_json` wrote, every field of its type; None for anything but
-        a JSON object (a forged file's value of the wrong type reads as none, or as text)."""
+        """The manifest :meth:`to_json` wrote, read field by field; None for anything but a
+        non-empty JSON object (a forged file's value of the wrong type reads as none, a stage
+        that is no record is left out)."""
         if not isinstance(data, dict) or not data:
             return None
-        run_id = data.get("run_id")
-
-        def text(key: str) -> str | None:
-            return None if data.get(key) is None else json_text(data.get(key))
-
-        return cls(run_id=None if run_id is None else json_text(run_id),
-                   study=json_text(data.get("study"), "unknown study"),
-                   command=json_text(data.get("command")), started=text("started"),
-                   recompute=data.get("recompute") is True, refit=data.get("refit") is True,
-                   versions=json_dict(data.get("versions")),
-                   stages=[r for r in map(StageRecord.from_json, json_list(data.get("stages")))
-                           if r is not None],
-                   doe_source=text("doe_source"),
-                   wall_time_s=json_number(data.get("wall_time_s")),
-                   interrupted=text("interrupted"), finished=text("finished"))
+        return from_json_lenient(cls, data)
 
     def write(self, folder: str | os.PathLike) -> Path:
         """Write ``folder/run.json``."""
@@ -639,11 +650,8 @@ def _governs(parent: Path, rel: str) -> bool:
     if os.path.lexists(parent / OWNED) and any(f.startswith(top + "/") for f in _stamp(parent)):
         return True
     if os.path.lexists(parent / LOCK) and in_use(parent):
-        try:
-            writes = _read_json(parent / LOCK)["writes"]
-        except (UnreadableFile, KeyError, TypeError):
-            writes = []
-        return isinstance(writes, list) and rel.split("/", 1)[0] in writes
+        info = _lock_info(parent / LOCK)
+        return info is not None and rel.split("/", 1)[0] in info.writes
     return False
 
 
@@ -766,7 +774,7 @@ def check_placeable(root: str | os.PathLike, files: Iterable[str]) -> None:
     """
     root = Path(root)
     doc = _stamp_doc(root)
-    owned, commands = doc["files"], doc["commands"]
+    owned, commands = doc.files, doc.commands
     run_folders = {k.split("/", 1)[0] for k in owned if "/" in k and k not in commands}
     bad, runs = [], []
     for rel in files:
@@ -814,8 +822,8 @@ def _place_forward(root: Path, journal: dict) -> None:
             (root / rel).parent.mkdir(parents=True, exist_ok=True)
             _replace(src, root / rel)
     doc = _stamp_doc(root)
-    doc["files"].update(journal["files"])
-    doc["commands"].update(dict.fromkeys(journal["files"], journal["command"]))
+    doc.files.update(journal["files"])
+    doc.commands.update(dict.fromkeys(journal["files"], journal["command"]))
     _write_stamp_doc(root, doc)
     (root / JOURNAL).unlink(missing_ok=True)
     _remove(stage)
