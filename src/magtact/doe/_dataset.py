@@ -258,7 +258,7 @@ ROUND_OFF_SETTINGS = {"mechanics": ("threads", "solver")}
 #: Bundled data sets, in the order they are tried (the first that describes a study serves it).
 #: The broad data sets: the MagOne body over H 2-10 mm, one per magnet size (diameter x height
 #: in mm) of the broad DOE, each answering that size only (bench/bench_broad.py).
-BROAD_SIZES = ("3x1", "3x2", "3x3", "4x1", "5x1", "6x1", "6x2", "6x3")
+BROAD_SIZES = ("3x1", "3x2", "3x3", "4x1", "4x2", "5x1", "6x1", "6x2", "6x3")
 BUNDLED_NAMES = (BUNDLED_NAME, *(f"broad_{size}_doe.nc" for size in BROAD_SIZES))
 
 

@@ -1,0 +1,85 @@
+"""A magnet between the bundled sizes of its height is answered by blending three sizes' data and
+shipped fits along the radius: the weights are the quadratic's through their radii, and the
+blend predicts FE paths of a size it never saw."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import magtact
+from magtact._errors import MagtactError
+from magtact.doe import bundled_blend
+from magtact.doe._dataset import radius_weights
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The magnet-size DOE's FE paths (``bench/bench_sizes.py``): the 5 x 2 mm magnet over
+#: H 2-10 mm, solved by the same FE chain as the bundled data sets and held out of the blend.
+SIZES_DOE = ROOT / "bench" / "results" / "sizes_doe" / "doe_partial.nc"
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(-10, 10), min_size=3, max_size=3),
+       st.lists(st.floats(1.0, 4.0), min_size=3, max_size=3, unique=True),
+       st.floats(1.0, 4.0))
+def test_the_weights_reproduce_any_quadratic_in_the_radius(c, radii, x):
+    r = np.asarray(radii)
+    if np.min(np.abs(r[:, None] - r[None, :]) + np.eye(3)) < 1e-2:
+        return  # nearly equal radii: the quadratic through them is ill-posed
+    w = radius_weights(r, x)
+    assert w.sum() == pytest.approx(1.0, abs=1e-9)
+    q = np.polynomial.polynomial.polyval
+    assert w @ q(r, c) == pytest.approx(q(x, c), abs=1e-7 * (1 + np.abs(c).sum() * 16))
+
+
+def _magone_over_3_to_9():
+    return magtact.load("magone", design={"H_mm": [3.0, 9.0]}, magnet={"size": "5x2"})
+
+
+def test_the_magone_magnet_over_3_to_9_mm_is_a_blend_of_three_sizes():
+    study = _magone_over_3_to_9()
+    ds, parts = bundled_blend(study)
+    assert sorted(name for name, *_ in parts) == ["3x2", "4x2", "6x2"]
+    assert sum(w for _, w, _, _ in parts) == pytest.approx(1.0)
+    models, source, _ = magtact.models_for(study)
+    assert "blended along the magnet's radius" in source
+    # the blended forces are the weighted sums of the parts' data
+    F = sum(w * d["F_z"] for _, w, d, _ in parts)
+    np.testing.assert_allclose(ds["F_z"].values, F.values)
+
+
+def test_the_blend_predicts_fe_paths_of_the_size_it_never_saw():
+    """F_z within 2 % and F_r within 5 % of the force range on the magnet-size DOE's 5 x 2 mm
+    paths at the heights inside 3-9 mm (4.67 and 7.33 mm), which no blended part holds, each
+    path up to its shear force's extreme (beyond it the body slips: no answer reads there)."""
+    import xarray as xr
+
+    models = magtact.models_for(_magone_over_3_to_9())[0]
+    with xr.open_dataset(SIZES_DOE) as d:
+        sub = d.sel(R_m=2.5e-3, H_m=2e-3).load()
+    G = sub["G"].values
+    T, TH, HH = np.meshgrid(sub["t"].values, sub["theta"].values, sub["H"].values,
+                            indexing="ij")
+    f = {k: (sub[f"F_{k[-1]}"].transpose("t", "theta", "H", "G").values / G).mean(axis=-1)
+         for k in ("f_r", "f_z")}
+    peak = np.nanargmin(f["f_r"], axis=0)  # (theta, H): the shear force's extreme
+    stable = (np.arange(T.shape[0])[:, None, None] <= peak) | (TH == 0)
+    for name, limit in (("f_z", 0.02), ("f_r", 0.05)):
+        F = f[name]
+        inside = np.isfinite(F) & (HH >= 3e-3) & (HH <= 9e-3) & stable
+        pred = np.asarray(models[name].value(T[inside], TH[inside], HH[inside]), dtype=float)
+        span = F[inside].max() - F[inside].min()
+        assert np.abs(pred - F[inside]).max() / span < limit, name
+
+
+def test_a_magnet_between_the_datas_heights_is_refused_saying_why():
+    study = magtact.load("magone", magnet={"R_m_mm": 2.0, "H_m_mm": 1.5})
+    why = r"4 × 1\.5 mm magnet a blend of bundled sizes: its height is none of theirs \(1, 2, 3 mm\)"
+    with pytest.raises(MagtactError, match=why):
+        bundled_blend(study)
+    with pytest.raises(MagtactError, match=r"needs new mechanics.*\. Nor is the " + why):
+        magtact.models_for(study)
