@@ -216,11 +216,11 @@ def test_seed_records_hold_the_chosen_designs_force_noise(models, study):
 
     sigma = 2e-6
     # the noise of a setting picked per design is not the study's
-    assert _resolution(models, study, H0, G0) == {}
+    assert _resolution(models, study, H0, G0) is None
     rec = _resolution(models, _hall(study, noise_x=sigma, noise_z=sigma), H0, G0)
     d = per_design(models, H0, G0, study)
-    assert rec["sigma_Fr_worst_mN"] == pytest.approx(d.Gamma_r_max * sigma * 1e3, rel=1e-6)
-    assert rec["sigma_Fz_worst_mN"] == pytest.approx(d.Gamma_z_max * sigma * 1e3, rel=1e-6)
+    assert rec.sigma_Fr_worst == pytest.approx(d.Gamma_r_max * sigma, rel=1e-6)
+    assert rec.sigma_Fz_worst == pytest.approx(d.Gamma_z_max * sigma, rel=1e-6)
 
 
 def test_card_shows_the_seed_spread_of_a_reproduce_run_of_the_same_study(tmp_path, models,

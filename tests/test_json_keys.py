@@ -100,12 +100,6 @@ PENDING: dict[str, str] = {
     "study/_load.py": "the study's keys (also keys of the files)",
     "report/_card.py": "reads sensor.json's verdict",
     "report/_html.py": "reads sensor.json's parts compared",
-    # publication.json (in the area of the records' mechanism, not yet converted)
-    "publication/_compare.py": "publication.json's spread and comparison",
-    "publication/_seeds.py": "publication.json's records",
-    "publication/_file.py": "publication.json",
-    "publication/_reference.py": "publication.json's reference",
-    "publication/_run.py": "publication.json",
 }
 
 #: Modules that write a JSON file without the atomic writer (``magtact._files``): the lock

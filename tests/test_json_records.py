@@ -148,3 +148,26 @@ def test_a_run_manifest_round_trips_and_a_forged_one_reads_field_by_field():
     assert r.stages == [StageRecord("doe", "", "unknown", None, "", [])]
     assert RunManifest.from_json({"command": "x"}).study == "unknown study"
     assert RunManifest.from_json({}) is None and RunManifest.from_json([1]) is None
+
+
+def test_a_seed_record_is_written_from_its_record_and_read_back():
+    import json
+    import math
+
+    from magtact._records import from_json, keys
+    from magtact.publication._file import ChosenRow, DesignRow, SeedRecord
+
+    design = DesignRow(3e-3, 29.4e3, 10.0, 40.0, -0.3, 6.0, 1.0, 0.4)
+    rec = SeedRecord("jacobian", 2, True, "", 1.5, None, design, design,
+                     chosen=ChosenRow(infeasible="no design"), branches=0,
+                     chosen_reference=ChosenRow(*vars(design).values(), active=("F_z",),
+                                                F_r_c=-0.25, F_z_c=5.0))
+    doc = json.loads(json.dumps(rec.to_json()))
+    assert doc["chosen"] == {"infeasible": "no design"} and doc["original"]["H_mm"] == 3.0
+    assert doc["chosen_reference"]["F_z_c_N"] == 5.0 and "sweep" not in doc
+    assert from_json(SeedRecord, doc) == rec
+    back = SeedRecord.from_json(doc)
+    assert math.isnan(back.chosen.H) and back.chosen_reference.active == ("F_z",)
+    failed = SeedRecord("published", 1, False, "no model").to_json()
+    assert list(failed) == list(keys(SeedRecord))[:4]
+    assert math.isnan(SeedRecord.from_json(failed).original.G)  # a failed fit: no design

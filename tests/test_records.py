@@ -349,3 +349,19 @@ def test_a_lenient_read_gives_the_fallback_and_keeps_the_items_that_read():
     assert from_json(Stage, {"name": "b"}).status == "pending"  # a strict read: the default
     with pytest.raises(RecordError, match=r"stages\[1\]: expected a JSON object"):
         from_json(Run, doc)
+
+
+@dataclass(frozen=True)
+class Row:
+    quantity: str = entry(kind=str)
+    cells: dict = entry(kind=object, levels=("map",), inline=True)
+    parts: dict = entry(kind=Part, levels=("map",), optional=True, default_factory=dict)
+
+
+def test_a_map_inline_stands_in_the_object_and_null_items_read_as_none():
+    r = Row("q", {"a/b": {"x": 1}, "c": 2}, {"p": None, "q": Part("n", 1e-3)})
+    doc = to_json(r)
+    assert doc == {"quantity": "q", "a/b": {"x": 1}, "c": 2,
+                   "parts": {"p": None, "q": {"name": "n", "force_mN": 1.0}}}
+    assert keys(Row) == ("quantity", "parts")
+    assert from_json(Row, doc) == r

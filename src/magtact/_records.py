@@ -105,7 +105,9 @@ def entry(key: str | None = None, unit: str = "", *, kind=float, levels=(),
     inline : bool
         A nested record whose keys stand in the enclosing record's object (an optional one
         writes them as null and reads as None where all are null; with ``omit`` its keys are
-        left out, and a document without any of them reads as the field's default).
+        left out, and a document without any of them reads as the field's default). With
+        ``levels=("map",)``: a dict whose entries stand in the enclosing object, read back from
+        the keys that no other field declares.
     array : bool
         A list of numbers held as a numpy array.
     key_units : mapping of str to str, optional
@@ -144,6 +146,8 @@ def keys(cls) -> tuple[str, ...]:
     in their place)."""
     out: list[str] = []
     for f, e in declared(cls):
+        if e.inline and e.levels:
+            continue  # entries of a map: the keys of no declaration
         out += list(keys(e.kind)) if e.inline else [key_of(f, e)]
     return tuple(out)
 
@@ -208,6 +212,9 @@ def to_json(record, *, null_nan: bool = True) -> dict:
     for f, e in declared(type(record)):
         value = getattr(record, f.name)
         if e.omit == "none" and value is None or e.omit == "empty" and _empty(value):
+            continue
+        if e.inline and e.levels:
+            out |= {k: _write(v, e, 1, e.unit, null_nan) for k, v in value.items()}
             continue
         if e.inline:
             inner = _inner_record(e, value)
@@ -353,6 +360,11 @@ def _record(cls, doc, where: str, path: str, lenient: bool = False):
     values = {}
     for f, e in declared(cls):
         try:
+            if e.inline and e.levels:
+                others = keys(cls)
+                values[f.name] = {k: _read(v, e, 1, e.unit, where, f"{path}.{k}", lenient)
+                                  for k, v in doc.items() if k not in others}
+                continue
             if e.inline:
                 if e.omit is not None and not any(k in doc for k in keys(e.kind)):
                     continue  # an inline record left out: the field's default
@@ -418,7 +430,7 @@ _KINDS = {float: "a number", int: "an integer", bool: "true or false", str: "tex
 
 def _read(value, e: Entry, depth: int, unit: str, where: str, path: str,
           lenient: bool = False):
-    if value is None and e.optional and depth == 0:
+    if value is None and e.optional and depth in (0, len(e.levels)):
         return None
     if depth < len(e.levels):
         if e.levels[depth] == "map":

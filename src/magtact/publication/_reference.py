@@ -7,7 +7,9 @@ de Boer et al., "Design Optimisation of a Magnetic Field Based Soft Tactile Sens
 
 from __future__ import annotations
 
+from .._records import si_value
 from ..study import to_si
+from ._file import DesignRow
 
 #: Designs of the publication: (H [mm], G as printed [kPa]).
 ORIGINAL = (3.0, 2.94)
@@ -16,16 +18,20 @@ FABRICATED = (4.1, 2.94)
 #: validation example simulates this sensor (``magtact.validation.SYNTHETIC_H``).
 H_FABRICATED = to_si(FABRICATED[0], "mm")
 
-#: Per design: Γ_r,max, Γ_z,max [N/T], F_r,min, F_z,max [N]; G as printed.
-DESIGNS: dict[str, dict[str, float]] = {
-    "original": {"H_mm": 3.0, "G_kPa": 2.94, "Gamma_r_max": 0.81, "Gamma_z_max": 50.5,
-                 "F_r_min": -0.34, "F_z_max": 7.03},
-    "fabricated": {"H_mm": 4.1, "G_kPa": 2.94, "Gamma_r_max": 0.47, "Gamma_z_max": 43.8,
-                   "F_r_min": -0.23, "F_z_max": 5.23},
-    "optimum_default": {"H_mm": 4.11, "G_kPa": 3.14, "Gamma_r_max": 0.48, "Gamma_z_max": 45.7,
-                        "F_r_min": -0.25, "F_z_max": 5.47},
-    "optimum_reference": {"H_mm": 4.17, "G_kPa": 4.51, "Gamma_r_max": 0.68,
-                          "Gamma_z_max": 56.7, "F_r_min": -0.34, "F_z_max": 7.15},
+def _design(H_mm: float, G_kPa: float, Gamma_r_max: float, Gamma_z_max: float,
+            F_r_min: float, F_z_max: float) -> DesignRow:
+    """A design as the publication prints it (H [mm], G as printed [kPa], Γ [N/T], F [N]), in
+    SI: the values that write the printed numbers again."""
+    return DesignRow(si_value(H_mm, "mm"), si_value(G_kPa, "kPa"), Gamma_r_max, Gamma_z_max,
+                     F_r_min, F_z_max)
+
+
+#: Per design: H, G as printed, Γ_r,max, Γ_z,max [N/T], F_r,min, F_z,max [N] (no t_m, θ_m).
+DESIGNS: dict[str, DesignRow] = {
+    "original": _design(3.0, 2.94, 0.81, 50.5, -0.34, 7.03),
+    "fabricated": _design(4.1, 2.94, 0.47, 43.8, -0.23, 5.23),
+    "optimum_default": _design(4.11, 3.14, 0.48, 45.7, -0.25, 5.47),
+    "optimum_reference": _design(4.17, 4.51, 0.68, 56.7, -0.34, 7.15),
 }
 #: Constraints of the publication's optimisation: F_r,c [N], F_z,c [N].
 CONSTRAINTS = (-0.25, 5.0)

@@ -13,9 +13,10 @@ from tempfile import mkdtemp
 
 from .._errors import MagtactError
 from .._files import write_csv, write_text
+from .._records import entry, from_json_lenient, keys, to_json
 from ..study import Study
-from ._compare import FIGURES, cell_text, comparison, publication_text, spread
-from ._file import document
+from ._compare import FIGURES, cell_text, comparison, publication_text, records_of, spread
+from ._file import FIGURE_NAMES, ComparisonRow, FigureSpread, document
 from ._seeds import DEFINITIONS, seed_study
 
 #: GP generations per force fit in the seed study. Half the design fit's budget: the study
@@ -65,23 +66,58 @@ class Reproduction:
                        comparison=self.comparison, records=self.records)
         files = [_write(out / "publication.json", json.dumps(_finite(doc), indent=1,
                                                              ensure_ascii=False))]
-        rows = [[r["definition"], r["seed"], r["ok"], r.get("fit_time_s", math.nan)]
-                + [_fmt(_path(r, p)) for *_, p in FIGURES] + [r.get("gamma_z_trend", "")]
-                for r in self.records]
-        files.append(write_csv(out / "seeds.csv", ["definition", "seed", "ok", "fit_time_s"]
-                          + [k for k, *_ in FIGURES] + ["gamma_z_trend"], rows))
-        rows = [[d, f["label"], f["unit"], f["n"], _fmt(f["min"]), _fmt(f["max"]),
-                 _fmt(f["max_over_min"])]
-                for d, figs in self.spread.items() for k, f in figs.items() if "min" in f]
-        files.append(write_csv(out / "spread.csv", ["definition", "figure", "unit", "seeds", "min",
-                                               "max", "max_over_min"], rows))
-        cols = [k for k in self.comparison[0] if "/" in k] if self.comparison else []
-        rows = [[r["quantity"], r["unit"], "yes" if r["scale_free"] else "no",
-                 publication_text(r["publication"])] + [cell_text(r[c]) for c in cols]
-                for r in self.comparison]
-        files.append(write_csv(out / "comparison.csv", ["quantity", "unit", "scale_free",
-                                                   "publication"] + cols, rows))
+        files.append(_table(out / "seeds.csv", SeedRow, [
+            SeedRow(r.definition, r.seed, r.ok,
+                    math.nan if r.fit_time_s is None else r.fit_time_s,
+                    {k: _fmt(value(r)) for k, _, _, value in FIGURES}, r.gamma_z_trend or "")
+            for r in records_of(self.records)]))
+        files.append(_table(out / "spread.csv", SpreadCsvRow, [
+            SpreadCsvRow(d, f.label, f.unit, f.n, _fmt(f.min), _fmt(f.max),
+                         _fmt(f.max_over_min))
+            for d, figs in self.spread.items()
+            for f in (from_json_lenient(FigureSpread, figs[k]) for k in FIGURE_NAMES)]))
+        rows = [r for r in map(ComparisonRow.from_json, self.comparison) if r is not None]
+        cols = rows[0].columns if rows else []
+        files.append(_table(out / "comparison.csv", ComparisonRow, [
+            ComparisonRow(r.quantity, r.unit, "yes" if r.scale_free else "no",
+                          publication_text(r.publication),
+                          {c: cell_text(r.cells[c]) for c in cols}) for r in rows], cols))
         return files
+
+
+@dataclass(frozen=True)
+class SeedRow:
+    """A row of ``seeds.csv``: a seed record's fit, its figures (:data:`FIGURES`, formatted)
+    and the trend of Γ_z."""
+
+    definition: str = entry(kind=str)
+    seed: int | None = entry(kind=int, optional=True)
+    ok: bool = entry(kind=bool)
+    fit_time_s: float = entry()
+    figures: dict[str, str] = entry(kind=str, levels=("map",), inline=True)
+    gamma_z_trend: str = entry(kind=str)
+
+
+@dataclass(frozen=True)
+class SpreadCsvRow:
+    """A row of ``spread.csv``: a figure's range over the seeds of one definition (numbers
+    formatted)."""
+
+    definition: str = entry(kind=str)
+    figure: str = entry(kind=str)
+    unit: str = entry(kind=str)
+    seeds: int = entry(kind=int)
+    min: str = entry(kind=str)
+    max: str = entry(kind=str)
+    max_over_min: str = entry(kind=str)
+
+
+def _table(path: Path, cls, rows: list, columns: list[str] = ()) -> Path:
+    """Write records of type ``cls`` as the rows of a CSV table: their keys, then the
+    ``columns`` of an inline map, as the header."""
+    docs = [to_json(r) for r in rows]
+    header = list(docs[0]) if docs else [*keys(cls), *columns]
+    return write_csv(path, header, ([d[k] for k in header] for d in docs))
 
 
 def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
@@ -150,13 +186,6 @@ def reproduce(study: Study, *, seeds: int = 8, workers: int | None = None,
                          log=log)
     return Reproduction(study, chosen, records, spread(records), comparison(records),
                         time.perf_counter() - t0, n_workers)
-
-
-def _path(rec: dict, path: str):
-    v = rec
-    for k in path.split("."):
-        v = v.get(k, math.nan) if isinstance(v, dict) else math.nan
-    return v
 
 
 def _fmt(v) -> str:

@@ -26,6 +26,16 @@ from .._errors import MagtactError
 from .._files import write_json
 from ..study import Study, from_si, study_from_dict
 from . import _reference as published
+from ._file import (
+    ChosenRow,
+    Conditioning,
+    DesignRow,
+    FitAccuracy,
+    GammaZCurve,
+    Resolution,
+    SeedRecord,
+    Sweep,
+)
 
 #: Sensitivity definitions compared.
 DEFINITIONS = ("jacobian", "published")
@@ -142,8 +152,8 @@ def _cached(cache, key, definition, seed) -> dict | None:
         rec = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    ok = isinstance(rec, dict) and rec.get("definition") == definition and rec.get("seed") == seed
-    return rec if ok else None
+    r = SeedRecord.from_json(rec)
+    return rec if r is not None and (r.definition, r.seed) == (definition, seed) else None
 
 
 def _store(cache, key, definition, seed, rec) -> None:
@@ -152,28 +162,26 @@ def _store(cache, key, definition, seed, rec) -> None:
     write_json(_cache_file(cache, key, definition, seed), rec, allow_nan=True)
 
 
-def _line(rec: dict, done: int, total: int) -> str:
-    head = f"[{done}/{total}] {rec['definition']} seed {rec['seed']}"
-    if not rec["ok"]:
-        return f"{head}: {rec['message']}"
-    return (f"{head}: fit {rec['fit_time_s']:.0f} s; original design Γ_r,max "
-            f"{rec['original']['Gamma_r_max']:.3g}, Γ_z,max {rec['original']['Gamma_z_max']:.3g}"
-            f" N/T; H* {rec['chosen'].get('H_mm', float('nan')):.3g} mm")
+def _line(doc: dict, done: int, total: int) -> str:
+    rec = SeedRecord.from_json(doc)
+    head = f"[{done}/{total}] {rec.definition} seed {rec.seed}"
+    if not rec.ok:
+        return f"{head}: {rec.message}"
+    return (f"{head}: fit {rec.fit_time_s:.0f} s; original design Γ_r,max "
+            f"{rec.original.Gamma_r_max:.3g}, Γ_z,max {rec.original.Gamma_z_max:.3g}"
+            f" N/T; H* {from_si(rec.chosen.H, 'mm'):.3g} mm")
 
 
 def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definition: str,
              seed: int, sweep_n: int) -> dict:
     """Fit the forces with one seed under one definition and measure the figures (a worker).
 
-    Keys of the record: ``definition, seed, ok, message, fit_time_s, accuracy`` (held-out
-    max |error| / range and R² of f_r, f_z), ``original``, ``fabricated`` (per design: H_mm,
-    G_kPa, Gamma_r_max, Gamma_z_max [N/T], F_r_min, F_z_max [N], t_m, theta_m),
-    ``chosen``/``chosen_reference`` (the chosen design under the default constraints / those of
-    the original design, or ``infeasible`` with the message; ``chosen`` adds σ_F [mN] with the
-    study's Hall chip where its noise is known), ``branches``/``branches_reference``
-    (Pareto branches of the exact reduction), ``gamma_z_curve`` (t, Γ_z [N/T] at the largest H,
-    θ_max, G of the original design) and its ``gamma_z_trend``, and ``sweep`` (H_mm and the
-    per-unit-G extrema γ_r,max, γ_z,max [N/(T·Pa)], f_r,min, f_z,max [N/Pa] over H).
+    Returns the document of a :class:`magtact.publication.SeedRecord`: held-out accuracy of
+    f_r, f_z, the original and fabricated designs, the chosen design under the default
+    constraints and under those of the original design (or why none; under the default ones
+    with σ_F with the study's Hall chip where its noise is known), the Pareto branches of the
+    exact reduction, Γ_z along t at the largest H, θ_max, G of the original design and its
+    trend, the per-unit-G extrema over H and the stable-shear bound's conditioning.
     """
     from ..doe import load_bundled, load_dataset
     from ..metamodel import fit_models, load_field_models
@@ -195,19 +203,17 @@ def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definit
                     sensitivity=replace(study.sensitivity, definition=definition),
                     optimise=replace(study.optimise, sweep_n=sweep_n,
                                      sweep_coarse=min(study.optimise.sweep_coarse, sweep_n)))
-    rec: dict = {"definition": definition, "seed": seed, "ok": False, "message": ""}
     ds = load_dataset(data_path) if data_path else load_bundled()
     field_models = load_field_models(models_dir)
     t0 = time.perf_counter()
     try:
         fit = fit_models(ds, study, definition=definition, field_models=field_models)
     except RuntimeError as exc:  # every try failed the guard rails
-        rec["message"] = f"no model passed the guard rails: {exc}"
-        return rec
-    rec["fit_time_s"] = time.perf_counter() - t0
-    rec["accuracy"] = {k: {"test_max_err_over_range": r.test.max_abs_err_over_range,
-                           "test_r2": r.test.r2} if r.test else None
-                       for k, r in fit.reports.items()}
+        return SeedRecord(definition, seed, False,
+                          f"no model passed the guard rails: {exc}").to_json()
+    fit_time = time.perf_counter() - t0
+    accuracy = {k: FitAccuracy(r.test.max_abs_err_over_range, r.test.r2) if r.test else None
+                for k, r in fit.reports.items()}
     models = fit.model_set(study)
     R = Responses(models)
     d = study.design
@@ -215,68 +221,61 @@ def _measure(*, study_toml: str, models_dir: str, data_path: str | None, definit
     # method in the tests): the seed study needs many designs, not the last digit of each
     H_fab = min(max(published.H_FABRICATED, d.H[0]), d.H[1])  # within the study's bounds
     designs = heights_batch(R, [d.H_original, H_fab], study)
-    rec["original"] = _row(designs, 0, d.G_original)
-    rec["fabricated"] = _row(designs, 1, d.G_original)
+    original = _row(designs, 0, d.G_original)
     table = sweep(R, study)
-    rec["sweep"] = {"H_mm": from_si(table.H, "mm").tolist(),
-                    "gamma_r_max": table.gamma_r_max.tolist(),
-                    "gamma_z_max": table.gamma_z_max.tolist(),
-                    "f_r_min": table.f_r_min.tolist(), "f_z_max": table.f_z_max.tolist(),
-                    "t_m": table.t_m.tolist()}
-    reference = ForceConstraints(rec["original"]["F_r_min"], rec["original"]["F_z_max"],
-                                 "reference")
-    for key, c in (("", force_constraints(R, study)), ("_reference", reference)):
+    reference = ForceConstraints(original.F_r_min, original.F_z_max, "reference")
+    chosen, branches = [], []
+    for c in (force_constraints(R, study), reference):
         try:
             red = exact_reduction(R, study, c, table)
         except InfeasibleError as exc:
-            rec["chosen" + key] = {"infeasible": str(exc)}
-            rec["branches" + key] = 0
+            chosen.append(ChosenRow(infeasible=str(exc)))
+            branches.append(0)
             continue
         idx = np.flatnonzero(red.front)
         k = int(idx[decision_index(np.stack([red.Gamma_r[idx], red.Gamma_z[idx]], axis=1))])
         row = _row(table, k, red.G_star[k])
-        g_r, g_z = c.margins(row["F_r_min"], row["F_z_max"])
+        g_r, g_z = c.margins(row.F_r_min, row.F_z_max)
         rtol = study.optimise.active_rtol
-        active = [n for n, g, lim in (("F_r", g_r, c.F_r_c), ("F_z", g_z, c.F_z_c))
-                  if abs(g) <= rtol * abs(lim)]
-        rec["chosen" + key] = row | {"active": active, "F_r_c_N": c.F_r_c, "F_z_c_N": c.F_z_c}
-        if not key:
-            rec["chosen"] |= _resolution(models, study, table.H[k], red.G_star[k])
-        rec["branches" + key] = count_branches(red.front)
+        active = tuple(n for n, g, lim in (("F_r", g_r, c.F_r_c), ("F_z", g_z, c.F_z_c))
+                       if abs(g) <= rtol * abs(lim))
+        sigma = _resolution(models, study, table.H[k], red.G_star[k]) if not chosen else None
+        chosen.append(ChosenRow(**vars(row), active=active, F_r_c=c.F_r_c, F_z_c=c.F_z_c,
+                                resolution=sigma))
+        branches.append(count_branches(red.front))
     cond = shear_bound_conditioning(R, study, np.linspace(*d.H, 21))
-    rec["conditioning"] = {"H_mm": from_si(cond.H, "mm").tolist(), "tol": cond.tol,
-                           "t_m": cond.t_m.tolist(), "t_tol": cond.t_tol.tolist(),
-                           "dF_z_rel": cond.dF_z_rel.tolist()}
     tt = np.linspace(0.0, 1.0, N_T_CURVE)
     gz = gamma(models, tt, study.loading.theta_max, d.H[1], d.G_original)[1]
-    rec["gamma_z_curve"] = {"t": tt.tolist(), "Gamma_z": np.asarray(gz).tolist(),
-                            "H_mm": from_si(d.H[1], "mm"), "theta_rad": study.loading.theta_max}
-    rec["gamma_z_trend"] = trend(gz)
-    rec["ok"] = True
-    return rec
+    return SeedRecord(
+        definition, seed, True, "", fit_time, accuracy, original,
+        _row(designs, 1, d.G_original),
+        Sweep(table.H, table.gamma_r_max, table.gamma_z_max, table.f_r_min, table.f_z_max,
+              table.t_m),
+        chosen[0], branches[0], chosen[1], branches[1],
+        Conditioning(cond.H, cond.tol, cond.t_m, cond.t_tol, cond.dF_z_rel),
+        GammaZCurve(tt, np.asarray(gz), d.H[1], study.loading.theta_max),
+        trend(gz)).to_json()
 
 
-def _resolution(models, study: Study, H: float, G: float) -> dict:
-    """σ_F [mN] of design (H, G) with the study's chip, or nothing if its noise is not known."""
+def _resolution(models, study: Study, H: float, G: float) -> Resolution | None:
+    """σ_F of design (H, G) with the study's chip, or None if its noise is not known."""
     from ..designer import resolution
     from ..optimise import per_design
     from ..study import hall_chip
 
     chip = hall_chip(study)
     if chip.noise is None:
-        return {}
+        return None
     r = resolution(models, study, per_design(models, float(H), float(G), study), chip)
-    return {f"sigma_F{c}_{w}_mN": from_si(getattr(r, f"sigma_{c}_{w}"), "mN")
-            for c in "rz" for w in ("0", "worst")}
+    return Resolution(r.sigma_r_0, r.sigma_r_worst, r.sigma_z_0, r.sigma_z_worst)
 
 
-def _row(table, k: int, G: float) -> dict:
-    """Design k of a per-height table at shear modulus G [Pa], in user units."""
-    return {"H_mm": float(from_si(table.H[k], "mm")), "G_kPa": float(from_si(G, "kPa")),
-            "Gamma_r_max": float(G * table.gamma_r_max[k]),
-            "Gamma_z_max": float(G * table.gamma_z_max[k]),
-            "F_r_min": float(G * table.f_r_min[k]), "F_z_max": float(G * table.f_z_max[k]),
-            "t_m": float(table.t_m[k]), "theta_m": float(table.theta_m[k])}
+def _row(table, k: int, G: float) -> DesignRow:
+    """Design k of a per-height table at shear modulus G [Pa]."""
+    return DesignRow(float(table.H[k]), float(G), float(G * table.gamma_r_max[k]),
+                     float(G * table.gamma_z_max[k]), float(G * table.f_r_min[k]),
+                     float(G * table.f_z_max[k]), float(table.t_m[k]),
+                     float(table.theta_m[k]))
 
 
 def count_branches(front: np.ndarray) -> int:
