@@ -231,11 +231,16 @@ def _saturation_text(a) -> str:
 def parts_rows(p) -> tuple[str, list[tuple[str, str]]]:
     """Title and rows of a design's parts (:class:`magtact.designer.Parts`): the magnet's
     grade and size, its magnetisation, the silicones whose G range holds the design's G."""
-    size = p.size if p.size != "custom" else None
-    if size is None and getattr(p, "R_m", None) is not None:
-        size = f"⌀{short(2e3 * p.R_m)} × {short(1e3 * p.H_m)}"
+    size = None
+    if getattr(p, "R_m", None) is not None:
+        size = f"⌀{short(2e3 * p.R_m)} × {short(1e3 * p.H_m)} mm"
+    elif p.size != "custom":
+        from .parts import SIZES
+
+        z = SIZES[p.size]
+        size = f"⌀{short(2e3 * z.R_m)} × {short(1e3 * z.H_m)} mm"
     magnet = ("no grade named" if p.grade == "custom" else p.grade) + (
-        f", {size} mm (diameter × height)" if size else "")
+        f", {size}" if size else "")
     if p.inside:
         holds = ", ".join(p.inside)
     else:

@@ -200,8 +200,11 @@ def _magnet_text(a) -> str:
         g = grade(p.grade)
         text = (f"{p.grade} (B_r {g.B_r_min:.3g}–{g.B_r_max:.3g} T, max {g.max_temperature_C:g} "
                 f"°C)")
-    if p.size != "custom":
-        return text + f", {p.size} mm (diameter × height)"
+    if p.R_m is None and p.size != "custom":
+        from ..parts import SIZES
+
+        z = SIZES[p.size]
+        return text + f", ⌀{mm(2 * z.R_m):.3g} × {mm(z.H_m):.3g} mm"
     if p.R_m is None:
         return text
     return text + f", ⌀{mm(2 * p.R_m):.3g} × {mm(p.H_m):.3g} mm"
