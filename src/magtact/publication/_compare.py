@@ -18,7 +18,7 @@ import numpy as np
 from .._records import to_json
 from ..study import from_si
 from . import _reference as ref
-from ._file import (
+from ._file import (  # noqa: F401 (cell_text, publication_text: the table's cells)
     FIGURE_NAMES,
     ComparisonRow,
     DefinitionSpread,
@@ -26,6 +26,8 @@ from ._file import (
     FigureSpread,
     SeedRecord,
     TrendSpread,
+    cell_text,
+    publication_text,
 )
 
 #: The reading of G as printed, relative to the study's (magone reads 29.4 kPa for 2.94).
@@ -226,18 +228,3 @@ def _printed_range() -> str:
 
     lo, hi = from_si(magone_printed().design.G, "kPa")
     return f"{lo:g}–{hi:g} kPa"
-
-
-def publication_text(value) -> str:
-    """The publication's cell: a number or a statement."""
-    return f"{value:.3g}" if isinstance(value, int | float) else str(value)
-
-
-def cell_text(cell: dict, digits: int = 3) -> str:
-    """A table cell: ``median [min, max]`` or its text."""
-    if "text" in cell:
-        return cell["text"]
-    m, lo, hi = cell["median"], cell["min"], cell["max"]
-    if lo == hi:
-        return f"{m:.{digits}g}"
-    return f"{m:.{digits}g} [{lo:.{digits}g}, {hi:.{digits}g}]"

@@ -329,6 +329,21 @@ def _finite(v: float | None) -> float | None:
 
 
 # ---- the side-by-side table ----------------------------------------------------------------
+def publication_text(value) -> str:
+    """The publication's cell: a number or a statement."""
+    return f"{value:.3g}" if isinstance(value, int | float) else str(value)
+
+
+def cell_text(cell: dict, digits: int = 3) -> str:
+    """A table cell: ``median [min, max]`` or its text."""
+    if "text" in cell:
+        return cell["text"]
+    m, lo, hi = cell["median"], cell["min"], cell["max"]
+    if lo == hi:
+        return f"{m:.{digits}g}"
+    return f"{m:.{digits}g} [{lo:.{digits}g}, {hi:.{digits}g}]"
+
+
 @dataclass(frozen=True)
 class ComparisonRow:
     """A row of the side-by-side table: ``cells`` per column ``"<definition>/<reading>"``
@@ -347,15 +362,11 @@ class ComparisonRow:
         return list(self.cells)
 
     def publication_text(self) -> str:
-        from ._compare import publication_text
-
         return publication_text(self.publication)
 
     def cell_text(self, column: str) -> str:
         """The cell of ``column`` as ``median [min, max]`` or its text; "—" where it has
         neither."""
-        from ._compare import cell_text
-
         cell = self.cells.get(column)
         try:
             return cell_text(cell) if isinstance(cell, dict) else "—"
