@@ -314,18 +314,8 @@ def from_json_lenient(cls: type[R], doc) -> R | None:
     :func:`from_json` reads it (a nested record leniently too, and a list or map of records
     keeps the items that read as records); a field whose key is missing or whose value has
     another shape takes its ``fallback``, else its default, and a field without either None.
-
-    Parameters
-    ----------
-    cls : type
-        A record type declared with :func:`entry`.
-    doc : object
-        A parsed JSON document.
-
-    Returns
-    -------
-    cls or None
-        None where ``doc`` is not a JSON object or the values read make no ``cls``.
+    ``cls`` and ``doc`` as :func:`from_json`; None where ``doc`` is not a JSON object or the
+    values read make no ``cls``.
     """
     try:
         return _record(cls, doc, cls.__name__, "", lenient=True)

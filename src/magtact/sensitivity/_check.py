@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, make_dataclass
 
 import numpy as np
 
@@ -102,35 +102,22 @@ def compare_with_data(models: ModelSet, ds, t_min: float = 0.2,
     return out
 
 
-@dataclass(frozen=True)
-class Spread:
-    """The median, 95th percentile and largest relative difference |γ_model − γ_data| /
-    |γ_model| over the points t ≥ t_min, and how many points."""
-
-    median: float = entry()
-    p95: float = entry()
-    max: float = entry()
-    n_points: int = entry(kind=int)
-
-
-@dataclass(frozen=True)
-class InteriorSpread:
-    """:class:`Spread` over the points where both differences of the data are central."""
-
-    median: float = entry("median_interior")
-    p95: float = entry("p95_interior")
-    max: float = entry("max_interior")
-    n_points: int = entry("n_points_interior", kind=int)
+def _spread_type(name: str, suffix: str, where: str) -> type:
+    """The record of the relative difference |γ_model − γ_data| / |γ_model| over the points
+    ``where``: its median, 95th percentile and largest value, and how many points; each key
+    ends in ``suffix``."""
+    return make_dataclass(name, [
+        ("median", float, entry("median" + suffix)), ("p95", float, entry("p95" + suffix)),
+        ("max", float, entry("max" + suffix)),
+        ("n_points", int, entry("n_points" + suffix, kind=int))],
+        frozen=True, namespace={"__doc__": f"The spread of the relative difference over {where}."})
 
 
-@dataclass(frozen=True)
-class AboveFloorSpread:
-    """:class:`Spread` over the points where |γ_model| is above the floor."""
-
-    median: float = entry("median_above_floor")
-    p95: float = entry("p95_above_floor")
-    max: float = entry("max_above_floor")
-    n_points: int = entry("n_points_above_floor", kind=int)
+Spread = _spread_type("Spread", "", "the points t ≥ t_min")
+InteriorSpread = _spread_type("InteriorSpread", "_interior",
+                              "the points where both differences of the data are central")
+AboveFloorSpread = _spread_type("AboveFloorSpread", "_above_floor",
+                                "the points where |γ_model| is above the floor")
 
 
 def _spread(kind: type):
