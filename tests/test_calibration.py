@@ -343,7 +343,7 @@ def test_report_section_shows_the_calibration(tmp_path, smap, sigma, firmware, d
     assert f"{sig(3e-12)} of the force range" in section and "reached" in section
     assert ("Forces from the metamodels; what limits them: metamodels against the DOE&#x27;s "
             "FE forces at H") in section
-    assert f"F_z {limit['F_z_mN']:.3g} mN" in section
+    assert f"F_z {1e3 * limit.F_z:.3g} mN" in section
 
 
 # ---- hostile press files ---------------------------------------------------------------------
@@ -456,18 +456,18 @@ def test_fe_interpolant_error_between_paths_is_stated(fe_map, doe, smap, sigma):
     inner = [p for p in paths if p.interior]
     assert [p.interior for p in paths] == [False, True, True, True, False]
     e = force_model_error(fe_map, doe)
-    assert e["F_z_mN"] == pytest.approx(1e3 * max(p.err_z for p in inner))
+    assert e.F_z == pytest.approx(max(p.err_z for p in inner))
     models_err = force_model_error(smap, doe)
-    assert models_err["force_source"] == "models" and models_err["points"] == 105
+    assert models_err.force_source == "models" and models_err.points == 105
     # the metamodels' error, computed here independently of the map
     d = doe.sel(H=H)
     T, TH = np.meshgrid(d["t"].values, d["theta"].values, indexing="ij")
     F = smap.F_of(smap.features(T, TH))
     scale = G_CHOSEN / float(d["G"].values[0])
-    assert models_err["F_z_mN"] == pytest.approx(
-        1e3 * np.abs(F[..., 2] - d["F_z"].values[..., 0] * scale).max(), rel=1e-9)
+    assert models_err.F_z == pytest.approx(
+        np.abs(F[..., 2] - d["F_z"].values[..., 0] * scale).max(), rel=1e-9)
     for p in inner:
-        assert 0.1e-3 <= p.err_z <= 1e-3 * models_err["F_z_mN"]
+        assert 0.1e-3 <= p.err_z <= models_err.F_z
         assert 0.1e-3 <= p.err_r <= 5e-3
         assert p.err_z > 2 * sigma[1]  # the map between paths: not within 2 σ_F
 
@@ -541,7 +541,7 @@ def test_calibrate_fits_a_unit_to_the_fe_forces_where_the_data_hold_H(models, st
     k = _pick(L, PRESSES)
     cal = calibrate(models, study, H, G_CHOSEN, noise=(NOISE, NOISE),
                     presses=Presses(B[k], F[k]), dataset=doe, degrees=(6,), table_sizes=())
-    assert cal.map.force_source == "fe" and cal.force_error["force_source"] == "fe"
+    assert cal.map.force_source == "fe" and cal.force_error.force_source == "fe"
     assert cal.unit.unit.B_scale == pytest.approx(1.03, rel=1e-9)
     summary = cal.to_json()
     assert summary["force_source"] == "fe" and summary["force_model_error"]["F_z_mN"] > 0

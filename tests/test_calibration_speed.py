@@ -15,7 +15,7 @@ import gc
 import pickle
 import shutil
 import sys
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -236,7 +236,8 @@ def test_candidates_from_shared_samples_are_those_fitted_alone(smap):
         alone = fit_features(smap, degree, transform, 0)
         assert shared.limits == alone.limits
         for a, b in ((shared.coef_r, alone.coef_r), (shared.coef_z, alone.coef_z),
-                     *((shared.stage[k], alone.stage[k]) for k in alone.stage)):
+                     *((getattr(shared.stage, f.name), getattr(alone.stage, f.name))
+                       for f in fields(alone.stage))):
             np.testing.assert_array_equal(a, b)
     assert sorted(samples._force_fits) == [4, 6]  # one force fit per degree
 

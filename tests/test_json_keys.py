@@ -84,12 +84,6 @@ PENDING: dict[str, str] = {
     "_result.py": "reads design.json, chosen.json",
     "_display.py": "reads sensor.json's answers",
     "_outputs.py": "reads sensor.json",
-    # calibration.json (magtact.calibration)
-    "calibration/_outputs.py": "calibration.json",
-    "calibration/_firmware.py": "calibration.json's firmware",
-    "calibration/_map.py": "force_map.json",
-    "calibration/_unit.py": "calibration.json's unit",
-    "calibration/_fe.py": "calibration.json's FE check",
     # the metamodels' files (magtact.metamodel)
     "metamodel/_fit.py": "the models' JSON",
     # others
@@ -111,7 +105,6 @@ RAW_JSON_WRITER = "_runfolder.py"
 PENDING_RAW: dict[str, str] = {
     "optimise/_sensor.py": "sensor.json, chosen.json",
     "metamodel/_io.py": "the models' JSON",
-    "calibration/_firmware.py": "the firmware's JSON",
     "report/_publication.py": "captions.json",
 }
 

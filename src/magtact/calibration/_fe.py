@@ -27,6 +27,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .._errors import MagtactError
+from .._records import entry, to_json
 from ..study import mm
 
 #: Heights of a data set and a design agree within this [m].
@@ -229,14 +230,14 @@ class PathHoldout:
     [rad], the largest |error| of F_r, F_z [N] over the path's loads t ≤ t_m, and whether the
     path lies between others (``interior``; the end paths θ = 0 and θ_max are extrapolation)."""
 
-    theta: float
-    err_r: float
-    err_z: float
-    interior: bool
+    theta: float = entry(unit="rad")
+    err_r: float = entry("err_F_r_mN", "mN")
+    err_z: float = entry("err_F_z_mN", "mN")
+    interior: bool = entry(kind=bool)
 
     def to_json(self) -> dict:
-        return {"theta_rad": self.theta, "err_F_r_mN": 1e3 * self.err_r,
-                "err_F_z_mN": 1e3 * self.err_z, "interior": self.interior}
+        """The path's error in user units (``calibration.json``'s ``force_model_error``)."""
+        return to_json(self)
 
 
 def path_holdout(dataset, H: float, G: float, t_m: float = np.inf,

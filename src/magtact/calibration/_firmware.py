@@ -19,7 +19,6 @@ The region test of the firmware is a polygon through the image of the region's t
 from __future__ import annotations
 
 import csv
-import json
 import weakref
 from dataclasses import dataclass, field, replace
 from functools import cache
@@ -28,10 +27,11 @@ from pathlib import Path
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 
+from .. import _files as files
 from .._errors import MagtactError
-from .._files import json_number, json_text
+from .._records import entry, from_json, from_json_lenient, to_json
 from ..study import from_si, mm, to_si
-from ._map import OK, SensorMap
+from ._map import OK, MapDesign, SensorMap
 
 #: Transforms of b_z for the polynomial candidates: name → (NumPy function, C expression).
 TRANSFORMS = {"B_z": (lambda v: v, "bz"), "1/B_z": (lambda v: 1.0 / v, "1.0 / bz"),
@@ -74,11 +74,12 @@ class Approximation:
     meta: dict = field(default_factory=dict)
     #: ``"features"`` only: the second stage and the unit's corrections (see
     #: :func:`fit_features`).
-    stage: dict = field(default_factory=dict)
+    stage: FeatureStage | None = None
 
     @property
     def n_coefficients(self) -> int:
-        extra = sum(np.size(self.stage[k]) for k in ("coef_p", "coef_q")) if self.stage else 0
+        st = self.stage
+        extra = 0 if st is None else np.size(st.coef_p) + np.size(st.coef_q)
         return int(self.coef_r.size + self.coef_z.size + extra)
 
     @property
@@ -137,18 +138,81 @@ class Approximation:
         return np.stack([F_r * cx, F_r * cy, F_z], axis=-1)
 
     def to_json(self) -> dict:
-        return {
-            "format": "magtact-calibration/1", "kind": self.kind, "degree": self.degree,
-            "transform": self.transform, "limits": list(self.limits),
-            "coef_r": self.coef_r.tolist(), "coef_z": self.coef_z.tolist(),
-            "basis": [list(ij) for ij in basis_terms(self.degree)] if self.kind != "table"
-            else None,
-            "polygon_T": self.polygon.tolist(), "max_error_F_r_N": self.err_r,
-            "max_error_F_z_N": self.err_z, "bytes": self.bytes,
-            "multiplies": self.multiplies,
-            "stage": {k: np.asarray(v).tolist() for k, v in self.stage.items()},
-            **self.meta,
-        }
+        """The approximation as ``force_map.json``'s ``approximation`` holds it
+        (:class:`ApproximationRecord`)."""
+        return to_json(self.record())
+
+    def record(self) -> ApproximationRecord:
+        """The approximation as its file gives it (:class:`ApproximationRecord`)."""
+        return ApproximationRecord(
+            APPROXIMATION_FORMAT, self.kind, self.degree, self.transform, self.limits,
+            self.coef_r.tolist(), self.coef_z.tolist(),
+            basis_terms(self.degree) if self.kind != "table" else None, self.polygon,
+            self.err_r, self.err_z, self.bytes, self.multiplies, self.stage, self.meta)
+
+
+@dataclass(frozen=True)
+class FeatureStage:
+    """The second stage of a two-stage candidate and the unit's corrections
+    (:func:`fit_features`), in SI.
+
+    Attributes
+    ----------
+    coef_p, coef_q : numpy.ndarray
+        The features' Chebyshev coefficients in (b_r, v(b_z)).
+    limits_pq : numpy.ndarray
+        (p_lo, p_hi, q_lo, q_hi) of the force's scaled variables.
+    B_scale : float
+        The unit's remanence over the design's.
+    field_offset : numpy.ndarray
+        The unit's field offset (b_x, b_y, b_z) [T].
+    G_scale : float
+        The unit's stiffness over the design's.
+    delta : numpy.ndarray
+        The shift of the features by the chip's offset, (−d_z, d_x, d_y) / a.
+    region : numpy.ndarray
+        (t_m, tan θ_m) of the region test.
+    """
+
+    coef_p: np.ndarray = entry(levels=("list",), array=True)
+    coef_q: np.ndarray = entry(levels=("list",), array=True)
+    limits_pq: np.ndarray = entry(levels=("list",), array=True)
+    B_scale: float = entry()
+    field_offset: np.ndarray = entry(levels=("list",), array=True)
+    G_scale: float = entry()
+    delta: np.ndarray = entry(levels=("list",), array=True)
+    region: np.ndarray = entry(levels=("list",), array=True)
+
+
+#: ``format`` of an approximation's JSON.
+APPROXIMATION_FORMAT = "magtact-calibration/1"
+
+
+@dataclass(frozen=True)
+class ApproximationRecord:
+    """An approximation as ``force_map.json``'s ``approximation`` gives it; SI (T, N).
+
+    ``coef_r``, ``coef_z``: the coefficients as nested lists (one list for a polynomial, n
+    rows for a table); ``basis``: the (i, j) of each polynomial coefficient (None for a table);
+    ``stage``: the two-stage candidate's (:class:`FeatureStage`), written as an empty object for
+    the others; ``meta``: further entries of the object as they are.
+    """
+
+    format: str = entry(kind=str)
+    kind: str = entry(kind=str)
+    degree: int = entry(kind=int)
+    transform: str = entry(kind=str)
+    limits: tuple[float, ...] = entry(levels=("list",))
+    coef_r: list = entry(kind=object)
+    coef_z: list = entry(kind=object)
+    basis: tuple | None = entry(kind=int, levels=("list", "list"), optional=True)
+    polygon: np.ndarray = entry("polygon_T", levels=("list", "list"), array=True)
+    err_r: float = entry("max_error_F_r_N", "N")
+    err_z: float = entry("max_error_F_z_N", "N")
+    bytes: int = entry(kind=int)
+    multiplies: int = entry(kind=int)
+    stage: FeatureStage | None = entry(kind=FeatureStage, shape="dict", default=None)
+    meta: dict = entry(kind=object, levels=("map",), inline=True, default_factory=dict)
 
 
 def basis_terms(n: int) -> list[tuple[int, int]]:
@@ -364,33 +428,31 @@ def fit_features(smap: SensorMap, degree: int, transform: str, seed: int = 0,
     b_r, v = s.B0[:, 0], TRANSFORMS[transform][0](s.B0[:, 2])
     lim_b, (c_p, c_q) = _cheb_fit(b_r, v, degree, [s.p, s.q])
     lim_f, (c_r, c_z) = s.force_fit(degree)
-    stage = {"coef_p": c_p, "coef_q": c_q, "limits_pq": np.array(lim_f),
-             "B_scale": unit.B_scale, "field_offset": np.array(unit.field_offset),
-             "G_scale": unit.G_scale, "delta": s.delta,
-             "region": np.array([smap.t_m, np.tan(smap.theta_m)])}
+    stage = FeatureStage(c_p, c_q, np.array(lim_f), unit.B_scale, np.array(unit.field_offset),
+                         unit.G_scale, s.delta, np.array([smap.t_m, np.tan(smap.theta_m)]))
     return Approximation("features", degree, transform, lim_b, c_r, c_z, np.zeros((0, 2)),
                          stage=stage)
 
 
 def _evaluate_features(ap: Approximation, B) -> tuple[np.ndarray, np.ndarray]:
     st = ap.stage
-    Bc = (B - np.asarray(st["field_offset"])) / st["B_scale"]
+    Bc = (B - np.asarray(st.field_offset)) / st.B_scale
     b_r = np.hypot(Bc[..., 0], Bc[..., 1])
     v = TRANSFORMS[ap.transform][0](Bc[..., 2])
-    p1, q1 = _cheb_eval(ap.limits, [st["coef_p"], st["coef_q"]], b_r, v, ap.degree)
+    p1, q1 = _cheb_eval(ap.limits, [st.coef_p, st.coef_q], b_r, v, ap.degree)
     with np.errstate(invalid="ignore", divide="ignore"):
         cx = np.where(b_r > 0, Bc[..., 0] / np.where(b_r > 0, b_r, 1.0), 1.0)
         cy = np.where(b_r > 0, Bc[..., 1] / np.where(b_r > 0, b_r, 1.0), 0.0)
-    delta = np.asarray(st["delta"])
+    delta = np.asarray(st.delta)
     p = p1 - delta[0]
     qx, qy = q1 * cx - delta[1], q1 * cy - delta[2]
     q = np.hypot(qx, qy)
-    f_r, f_z = _cheb_eval(tuple(st["limits_pq"]), [ap.coef_r, ap.coef_z], p, q, ap.degree)
+    f_r, f_z = _cheb_eval(tuple(st.limits_pq), [ap.coef_r, ap.coef_z], p, q, ap.degree)
     with np.errstate(invalid="ignore", divide="ignore"):
         ux = np.where(q > 0, qx / np.where(q > 0, q, 1.0), 0.0)
         uy = np.where(q > 0, qy / np.where(q > 0, q, 1.0), 0.0)
-    g = st["G_scale"]
-    t_m, tan_m = st["region"]
+    g = st.G_scale
+    t_m, tan_m = st.region
     inside = (p >= -REGION_SLACK) & (p <= t_m + REGION_SLACK) & (
         q <= np.maximum(p, 0.0) * tan_m + REGION_SLACK)
     return np.stack([g * f_r * ux, g * f_r * uy, g * f_z], axis=-1), inside
@@ -416,46 +478,27 @@ class FrontierPoint:
         Whether no candidate of at most its size has a smaller ``error_over_sigma``.
     """
 
-    kind: str
-    degree: int
-    transform: str
-    bytes: int
-    multiplies: int
-    err_r: float
-    err_z: float
-    error_over_sigma: float
-    on_frontier: bool
+    kind: str = entry(kind=str, fallback="")
+    degree: int = entry("degree_or_n", kind=int, fallback=0)
+    transform: str = entry(kind=str, fallback="")
+    bytes: int = entry(kind=int)
+    multiplies: int = entry(kind=int, fallback=0)
+    err_r: float = entry("max_error_F_r_mN", "mN", fallback=np.nan)
+    err_z: float = entry("max_error_F_z_mN", "mN", fallback=np.nan)
+    error_over_sigma: float = entry()
+    on_frontier: bool = entry(kind=bool, fallback=False)
 
     def to_json(self) -> dict:
         """The candidate in user units (mN), as ``calibration.json``'s frontier holds it."""
-        return {"kind": self.kind, "degree_or_n": self.degree, "transform": self.transform,
-                "bytes": self.bytes, "multiplies": self.multiplies,
-                "max_error_F_r_mN": from_si(self.err_r, "mN"),
-                "max_error_F_z_mN": from_si(self.err_z, "mN"),
-                "error_over_sigma": self.error_over_sigma, "on_frontier": self.on_frontier}
+        return to_json(self)
 
     @classmethod
     def from_json(cls, data) -> FrontierPoint | None:
         """The candidate :meth:`to_json` wrote, in SI; None for anything but a JSON object
-        with a size and a score (another missing number reads as NaN or 0, text as text)."""
-        if not isinstance(data, dict):
-            return None
-        size, score = data.get("bytes"), json_number(data.get("error_over_sigma"))
-        if not isinstance(size, int) or isinstance(size, bool) or score is None:
-            return None
-
-        def num(key: str) -> float:
-            v = json_number(data.get(key))
-            return np.nan if v is None else to_si(v, "mN")
-
-        def count(key: str) -> int:
-            v = data.get(key)
-            return v if isinstance(v, int) and not isinstance(v, bool) else 0
-
-        return cls(json_text(data.get("kind")), count("degree_or_n"),
-                   json_text(data.get("transform")), size, count("multiplies"),
-                   num("max_error_F_r_mN"), num("max_error_F_z_mN"), score,
-                   data.get("on_frontier") is True)
+        with a size and a score (another value missing or of another type reads as NaN, 0,
+        empty text or False)."""
+        p = from_json_lenient(cls, data)
+        return None if p is None or p.bytes is None or p.error_over_sigma is None else p
 
 
 @dataclass(frozen=True)
@@ -595,7 +638,7 @@ def c_source(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
     finite. ``offset`` (or NULL) is subtracted from the
     reading first; ``magtact_force_tare`` sets it from the mean of n readings at rest.
     """
-    d = smap.describe()
+    d = smap.design_record()
     rest = rest_field(smap)
     band = (0.0, 0.0) if noise is None else tuple(BAND_SIGMAS * float(v) for v in noise)
     double = (builds or {}).get(BUILDS[0][0])
@@ -621,14 +664,14 @@ def c_source(a: Approximation, smap: SensorMap, choice: FirmwareChoice | None = 
                  f"force of degree {a.degree} in the features")
     head = (
         "/* magtact field-to-force calibration (generated; docs/method.md section 13).\n"
-        f" *   design: H = {d['H_mm']:.4g} mm, G = {d['G_kPa']:.4g} kPa, "
-        f"M_z = {d['M_z_A_per_m']:.4g} A/m\n"
+        f" *   design: H = {mm(d.H):.4g} mm, G = {from_si(d.G, 'kPa'):.4g} kPa, "
+        f"M_z = {d.M_z:.4g} A/m\n"
         " *   units: bx, by, bz in tesla (the Hall chip's axes: x, y in the base plane, z up);"
         " out[3] in newtons\n"
         " *   out = (F_x, F_y, F_z): the reaction of the base on the body (F_r <= 0 against the "
         "shear,\n *   F_z > 0 in compression); the load applied on the top is -out.\n"
-        f" *   region: t <= {d['t_m']:.6g}, theta <= {d['theta_m_rad']:.6g} rad (every azimuth); "
-        f"F_r down to -{d['F_r_range_N']:.4g} N, F_z up to {d['F_z_range_N']:.4g} N\n"
+        f" *   region: t <= {d.t_m:.6g}, theta <= {d.theta_m:.6g} rad (every azimuth); "
+        f"F_r down to -{d.F_r_range:.4g} N, F_z up to {d.F_z_range:.4g} N\n"
         f" *   field at rest: ({rest_mT}) mT\n"
         + band_text +
         f" *   approximation: {a.kind}{kind}\n"
@@ -969,10 +1012,10 @@ def _c_features(a: Approximation) -> tuple[str, str]:
     n = a.degree
     terms = basis_terms(n)
     lo_r, hi_r, lo_v, hi_v = a.limits
-    lo_p, hi_p, lo_q, hi_q = (float(v) for v in st["limits_pq"])
-    b0 = [float(v) for v in st["field_offset"]]
-    d = [float(v) for v in st["delta"]]
-    t_m, tan_m = (float(v) for v in st["region"])
+    lo_p, hi_p, lo_q, hi_q = (float(v) for v in st.limits_pq)
+    b0 = [float(v) for v in st.field_offset]
+    d = [float(v) for v in st.delta]
+    t_m, tan_m = (float(v) for v in st.region)
     helper = (
         f"/* two sums of c[k] T_i(xi) T_j(eta) over the basis i + j <= {n} */\n"
         "static inline void magtact_force_cheb2(const MAGTACT_REAL *c1, const MAGTACT_REAL *c2,\n"
@@ -993,10 +1036,10 @@ def _c_features(a: Approximation) -> tuple[str, str]:
     ind = "        "
     block = (
         "    {\n"
-        + _c_array("coef_p", st["coef_p"], ind) + _c_array("coef_q", st["coef_q"], ind)
+        + _c_array("coef_p", st.coef_p, ind) + _c_array("coef_q", st.coef_q, ind)
         + _c_array("coef_r", a.coef_r, ind) + _c_array("coef_z", a.coef_z, ind) +
-        f"{ind}const MAGTACT_ACC s = {float(st['B_scale']):.17g}, g = "
-        f"{float(st['G_scale']):.17g};\n"
+        f"{ind}const MAGTACT_ACC s = {float(st.B_scale):.17g}, g = "
+        f"{float(st.G_scale):.17g};\n"
         f"{ind}MAGTACT_ACC cx = ((MAGTACT_ACC)bx - ({b0[0]:.17g})) / s;\n"
         f"{ind}MAGTACT_ACC cy = ((MAGTACT_ACC)by - ({b0[1]:.17g})) / s;\n"
         f"{ind}MAGTACT_ACC cz = ((MAGTACT_ACC)bz - ({b0[2]:.17g})) / s;\n"
@@ -1066,34 +1109,77 @@ def write_table_csv(smap: SensorMap, path: Path, n: int = 64) -> Path:
     return path
 
 
+#: How to evaluate an approximation of ``force_map.json``, in words.
+EVALUATION = ("b_r = sqrt(bx^2 + by^2); poly: xi = 2 (b_r - limits[0]) / (limits[1] - limits[0]) "
+              "- 1, eta likewise of transform(bz) with limits[2:4]; F_r = sum coef_r[k] T_i(xi) "
+              "T_j(eta) over basis[k] = (i, j), F_z likewise; table: bilinear in (b_r, bz) on an "
+              "n x n grid over limits, coef[i][j]; out = (F_r bx / b_r, F_r by / b_r, F_z); "
+              "inside: crossing-number test of (b_r, bz) against polygon_T")
+
+
+@dataclass(frozen=True)
+class TargetSigma:
+    """The target σ_F,r, σ_F,z [N] of ``force_map.json``."""
+
+    r: float = entry("target_sigma_F_r_mN", "mN")
+    z: float = entry("target_sigma_F_z_mN", "mN")
+
+
+@dataclass(frozen=True)
+class ForceMapFile:
+    """``force_map.json``: the design, the chosen approximation and the frontier (for
+    Python/MicroPython), in SI.
+
+    Attributes
+    ----------
+    design : MapDesign
+    approximation : ApproximationRecord
+    target_sigma_F : (float, float)
+        σ_F,r, σ_F,z [N] the approximation was held to.
+    reached, rule
+        Whether the chosen approximation reaches them, and how it was chosen.
+    frontier : tuple of FrontierPoint
+        Every candidate measured.
+    evaluation, units : str
+        How to evaluate the approximation, and its units, in words.
+    H : float
+        The design's body height [m].
+    """
+
+    design: MapDesign = entry(kind=MapDesign)
+    approximation: ApproximationRecord = entry(kind=ApproximationRecord)
+    target_sigma_F: tuple[float, float] = entry(kind=TargetSigma, inline=True, shape="tuple")
+    reached: bool = entry(kind=bool)
+    rule: str = entry(kind=str)
+    frontier: tuple[FrontierPoint, ...] = entry(kind=FrontierPoint, levels=("list",))
+    evaluation: str = entry(kind=str, default=EVALUATION)
+    units: str = entry(kind=str, default="B in T, F in N")
+    H: float = entry(unit="mm", default=np.nan)
+
+
 def approximation_json(choice: FirmwareChoice, smap: SensorMap) -> dict:
-    """The design, the chosen approximation and the frontier (JSON for Python/MicroPython)."""
-    a = choice.chosen
-    return {"design": smap.describe(), "approximation": a.to_json(),
-            "target_sigma_F_r_mN": from_si(choice.target_r, "mN"),
-            "target_sigma_F_z_mN": from_si(choice.target_z, "mN"),
-            "reached": choice.reached, "rule": choice.rule, "frontier": choice.frontier(),
-            "evaluation": ("b_r = sqrt(bx^2 + by^2); poly: xi = 2 (b_r - limits[0]) / "
-                           "(limits[1] - limits[0]) - 1, eta likewise of transform(bz) with "
-                           "limits[2:4]; F_r = sum coef_r[k] T_i(xi) T_j(eta) over basis[k] = "
-                           "(i, j), F_z likewise; table: bilinear in (b_r, bz) on an n x n grid "
-                           "over limits, coef[i][j]; out = (F_r bx / b_r, F_r by / b_r, F_z); "
-                           "inside: crossing-number test of (b_r, bz) against polygon_T"),
-            "units": "B in T, F in N", "H_mm": mm(smap.H)}
+    """The design, the chosen approximation and the frontier (JSON for Python/MicroPython:
+    ``force_map.json``, :class:`ForceMapFile`)."""
+    return to_json(ForceMapFile(smap.design_record(), choice.chosen.record(),
+                                (choice.target_r, choice.target_z), choice.reached,
+                                choice.rule, tuple(choice.frontier_points()), H=smap.H))
 
 
 def load_approximation(data: dict) -> Approximation:
-    """An approximation back from its JSON (the ``approximation`` entry)."""
-    return Approximation(data["kind"], int(data["degree"]), data["transform"],
-                         tuple(data["limits"]), np.asarray(data["coef_r"], float),
-                         np.asarray(data["coef_z"], float),
-                         np.asarray(data["polygon_T"], float).reshape(-1, 2),
-                         data["max_error_F_r_N"], data["max_error_F_z_N"],
-                         stage={k: np.asarray(v, float) if isinstance(v, list) else v
-                                for k, v in (data.get("stage") or {}).items()})
+    """An approximation back from its JSON (the ``approximation`` entry).
+
+    Raises
+    ------
+    RecordError
+        If ``data`` is not an approximation's JSON (the message names the key).
+    """
+    r = from_json(ApproximationRecord, data, "force_map.json's approximation")
+    return Approximation(r.kind, r.degree, r.transform, r.limits,
+                         np.asarray(r.coef_r, float), np.asarray(r.coef_z, float),
+                         np.asarray(r.polygon, float).reshape(-1, 2), r.err_r, r.err_z,
+                         r.meta, None if not r.stage else FeatureStage(**r.stage))
 
 
 def write_json(obj: dict, path: Path) -> Path:
-    path = Path(path)
-    path.write_text(json.dumps(obj, indent=1, allow_nan=False) + "\n", encoding="utf-8")
-    return path
+    """Write the document ``obj`` to ``path`` atomically (indented by one, no NaN)."""
+    return files.write_json(path, obj, indent=1, allow_nan=False)

@@ -15,19 +15,20 @@ there and their Jacobians are regular at t = 0, where (t, θ) are not.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from .._errors import MagtactError
-from .._sensor import Sensor
+from .._records import entry, to_json
+from .._sensor import Sensor, SettingRecord
 from ..doe import check_design
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..metamodel import ModelSet
 from ..optimise import per_design
-from ..study import Study, from_si, mm
+from ..study import Study, mm
 from ._fe import FEForces, fe_forces
 
 #: Where the map's forces come from: the metamodels, or the DOE's FE paths at the design's H.
@@ -62,10 +63,12 @@ class UnitParameters:
         (b_x, b_y, b_z) [T]: a constant field added to every reading (chip offset, stray field).
     """
 
-    G_scale: float = 1.0
-    B_scale: float = 1.0
-    chip_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    field_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    G_scale: float = entry(default=1.0)
+    B_scale: float = entry(default=1.0)
+    chip_offset: tuple[float, float, float] = entry(unit="mm", levels=("list",),
+                                                    default=(0.0, 0.0, 0.0))
+    field_offset: tuple[float, float, float] = entry(unit="mT", levels=("list",),
+                                                     default=(0.0, 0.0, 0.0))
 
     @property
     def nominal(self) -> bool:
@@ -83,9 +86,7 @@ class UnitParameters:
 
     def to_json(self) -> dict:
         """User units, the unit in each key."""
-        return {"G_scale": self.G_scale, "B_scale": self.B_scale,
-                "chip_offset_mm": [mm(v) for v in self.chip_offset],
-                "field_offset_mT": [from_si(v, "mT") for v in self.field_offset]}
+        return to_json(self)
 
 
 @dataclass(frozen=True)
@@ -414,26 +415,71 @@ class SensorMap:
         return replace(self, unit=unit, field_source=source)
 
     def describe(self) -> dict:
-        """The design, the region and the conventions, in user units (for files)."""
+        """The design, the region and the conventions, in user units (for files:
+        :class:`MapDesign`)."""
+        return to_json(self.design_record())
+
+    def design_record(self) -> MapDesign:
+        """The design, its parts, the region and the conventions (:class:`MapDesign`)."""
         F_r, F_z = self.ranges
-        return {
-            "H_mm": mm(self.H), "G_kPa": from_si(self.G, "kPa"),
-            "M_z_A_per_m": self.sensor.M_z,
-            # the parts the field depends on: the sensor this map is for
-            "magnet_grade": self.sensor.grade, "silicone": self.sensor.silicone,
-            "standoff_mm": mm(self.sensor.standoff), "chip": self.sensor.chip,
-            "chip_setting": {k: (getattr(self.study.hall, k) if self.sensor.setting is None
-                                 else int(getattr(self.sensor.setting, k)))
-                             for k in ("gain_sel", "res", "osr", "dig_filt")},
-            "t_m": self.t_m, "theta_m_rad": self.theta_m,
-            "F_r_range_N": F_r, "F_z_range_N": F_z, "field_source": self.field_source,
-            "force_source": self.force_source,
-            "unit": self.unit.to_json(),
-            "convention": ("B = (B_r cos phi, B_r sin phi, B_z), F = (F_r cos phi, F_r sin phi, "
-                           "F_z); phi: the shear azimuth; F: the reaction of the base on the "
-                           "body (F_r <= 0 against the shear, F_z > 0 in compression); the load "
-                           "applied on the top is -F"),
-        }
+        setting = self.sensor.setting
+        return MapDesign(
+            self.H, self.G, self.sensor.M_z, self.sensor.grade, self.sensor.silicone,
+            self.sensor.standoff, self.sensor.chip,
+            SettingRecord(*(getattr(self.study.hall, f.name) if setting is None
+                            else int(getattr(setting, f.name)) for f in fields(SettingRecord))),
+            self.t_m, self.theta_m, F_r, F_z, self.field_source, self.force_source, self.unit)
+
+
+#: The conventions of a map's readings and forces, as its files state them.
+CONVENTION = ("B = (B_r cos phi, B_r sin phi, B_z), F = (F_r cos phi, F_r sin phi, F_z); phi: "
+              "the shear azimuth; F: the reaction of the base on the body (F_r <= 0 against "
+              "the shear, F_z > 0 in compression); the load applied on the top is -F")
+
+
+@dataclass(frozen=True)
+class MapDesign:
+    """The design of a map as its files give it (``design`` of ``calibration.json`` and
+    ``force_map.json``), in SI.
+
+    Attributes
+    ----------
+    H, G, M_z : float
+        Body height [m], shear modulus [Pa], the magnet's magnetisation [A/m].
+    magnet_grade, silicone, chip : str
+        The parts the field depends on.
+    standoff : float
+        The chip's distance below the body [m].
+    chip_setting : SettingRecord
+        The chip's setting.
+    t_m, theta_m : float
+        The stable region [1, rad].
+    F_r_range, F_z_range : float
+        The force ranges [N].
+    field_source, force_source : str
+        Where the map's field and forces come from.
+    unit : UnitParameters
+        What the built unit differs by from its design.
+    convention : str
+        The conventions of readings and forces, in words.
+    """
+
+    H: float = entry(unit="mm")
+    G: float = entry(unit="kPa")
+    M_z: float = entry(unit="A_per_m")
+    magnet_grade: str = entry(kind=str)
+    silicone: str = entry(kind=str)
+    standoff: float = entry(unit="mm")
+    chip: str = entry(kind=str)
+    chip_setting: SettingRecord = entry(kind=SettingRecord)
+    t_m: float = entry()
+    theta_m: float = entry(unit="rad")
+    F_r_range: float = entry(unit="N")
+    F_z_range: float = entry(unit="N")
+    field_source: str = entry(kind=str)
+    force_source: str = entry(kind=str)
+    unit: UnitParameters = entry(kind=UnitParameters)
+    convention: str = entry(kind=str, default=CONVENTION)
 
 
 def _jacobian(fun, w, columns: int = 3) -> np.ndarray:

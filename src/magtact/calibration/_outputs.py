@@ -10,24 +10,26 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from .._errors import MagtactError
-from .._files import json_dict, json_list, json_number, json_text
+from .._files import write_text
+from .._records import entry, from_json_or_none, keys, to_json
 from .._sensor import Sensor
 from ..doe import check_design
 from ..metamodel import ModelSet
-from ..study import HallChip, Study, from_si, hall_chip, to_si
-from ._fe import fe_forces, has_height, path_holdout
+from ..study import HallChip, Study, hall_chip
+from ._fe import PathHoldout, fe_forces, has_height, path_holdout
 from ._firmware import (
     DEGREES,
     TABLE_SIZES,
     FirmwareChoice,
+    FrontierPoint,
     approximation_json,
     c_header,
     firmware_approximation,
     write_json,
     write_table_csv,
 )
-from ._map import FORCE_SOURCES, OK, SensorMap, sensor_map
-from ._unit import DEFAULT_FIT, Presses, UnitCalibration, calibrate_unit
+from ._map import FORCE_SOURCES, OK, MapDesign, SensorMap, sensor_map
+from ._unit import DEFAULT_FIT, Presses, UnitCalibration, UnitRecord, calibrate_unit
 
 #: Points per side of the (t, θ) grid of the error maps.
 N_GRID = 41
@@ -56,7 +58,7 @@ class Calibration:
     grid : dict
         ``t``, ``theta`` (n, n) and the chosen approximation's error ``err_r``, ``err_z`` [N]
         over the region, the maps of the report's figure.
-    force_error : dict or None
+    force_error : ForceError or None
         What limits the map's forces (:func:`force_model_error`): the metamodels' error against
         the DOE's FE paths at H, or the FE interpolant's error between paths.
     """
@@ -69,7 +71,7 @@ class Calibration:
     firmware: FirmwareChoice
     unit: UnitCalibration | None
     grid: dict
-    force_error: dict | None = None
+    force_error: ForceError | None = None
 
     def __str__(self) -> str:
         """The map's design, target and firmware in mN, mm and kPa (a few lines)."""
@@ -84,152 +86,146 @@ class Calibration:
 
     @property
     def force_limit(self) -> ForceError | None:
-        """What limits the map's forces (:attr:`force_error`) as a record, in N."""
-        return ForceError.from_json(self.force_error)
+        """What limits the map's forces (:attr:`force_error`), in N."""
+        return self.force_error
 
     def to_json(self) -> dict:
-        """The summary in user units (``calibration.json``; read back by
-        :meth:`CalibrationSummary.from_json`)."""
-        fw = approximation_json(self.firmware, self.map)
-        return {
-            "format": SUMMARY_FORMAT,
-            "design": self.map.describe(),
-            "noise_B_uT": [from_si(v, "uT") for v in self.noise],
-            "noise_source": self.noise_source,
-            "sigma_F_r_mN": from_si(self.sigma_F[0], "mN"),
-            "sigma_F_z_mN": from_si(self.sigma_F[1], "mN"),
-            "round_trip_rel": self.round_trip,
-            "firmware": {k: fw[k] for k in ("reached", "rule", "frontier")}
-            | {"kind": self.firmware.chosen.kind, "degree_or_n": self.firmware.chosen.degree,
-               "transform": self.firmware.chosen.transform,
-               "bytes": self.firmware.chosen.bytes,
-               "multiplies": self.firmware.chosen.multiplies,
-               "max_error_F_r_mN": from_si(self.firmware.chosen.err_r, "mN"),
-               "max_error_F_z_mN": from_si(self.firmware.chosen.err_z, "mN")},
-            "unit": None if self.unit is None else self.unit.to_json(),
-            "force_source": self.map.force_source,
-            "force_model_error": self.force_error,
-            "files": {"c_header": "force.h", "json": "force_map.json",
-                      "csv_table": "force_table.csv"},
-            "usage": ("C: #include \"force.h\" (link with -lm); MAGTACT_REAL F[3], off[3]; "
-                      "magtact_force_tare(rest, n, off) once, from n readings rest[n][3] at rest "
-                      "(e.g. 16); "
-                      "int rc = magtact_force(bx, by, bz, off, F) (0 valid, 1 outside the "
-                      "region, 2 no field); bx, by, bz in T, F in N. Python: "
-                      "magtact.calibration.load_approximation(json.load(open('force_map.json'))['approximation']).evaluate(B)"),
-        }
+        """The summary in user units (``calibration.json``: :class:`CalibrationSummary`)."""
+        return to_json(self.summary())
+
+    def summary(self) -> CalibrationSummary:
+        """The summary ``calibration.json`` holds (:class:`CalibrationSummary`)."""
+        fw = self.firmware
+        a = fw.chosen
+        return CalibrationSummary(
+            self.map.design_record(), self.noise, self.noise_source, self.sigma_F,
+            self.round_trip,
+            FirmwareSummary(fw.reached, fw.rule, tuple(fw.frontier_points()), a.kind, a.degree,
+                            a.transform, a.bytes, a.multiplies, a.err_r, a.err_z),
+            None if self.unit is None else self.unit.record(), self.map.force_source,
+            self.force_error)
 
 
 #: ``format`` of the calibration summary (``calibration.json``).
 SUMMARY_FORMAT = "magtact-calibration-summary/1"
 
+#: How to use the calibration's files, in words (``calibration.json``'s ``usage``).
+USAGE = ("C: #include \"force.h\" (link with -lm); MAGTACT_REAL F[3], off[3]; "
+         "magtact_force_tare(rest, n, off) once, from n readings rest[n][3] at rest (e.g. 16); "
+         "int rc = magtact_force(bx, by, bz, off, F) (0 valid, 1 outside the region, 2 no "
+         "field); bx, by, bz in T, F in N. Python: "
+         "magtact.calibration.load_approximation(json.load(open('force_map.json'))"
+         "['approximation']).evaluate(B)")
+
 
 @dataclass(frozen=True)
 class ForceError:
-    """What limits the forces of a map (:func:`force_model_error`): in words, and the
-    largest error of F_r and F_z [N] (None where not measured)."""
+    """What limits the forces of a map (:func:`force_model_error`): where they come from, in
+    words, and the largest error of F_r and F_z [N] (None where not measured); with the FE
+    source, each path's leave-one-out error (``paths``), with the metamodels, the number of FE
+    points compared (``points``)."""
 
-    kind: str
-    F_r: float | None
-    F_z: float | None
+    force_source: str = entry(kind=str)
+    kind: str = entry(kind=str)
+    F_r: float | None = entry(unit="mN", optional=True)
+    F_z: float | None = entry(unit="mN", optional=True)
+    paths: tuple[PathHoldout, ...] | None = entry(kind=PathHoldout, levels=("list",),
+                                                  omit="none", default=None)
+    points: int | None = entry(kind=int, omit="none", default=None)
 
     @classmethod
     def from_json(cls, data) -> ForceError | None:
-        """The record of :func:`force_model_error`'s document; None for anything but a JSON
-        object."""
-        if not isinstance(data, dict):
-            return None
-        r, z = (json_number(data.get(k)) for k in ("F_r_mN", "F_z_mN"))
-        return cls(json_text(data.get("kind")), None if r is None else to_si(r, "mN"),
-                   None if z is None else to_si(z, "mN"))
+        """The record of :func:`force_model_error`'s document; None for anything but such a
+        document."""
+        return from_json_or_none(cls, data, "calibration.json's force error")
+
+
+@dataclass(frozen=True)
+class FirmwareSummary:
+    """The firmware map of ``calibration.json``: whether it reaches σ_F, how it was chosen,
+    every candidate, and the chosen one (kind, degree or table size, transform of B_z, size,
+    multiplies, largest error of F_r and F_z [N])."""
+
+    reached: bool = entry(kind=bool)
+    rule: str = entry(kind=str)
+    frontier: tuple[FrontierPoint, ...] = entry(kind=FrontierPoint, levels=("list",))
+    kind: str = entry(kind=str)
+    degree: int = entry("degree_or_n", kind=int)
+    transform: str = entry(kind=str)
+    bytes: int = entry(kind=int)
+    multiplies: int = entry(kind=int)
+    err_r: float = entry("max_error_F_r_mN", "mN")
+    err_z: float = entry("max_error_F_z_mN", "mN")
+
+
+@dataclass(frozen=True)
+class SigmaF:
+    """The target σ_F,r, σ_F,z [N] of ``calibration.json``."""
+
+    r: float = entry("sigma_F_r_mN", "mN")
+    z: float = entry("sigma_F_z_mN", "mN")
+
+
+@dataclass(frozen=True)
+class CalibrationFiles:
+    """The files of a calibration (``calibration.json``'s ``files``), by what they are."""
+
+    c_header: str = entry(kind=str, default="force.h")
+    json: str = entry(kind=str, default="force_map.json")
+    csv_table: str = entry(kind=str, default="force_table.csv")
 
 
 @dataclass(frozen=True)
 class CalibrationSummary:
-    """``calibration.json`` (:meth:`Calibration.to_json`) read back, in SI; a value the file
-    does not give (or gives with the wrong type) is None.
+    """``calibration.json``: the design, the resolution the firmware is held to, the round
+    trip, the firmware map, a built unit and what limits the forces; in SI.
 
     Attributes
     ----------
-    H, G, t_m, theta_m : float or None
-        The design [m, Pa] and its stable region [1, rad].
-    round_trip : float or None
-        Largest round-trip error F → B → F, relative to the force range.
+    design : MapDesign
+        The design, its parts and its stable region.
     noise : tuple of float
-        σ_B [T] the resolution is computed with; ``noise_source`` where it comes from.
-    sigma_F : (float or None, float or None)
+        σ_B (x, z) [T] the resolution is computed with; ``noise_source`` where it comes from.
+    sigma_F : (float, float)
         σ_F,r, σ_F,z [N], the firmware's target.
-    firmware_kind, firmware_rule : str or None
-    firmware_bytes, firmware_multiplies : int or None
-    firmware_error : (float or None, float or None)
-        The chosen approximation's largest error of F_r, F_z over the region [N].
-    reached : bool
-        Whether the firmware map reaches σ_F.
-    frontier : list of dict
-        Every firmware candidate as the file gives it (user units in its keys).
-    force_source : str or None
+    round_trip : float
+        Largest round-trip error F → B → F, relative to the force range.
+    format : str
+        The file's format (:data:`SUMMARY_FORMAT`).
+    firmware : FirmwareSummary
+    unit : UnitRecord or None
+        A built unit's fit.
+    force_source : str
     force_error : ForceError or None
-    unit : dict or None
-        A built unit's parameters as the file gives them.
-    usage : str or None
+    files : CalibrationFiles
+    usage : str
     """
 
-    H: float | None
-    G: float | None
-    t_m: float | None
-    theta_m: float | None
-    round_trip: float | None
-    noise: tuple[float, ...]
-    noise_source: str | None
-    sigma_F: tuple[float | None, float | None]
-    firmware_kind: str | None
-    firmware_rule: str | None
-    firmware_bytes: int | None
-    firmware_multiplies: int | None
-    firmware_error: tuple[float | None, float | None]
-    reached: bool
-    frontier: list[dict]
-    force_source: str | None
-    force_error: ForceError | None
-    unit: dict | None
-    usage: str | None
+    format: str = entry(kind=str, default=SUMMARY_FORMAT, kw_only=True)
+    design: MapDesign = entry(kind=MapDesign)
+    noise: tuple[float, ...] = entry("noise_B_uT", "uT", levels=("list",))
+    noise_source: str = entry(kind=str)
+    sigma_F: tuple[float, float] = entry(kind=SigmaF, inline=True, shape="tuple")
+    round_trip: float = entry("round_trip_rel")
+    firmware: FirmwareSummary = entry(kind=FirmwareSummary)
+    unit: UnitRecord | None = entry(kind=UnitRecord, optional=True)
+    force_source: str = entry(kind=str)
+    force_error: ForceError | None = entry("force_model_error", kind=ForceError,
+                                           optional=True)
+    files: CalibrationFiles = entry(kind=CalibrationFiles, default=CalibrationFiles())
+    usage: str = entry(kind=str, default=USAGE)
 
     @classmethod
     def from_json(cls, data) -> CalibrationSummary | None:
         """The summary of ``calibration.json``'s document; None for a document of another
-        format."""
-        if not (isinstance(data, dict) and data.get("format") == SUMMARY_FORMAT):
-            return None
-        design, fw = json_dict(data.get("design")), json_dict(data.get("firmware"))
+        format or shape."""
+        s = from_json_or_none(cls, data, "calibration.json")
+        return s if s is not None and s.format == SUMMARY_FORMAT else None
 
-        def num(d: dict, key: str, unit: str | None = None) -> float | None:
-            v = json_number(d.get(key))
-            return v if v is None or unit is None else to_si(v, unit)
-
-        def text(d: dict, key: str) -> str | None:
-            return None if d.get(key) is None else json_text(d.get(key))
-
-        def count(d: dict, key: str) -> int | None:
-            v = d.get(key)
-            return v if isinstance(v, int) and not isinstance(v, bool) else None
-
-        return cls(
-            H=num(design, "H_mm", "mm"), G=num(design, "G_kPa", "kPa"), t_m=num(design, "t_m"),
-            theta_m=num(design, "theta_m_rad"), round_trip=num(data, "round_trip_rel"),
-            noise=tuple(to_si(v, "uT") for v in map(json_number, json_list(
-                data.get("noise_B_uT"))) if v is not None),
-            noise_source=text(data, "noise_source"),
-            sigma_F=(num(data, "sigma_F_r_mN", "mN"), num(data, "sigma_F_z_mN", "mN")),
-            firmware_kind=text(fw, "kind"), firmware_rule=text(fw, "rule"),
-            firmware_bytes=count(fw, "bytes"), firmware_multiplies=count(fw, "multiplies"),
-            firmware_error=(num(fw, "max_error_F_r_mN", "mN"),
-                            num(fw, "max_error_F_z_mN", "mN")),
-            reached=bool(fw.get("reached")),
-            frontier=[r for r in json_list(fw.get("frontier")) if isinstance(r, dict)],
-            force_source=text(data, "force_source"),
-            force_error=ForceError.from_json(data.get("force_model_error")),
-            unit=data.get("unit") if isinstance(data.get("unit"), dict) else None,
-            usage=text(data, "usage"))
+    @property
+    def frontier(self) -> list[dict]:
+        """Every firmware candidate in user units, as the file gives it."""
+        return [p.to_json() for p in self.firmware.frontier]
 
 
 def round_trip_error(smap: SensorMap, n: int = N_ROUND_TRIP, seed: int = 0) -> float:
@@ -277,8 +273,8 @@ def force_source_for(force_source: str, dataset, H: float, presses: bool) -> str
     return force_source
 
 
-def force_model_error(smap: SensorMap, dataset) -> dict:
-    """What limits the map's forces, in mN (docs/method.md §13.4). FE source: the interpolant's
+def force_model_error(smap: SensorMap, dataset) -> ForceError:
+    """What limits the map's forces (docs/method.md §13.4). FE source: the interpolant's
     leave-one-θ-path-out error at H (:func:`path_holdout`; the interior paths' largest is the
     error between paths, the end paths' is extrapolation). Metamodel source: the models'
     largest error against the FE forces of the DOE's paths at H over the region (not measured
@@ -286,26 +282,22 @@ def force_model_error(smap: SensorMap, dataset) -> dict:
     if smap.fe is not None:
         paths = path_holdout(dataset, smap.H, smap.G, smap.t_m)
         inner = [p for p in paths if p.interior]
-        return {"force_source": "fe",
-                "kind": "FE interpolant, leave-one-theta-path-out at H (the interior paths: "
-                        "between paths, at twice the paths' spacing)",
-                "F_r_mN": from_si(max(p.err_r for p in inner), "mN"),
-                "F_z_mN": from_si(max(p.err_z for p in inner), "mN"),
-                "paths": [p.to_json() for p in paths]}
+        return ForceError("fe", "FE interpolant, leave-one-theta-path-out at H (the interior "
+                                "paths: between paths, at twice the paths' spacing)",
+                          max(p.err_r for p in inner), max(p.err_z for p in inner),
+                          paths=tuple(paths))
     if not has_height(dataset, smap.H):
-        return {"force_source": "models", "kind": "not measured: no FE paths at this H",
-                "F_r_mN": None, "F_z_mN": None}
+        return ForceError("models", "not measured: no FE paths at this H", None, None)
     fe = fe_forces(dataset, smap.H)
     T, TH = np.meshgrid(np.concatenate([[0.0], fe.t]), fe.theta, indexing="ij")
     w = smap.features(T, TH)
     inside = smap.inside(w)
     fr, fz = fe.forces(w[..., 0], w[..., 1], smap.G)
     F = smap.F_of(w)
-    return {"force_source": "models",
-            "kind": "metamodels against the DOE's FE forces at H, over the region's FE points",
-            "F_r_mN": from_si(float(np.abs(F[..., 0] - fr)[inside].max()), "mN"),
-            "F_z_mN": from_si(float(np.abs(F[..., 2] - fz)[inside].max()), "mN"),
-            "points": int(inside.sum())}
+    return ForceError("models", "metamodels against the DOE's FE forces at H, over the "
+                                "region's FE points",
+                      float(np.abs(F[..., 0] - fr)[inside].max()),
+                      float(np.abs(F[..., 2] - fz)[inside].max()), points=int(inside.sum()))
 
 
 def _chip(study: Study, noise: tuple[float, float] | None,
@@ -388,14 +380,13 @@ def write_calibration_outputs(cal: Calibration, out_dir, figures=None) -> dict[s
     :func:`magtact.report.calibration_figures`), the error figure. Returns the files by name."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    files = {
-        "c_header": out / "force.h",
-        "json": write_json(approximation_json(cal.firmware, cal.map), out / "force_map.json"),
-        "csv_table": write_table_csv(cal.map, out / "force_table.csv"),
-        "summary": write_json(cal.to_json(), out / "calibration.json"),
-    }
-    files["c_header"].write_text(c_header(cal.firmware.chosen, cal.map, cal.firmware,
-                                          noise=cal.noise), encoding="utf-8")
+    names = CalibrationFiles()
+    header = out / names.c_header
+    files = dict(zip(keys(CalibrationFiles), (
+        header, write_json(approximation_json(cal.firmware, cal.map), out / names.json),
+        write_table_csv(cal.map, out / names.csv_table)), strict=True))
+    files["summary"] = write_json(cal.to_json(), out / "calibration.json")
+    write_text(header, c_header(cal.firmware.chosen, cal.map, cal.firmware, noise=cal.noise))
     if cal.unit is not None:
         files["unit"] = write_json(cal.unit.to_json(), out / "unit.json")
     if figures is not None:

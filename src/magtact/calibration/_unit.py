@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import csv
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -26,25 +26,25 @@ from scipy.optimize import least_squares
 
 from .._errors import MagtactError
 from .._numbers import parse_float
+from .._records import entry, to_json
 from ..study import from_si, mm, to_si
 from ..validation import DataError, read_cell, read_row, read_table_lines
 from ._map import SensorMap, UnitParameters, _check_readings
 
+#: The names of the unit's scales (of stiffness and remanence): the fields of
+#: :class:`UnitParameters` that hold them.
+G_SCALE, B_SCALE = (f.name for f in fields(UnitParameters)[:2])
 #: Parameter names in the order of :meth:`UnitParameters.vector`, with the unit they are shown in.
-PARAMETERS = ("G_scale", "B_scale", "chip_offset_x", "chip_offset_y", "chip_offset_z",
+PARAMETERS = (G_SCALE, B_SCALE, "chip_offset_x", "chip_offset_y", "chip_offset_z",
               "field_offset_x", "field_offset_y", "field_offset_z")
-SHOW = {"G_scale": ("", 1.0), "B_scale": ("", 1.0), "chip_offset_x": ("mm", 1e3),
-        "chip_offset_y": ("mm", 1e3), "chip_offset_z": ("mm", 1e3),
-        "field_offset_x": ("mT", 1e3), "field_offset_y": ("mT", 1e3),
-        "field_offset_z": ("mT", 1e3)}
+SHOW = dict(zip(PARAMETERS, [("", 1.0)] * 2 + [("mm", 1e3)] * 3 + [("mT", 1e3)] * 3,
+                strict=True))
 #: The parameters fitted by default: the field offset is left out, because with a few presses
 #: it trades off against the remanence and the chip's height (docs/method.md §13.3).
 DEFAULT_FIT = PARAMETERS[:5]
 #: The largest standard deviation a fitted parameter may have (SI): 1 % of a scale, 10 µm of
 #: an offset of the chip, 50 µT of a field offset.
-TOLERANCE = {"G_scale": 1e-2, "B_scale": 1e-2, "chip_offset_x": 1e-5, "chip_offset_y": 1e-5,
-             "chip_offset_z": 1e-5, "field_offset_x": 5e-5, "field_offset_y": 5e-5,
-             "field_offset_z": 5e-5}
+TOLERANCE = dict(zip(PARAMETERS, [1e-2] * 2 + [1e-5] * 3 + [5e-5] * 3, strict=True))
 #: Default noise of one press (1 σ per axis; a press is the mean of repeated readings):
 #: field [T], force [N]. Assumed figures, not a datasheet's: give the rig's own.
 SIGMA_B, SIGMA_F = 5e-6, 2e-3
@@ -71,7 +71,7 @@ SIGMA_BOUNDS = {"sigma_B": (1e-9, 1e-2), "sigma_F": (1e-6, 100.0)}
 #: factor 5 of its design's (batches, mixing ratio, cure), the remanence of its magnet within
 #: ±50 % (sintered NdFeB grades span B_r 1.17–1.48 T; a bonded or heated magnet less). A fit
 #: outside is no unit of this design: wrong units, sign or design.
-SCALE_RANGE = {"G_scale": (0.2, 5.0), "B_scale": (0.5, 1.5)}
+SCALE_RANGE = {G_SCALE: (0.2, 5.0), B_SCALE: (0.5, 1.5)}
 
 
 @dataclass(frozen=True)
@@ -218,15 +218,54 @@ class UnitCalibration:
     presses: Presses
 
     def to_json(self) -> dict:
-        out = {"n_presses": len(self.presses), "parameters": self.unit.to_json(),
-               "std": {k: v * SHOW[k][1] for k, v in self.std.items()},
-               "std_units": {k: SHOW[k][0] for k in self.std},
-               "rms_residual_B_uT": from_si(float(np.sqrt(np.mean(self.residual_B**2))), "uT"),
-               "rms_residual_F_mN": from_si(float(np.sqrt(np.mean(self.residual_F**2))), "mN"),
-               "sigma_B_uT": from_si(self.presses.sigma_B, "uT"),
-               "sigma_F_mN": from_si(self.presses.sigma_F, "mN"),
-               "source": self.presses.source}
-        return out
+        """The fit in user units (``unit.json``, ``calibration.json``'s ``unit``:
+        :class:`UnitRecord`)."""
+        return to_json(self.record())
+
+    def record(self) -> UnitRecord:
+        """The fit as its files give it (:class:`UnitRecord`)."""
+        return UnitRecord(
+            len(self.presses), self.unit,
+            {k: v * SHOW[k][1] for k, v in self.std.items()}, {k: SHOW[k][0] for k in self.std},
+            float(np.sqrt(np.mean(self.residual_B**2))),
+            float(np.sqrt(np.mean(self.residual_F**2))), self.presses.sigma_B,
+            self.presses.sigma_F, self.presses.source)
+
+
+@dataclass(frozen=True)
+class UnitRecord:
+    """A built unit's fit as ``unit.json`` (and ``calibration.json``'s ``unit``) gives it.
+
+    Attributes
+    ----------
+    n_presses : int
+    parameters : UnitParameters
+        The fitted parameters, in SI.
+    std : dict of str to float
+        The standard deviation of each fitted parameter in the unit ``std_units`` names (the
+        units of :data:`SHOW`: a parameter's unit is named in the file, not in its key).
+    std_units : dict of str to str
+    rms_residual_B, rms_residual_F : float
+        RMS residual of the presses' field [T] and force [N] at the solution.
+    sigma_B, sigma_F : float
+        The noise of one press [T], [N].
+    source : str
+        The press file.
+    """
+
+    n_presses: int = entry(kind=int)
+    parameters: UnitParameters = entry(kind=UnitParameters)
+    std: dict[str, float] = entry(levels=("map",))
+    std_units: dict[str, str] = entry(kind=str, levels=("map",))
+    rms_residual_B: float = entry(unit="uT")
+    rms_residual_F: float = entry(unit="mN")
+    sigma_B: float = entry(unit="uT")
+    sigma_F: float = entry(unit="mN")
+    source: str = entry(kind=str)
+
+    def to_json(self) -> dict:
+        """The fit in user units."""
+        return to_json(self)
 
 
 def _model(smap: SensorMap, theta, w):
@@ -475,17 +514,17 @@ def _check_scales(theta: np.ndarray, free: np.ndarray, n: int) -> None:
     g, b = float(theta[0]), float(theta[1])
     if (free[0] and not g > 0) or (free[1] and not b > 0):
         which = " and ".join(f"{name} {v:.3g}" for name, v, f in
-                             (("G_scale", g, free[0]), ("B_scale", b, free[1])) if f and not v > 0)
+                             ((G_SCALE, g, free[0]), (B_SCALE, b, free[1])) if f and not v > 0)
         raise MagtactError(
             f"these {n} presses fit only a unit with a negative scale ({which}): forces look "
             "like the load's sign: F_z must be positive in compression (the reaction of the "
             "base on the body, as force.h returns it; negate F_x, F_y, F_z of a load cell "
             "that reads the load applied on the top), and B_z positive with the magnet above "
             "the chip")
-    for name, v, f in (("G_scale", g, free[0]), ("B_scale", b, free[1])):
+    for name, v, f in ((G_SCALE, g, free[0]), (B_SCALE, b, free[1])):
         lo, hi = SCALE_RANGE[name]
         if f and not lo <= v <= hi:
-            what = "stiffness of the body" if name == "G_scale" else "remanence of the magnet"
+            what = "stiffness of the body" if name == G_SCALE else "remanence of the magnet"
             raise MagtactError(
                 f"these {n} presses fit {name} = {v:.3g}, outside the physical range {lo:g} to "
                 f"{hi:g} of a unit of this design (the {what} over the design's): check the "

@@ -665,21 +665,22 @@ def _calibration(folder: Path) -> str:
         d = CalibrationSummary.from_json(_load_json(p))
         if d is None:
             continue
+        design, fw = d.design, d.firmware
         out.append(
-            f"<p>Design H = {_sig(_in(d.H, 'mm'))} mm, "
-            f"G = {_sig(_in(d.G, 'kPa'))} kPa; "
-            f"stable region t ≤ {_sig(d.t_m)}, θ ≤ "
-            f"{_sig(d.theta_m)} rad. Round trip F → B → F: largest error "
+            f"<p>Design H = {_sig(_in(design.H, 'mm'))} mm, "
+            f"G = {_sig(_in(design.G, 'kPa'))} kPa; "
+            f"stable region t ≤ {_sig(design.t_m)}, θ ≤ "
+            f"{_sig(design.theta_m)} rad. Round trip F → B → F: largest error "
             f"{_sig(d.round_trip)} of the force range. Firmware map: "
-            f"{_e(d.firmware_kind)} ({_fmt(d.firmware_bytes)} bytes, "
-            f"{_fmt(d.firmware_multiplies)} multiplications), largest error over the region "
-            f"F_r {_sig(_in(d.firmware_error[0], 'mN'))} mN, "
-            f"F_z {_sig(_in(d.firmware_error[1], 'mN'))}"
+            f"{_e(fw.kind)} ({_fmt(fw.bytes)} bytes, "
+            f"{_fmt(fw.multiplies)} multiplications), largest error over the region "
+            f"F_r {_sig(_in(fw.err_r, 'mN'))} mN, "
+            f"F_z {_sig(_in(fw.err_z, 'mN'))}"
             f" mN against σ_F {_sig(_in(d.sigma_F[0], 'mN'))} / "
             f"{_sig(_in(d.sigma_F[1], 'mN'))} mN "
             f"(field noise {_e(', '.join(_sig(_in(v, 'uT')) for v in d.noise))} µT from "
             f"{_e(d.noise_source)}): "
-            f"{'reached' if d.reached else 'not reached'}, {_e(d.firmware_rule)}.</p>")
+            f"{'reached' if fw.reached else 'not reached'}, {_e(fw.rule)}.</p>")
         err = d.force_error
         if err is not None:
             limit = ("not measured" if err.F_r is None else
@@ -691,7 +692,7 @@ def _calibration(folder: Path) -> str:
             out.append(f"<p>Forces from {_e(source)}; what limits them: "
                        f"{_e(err.kind)}: {limit} (docs/method.md §13.4).</p>")
         if d.unit is not None:
-            out.append("<h3>Built unit</h3>" + _dict_table(d.unit))
+            out.append("<h3>Built unit</h3>" + _dict_table(d.unit.to_json()))
         out.append(f"<p>Use: {_e(d.usage)}. Files in <code>{_e(folder.name)}/</code>: "
                    "<code>force.h</code> (C99), <code>force_map.json</code>, "
                    "<code>force_table.csv</code>.</p>")
