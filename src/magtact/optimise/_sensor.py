@@ -40,6 +40,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .._files import write_json
+from .._records import entry, to_json
 from ..chip import ChipOption, SensorGrid, chip_options, sensor_grid
 from ..metamodel import ModelSet
 from ..parts import grade as catalogue_grade
@@ -97,8 +99,7 @@ class SensorSpace:
         """(t_m, θ_m, f_r,min, f_z,max) at heights H [m], interpolated in the table."""
         H = np.atleast_1d(np.asarray(H, float))
         tb = self.table
-        return tuple(np.interp(H, tb.H, getattr(tb, k))
-                     for k in ("t_m", "theta_m", "f_r_min", "f_z_max"))
+        return tuple(np.interp(H, tb.H, v) for v in (tb.t_m, tb.theta_m, tb.f_r_min, tb.f_z_max))
 
     def G_force(self, f_r_min, f_z_max, j: int | None = None) -> np.ndarray:
         """The smallest G [Pa] meeting the force constraints (inf where none in the bounds;
@@ -223,25 +224,58 @@ class SensorDesign:
         return bool(self.G >= max(self.G_force, self.G_range) * (1.0 - 1e-9))
 
     def to_json(self) -> dict:
-        """The design in user units, each key naming its unit."""
+        """The design in user units, each key naming its unit (:class:`SensorRecord`)."""
+        return to_json(self.record())
+
+    def record(self) -> SensorRecord:
+        """The design as the files give it (:class:`SensorRecord`)."""
         o = self.option
-        return {"H_mm": from_si(self.H, "mm"), "G_kPa": from_si(self.G, "kPa"),
-                "magnet_grade": self.grade, "M_z_A_per_m": self.M_z,
-                "standoff_mm": from_si(self.standoff, "mm"), "chip_setting": o.words,
-                "range_x_mT": from_si(o.range_x, "mT"), "range_z_mT": from_si(o.range_z, "mT"),
-                "noise_x_uT": from_si(o.noise_x, "uT"), "noise_z_uT": from_si(o.noise_z, "uT"),
-                "sample_rate_Hz": None if np.isnan(o.rate) else o.rate,
-                "sigma_Fr_mN": from_si(self.sigma_r, "mN"),
-                "sigma_Fz_mN": from_si(self.sigma_z, "mN"),
-                "G_force_kPa": _finite(from_si(self.G_force, "kPa")),
-                "G_range_kPa": _finite(from_si(self.G_range, "kPa")),
-                "F_saturation_N": _finite(self.F_saturation),
-                "F_r_within_N": _finite(self.F_r_within), "feasible": self.feasible,
-                "silicone": self.silicone}
+        return SensorRecord(self.H, self.G, self.grade, self.M_z, float(self.standoff), o.words,
+                            o.range_x, o.range_z, o.noise_x, o.noise_z, o.rate, self.sigma_r,
+                            self.sigma_z, self.G_force, self.G_range, self.F_saturation,
+                            self.F_r_within, self.feasible, self.silicone)
 
 
-def _finite(x: float) -> float | None:
-    return float(x) if np.isfinite(x) else None
+@dataclass(frozen=True)
+class SensorRecord:
+    """A sensor of the sensor problem as ``sensor.json`` and ``chosen.json`` give it (SI).
+
+    Attributes
+    ----------
+    H, G, M_z, standoff : float
+        Base height [m], shear modulus [Pa], magnetisation [A/m], the chip's standoff [m].
+    grade, chip_setting, silicone : str
+        The magnet's grade, the chip's setting in words, the silicone.
+    range_x, range_z, noise_x, noise_z : float
+        The chip's range [T] and RMS noise [T] per axis at its setting.
+    sample_rate : float
+        Its sample rate [Hz] (NaN, null in the file: not known).
+    sigma_r, sigma_z : float
+        Worst σ_F,r, σ_F,z [N] over the required loads.
+    G_force, G_range, F_saturation, F_r_within : float
+        As :class:`SensorDesign` (not finite: null in the file, NaN read back).
+    feasible : bool
+    """
+
+    H: float = entry(unit="mm")
+    G: float = entry(unit="kPa")
+    grade: str = entry("magnet_grade", kind=str)
+    M_z: float = entry(unit="A_per_m")
+    standoff: float = entry(unit="mm")
+    chip_setting: str = entry(kind=str)
+    range_x: float = entry(unit="mT")
+    range_z: float = entry(unit="mT")
+    noise_x: float = entry(unit="uT")
+    noise_z: float = entry(unit="uT")
+    sample_rate: float = entry(unit="Hz", null_nan=True)
+    sigma_r: float = entry("sigma_Fr_mN", "mN")
+    sigma_z: float = entry("sigma_Fz_mN", "mN")
+    G_force: float = entry(unit="kPa", null_nan=True)
+    G_range: float = entry(unit="kPa", null_nan=True)
+    F_saturation: float = entry(unit="N", null_nan=True)
+    F_r_within: float = entry(unit="N", null_nan=True)
+    feasible: bool = entry(kind=bool)
+    silicone: str = entry(kind=str)
 
 
 def evaluate_designs(models: ModelSet, study: Study, space: SensorSpace, H, G, standoff,
@@ -786,33 +820,88 @@ class SensorOptimisation:
         flat values in user units, with ``design``'s extrema, a
         :class:`magtact.optimise.DesignResult` of the chosen sensor, for the report) into
         ``folder``; return the files."""
-        import json
         from pathlib import Path
 
         from ._run import design_json
 
         folder = Path(folder)
         flat = design_json(design) | self.choice.to_json() | {"problem": "sensor"}
-        files = []
-        for name, doc in (("sensor.json", self.to_json()), ("chosen.json", flat)):
-            (folder / name).write_text(json.dumps(doc, indent=2) + "\n")
-            files.append(folder / name)
-        return files
+        return [write_json(folder / name, doc, indent=2)
+                for name, doc in (("sensor.json", self.to_json()), ("chosen.json", flat))]
 
     def to_json(self) -> dict:
-        """The answer in user units (``sensor.json``)."""
+        """The answer in user units (``sensor.json``: :class:`SensorFile`)."""
+        return to_json(self.record())
+
+    def record(self) -> SensorFile:
+        """The answer as ``sensor.json`` gives it (:class:`SensorFile`)."""
         p = self.pareto
-        sizes = {"magnet_size": self.size, "magnet_sizes": [
-            {"size": name, "best": None if d is None else d.to_json(), "note": note or None}
-            for name, d, note in zip(self.sizes, self.per_size, self.size_notes, strict=True)]
-        } if self.sizes else {}
-        return {"chosen": self.choice.to_json(),
-                "exact_reduction_choice": self.reduction_choice.to_json(),
-                "gap_to_exact_reduction": None if np.isnan(self.gap) else self.gap,
-                "combinations": self.combinations, "wall_time_s": self.wall_time,
-                "nsga2": None if p is None else {"points": int(p.H.size), "seed": p.seed,
-                                                 "generations": p.generations,
-                                                 "evaluations": p.evaluations}} | sizes
+        sizes = MagnetSizes(self.size, tuple(
+            SizeRecord(name, None if d is None else d.record(), note or None)
+            for name, d, note in zip(self.sizes, self.per_size, self.size_notes,
+                                     strict=True))) if self.sizes else None
+        return SensorFile(
+            self.choice.record(), self.reduction_choice.record(), self.gap, self.combinations,
+            self.wall_time, None if p is None else NSGA2Record(int(p.H.size), p.seed,
+                                                               p.generations, p.evaluations),
+            sizes)
+
+
+@dataclass(frozen=True)
+class NSGA2Record:
+    """NSGA-II's run of the sensor problem: its feasible points, seed, generations and
+    evaluations."""
+
+    points: int = entry(kind=int)
+    seed: int = entry(kind=int)
+    generations: int = entry(kind=int)
+    evaluations: int = entry(kind=int)
+
+
+@dataclass(frozen=True)
+class SizeRecord:
+    """One magnet size of the answer: its name, its best sensor (None: none) and a note."""
+
+    size: str = entry(kind=str)
+    best: SensorRecord | None = entry(kind=SensorRecord, optional=True)
+    note: str | None = entry(kind=str, optional=True)
+
+
+@dataclass(frozen=True)
+class MagnetSizes:
+    """The magnet sizes an answer compared: the chosen size, and each size's best sensor."""
+
+    magnet_size: str = entry(kind=str)
+    magnet_sizes: tuple[SizeRecord, ...] = entry(kind=SizeRecord, levels=("list",))
+
+
+@dataclass(frozen=True)
+class SensorFile:
+    """``sensor.json``: the sensor problem's answer (SI).
+
+    Attributes
+    ----------
+    chosen, exact_reduction_choice : SensorRecord
+        The chosen sensor and the exact reduction's.
+    gap : float
+        NSGA-II's σ_F over the reduction's, less one (NaN, null in the file: not run).
+    combinations : int
+        The parts' combinations the reduction enumerated.
+    wall_time : float
+        Seconds the problem took.
+    nsga2 : NSGA2Record or None
+    sizes : MagnetSizes or None
+        The magnet sizes compared (their keys left out where the answer compared none).
+    """
+
+    chosen: SensorRecord = entry(kind=SensorRecord)
+    exact_reduction_choice: SensorRecord = entry(kind=SensorRecord)
+    gap: float = entry("gap_to_exact_reduction", null_nan=True)
+    combinations: int = entry(kind=int)
+    wall_time: float = entry(unit="s")
+    nsga2: NSGA2Record | None = entry(kind=NSGA2Record, optional=True)
+    sizes: MagnetSizes | None = entry(kind=MagnetSizes, inline=True, optional=True,
+                                      omit="none", default=None)
 
 
 def optimise_sensor(models: ModelSet, study: Study, table: HeightTable | None = None,
