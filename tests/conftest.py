@@ -286,6 +286,16 @@ def magone_design():
 
 
 @pytest.fixture(scope="session")
+def magone_magnet_design():
+    """``magtact.design`` of the built-in study with its own magnet (the MagOne ⌀5 × 2 mm, no
+    other size to choose: ``[design] magnet_sizes = []``), for tests of that magnet's physics
+    (one per test session; read, never changed)."""
+    import magtact
+
+    return magtact.design(magtact.load("magone", design={"magnet_sizes": []}))
+
+
+@pytest.fixture(scope="session")
 def magone_budgets(magone_design):
     """``magtact.error_budgets(magone_design)``: a Monte-Carlo computation of a few seconds,
     done once per test process for every test that shows or writes the card."""

@@ -56,22 +56,24 @@ def bisection_figure(models, a, n_theta=61):
     return float(np.min(models.forces(hi, th, d.H, d.G)[1]))
 
 
-def test_the_saturation_figure_agrees_with_a_bisection_on_the_exact_field(magone_design):
-    a = magone_design.chosen
-    models, _, _ = magone_design.of(a)
+def test_the_saturation_figure_agrees_with_a_bisection_on_the_exact_field(
+        magone_magnet_design):
+    a = magone_magnet_design.chosen
+    models, _, _ = magone_magnet_design.of(a)
     reference = bisection_figure(models, a)
     assert a.verdict.F_saturation == pytest.approx(reference, rel=5e-3)
     assert a.saturation.F_z == pytest.approx(a.verdict.F_saturation, rel=1e-9)
 
 
-def test_every_file_and_display_states_the_same_saturation_figure(magone_design, magone_budgets,
+def test_every_file_and_display_states_the_same_saturation_figure(magone_magnet_design,
                                                                   tmp_path):
     import magtact
     from magtact import write_results_into
 
-    r = magone_design
+    r = magone_magnet_design
+    budgets = magtact.error_budgets(r)
     figure = f"{r.chosen.verdict.F_saturation:.3g}"
-    write_results_into(r, tmp_path, figures=False, budget=False, budgets=magone_budgets)
+    write_results_into(r, tmp_path, figures=False, budget=False, budgets=budgets)
     card = json.loads((tmp_path / "card.json").read_text())
     sensor = json.loads((tmp_path / "sensor.json").read_text())
     chosen = json.loads((tmp_path / "chosen.json").read_text())
@@ -80,7 +82,7 @@ def test_every_file_and_display_states_the_same_saturation_figure(magone_design,
               "chosen.json": chosen["F_saturation_N"]}
     assert {k: f"{v:.3g}" for k, v in stated.items()} == dict.fromkeys(stated, figure)
     # the card's rows (the terminal's and the report's card) and the verdict's words
-    shown = magtact.card(r, magone_budgets)
+    shown = magtact.card(r, budgets)
     rows = " | ".join(" ; ".join(row) for row in shown["rows"])
     assert f"F_z = {figure} N" in rows and f"saturates at {figure} N" in rows
     assert f"saturates at {figure} N" in str(shown)
@@ -107,15 +109,15 @@ def test_onset_finds_the_first_crossing_of_a_known_ratio():
     assert onset(bump, np.zeros(1), 1.0)[0] == pytest.approx(0.2, abs=1e-12)
 
 
-def test_the_saturation_of_another_modulus_is_the_forces_scaled_by_it(magone_design):
+def test_the_saturation_of_another_modulus_is_the_forces_scaled_by_it(magone_magnet_design):
     """Where the chip leaves its range depends on the load path, not on G (the forces are G
     times the per-unit-G forces): a design of another G saturates at the same t and θ, at the
     forces scaled by the ratio of the moduli, and a kept figure equals a fresh search."""
     from magtact.chip import saturation
     from magtact.chip._range import _unit_saturation
 
-    a = magone_design.chosen
-    models, _, _ = magone_design.of(a)
+    a = magone_magnet_design.chosen
+    models, _, _ = magone_magnet_design.of(a)
     d, study = a.design, a.study
     place = {"M_z": a.sensor.M_z, "standoff": a.sensor.standoff}
     s1 = saturation(study, models, d.H, d.G, a.chip, d.t_m, d.theta_m, **place)

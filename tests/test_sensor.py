@@ -30,9 +30,10 @@ def _study(**sections):
 
 
 @pytest.fixture(scope="module")
-def result(magone_design):
-    """The built-in study's design (the session's: solved once for every test that asks)."""
-    return magone_design
+def result(magone_magnet_design):
+    """The built-in study's design with its own magnet, the MagOne ⌀5 × 2 mm (the session's:
+    solved once for every test that asks)."""
+    return magone_magnet_design
 
 
 def field_magpylib(study, sensor, H, t, theta):
@@ -148,11 +149,11 @@ def assert_worst_corner_reads(result, n_t=401):
 
 
 def test_the_default_sensor_reads_the_required_loads_and_its_verdict_leads_the_card(
-        result, magone_budgets):
+        result):
     B = assert_reads_required_loads(result)
     a = result.chosen
     assert np.abs(B[1]).max() > 0.5 * a.chip.range_z  # it uses its range
-    rows = magtact.card(result, magone_budgets)["rows"]
+    rows = magtact.card(result)["rows"]
     req = [r.statement for r in a.verdict.requirements]
     assert [r[0] for r in rows[:len(req)]] == req
     assert req[0] == "reads 0–5 N normal without saturating"

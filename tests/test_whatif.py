@@ -68,7 +68,7 @@ def test_exact_rescalings_are_answered_from_the_bundled_data(ds, case):
 
 NEW_MECHANICS = [
     ({"body": {"R_mm": 7.0, "R_g_mm": 7.0}}, "[body] R_mm = 7"),
-    ({"magnet": {"R_m_mm": 2.0}}, "[magnet] R_m_mm = 2"),
+    ({"magnet": {"H_m_mm": 1.5}}, "[magnet] H_m_mm = 1.5"),
     ({"mechanics": {"mesh": "coarse"}}, "[mechanics] mesh = 'coarse'"),
     ({"loading": {"mu_f": 0.4, "theta_max_rad": 0.38}}, "[loading] mu_f = 0.4"),
     ({"material": {"bulk_ratio": 2000.0}}, "[material] bulk_ratio = 2000"),
@@ -183,13 +183,13 @@ def test_each_broad_magnet_size_is_answered_from_its_own_data(size):
     assert find_shipped(study, ds)[0] == prefitted_dir(f"broad_{size}")
 
 
-def test_a_magnet_between_the_broad_sizes_is_refused_naming_the_sizes_held():
-    """The broad DOE has two diameters and two heights: a size between them is not interpolated
-    (a fit over the sizes missed the 5 x 2 mm MagOne data by tens of per cent)."""
+def test_a_magnet_between_the_bundled_heights_is_refused_naming_the_sizes_held():
+    """The bundled sizes have three magnet heights: a magnet between them is not interpolated
+    (along the height the forces do not interpolate on three levels, docs/method.md §10)."""
     with pytest.raises(MagtactError) as info:
-        bundled_for(_study(magnet={"R_m_mm": 2.0, "H_m_mm": 2.0}))
+        bundled_for(_study(magnet={"R_m_mm": 2.0, "H_m_mm": 1.5}))
     msg = str(info.value)
-    assert "needs new mechanics: [magnet] R_m" in msg
+    assert "needs new mechanics: [magnet] H_m_mm = 1.5" in msg
     for held in ("a 5 × 2 mm magnet over H [3, 7] mm", "a 3 × 1 mm magnet over H [2, 10] mm",
                  "a 6 × 3 mm magnet over H [2, 10] mm"):
         assert held in msg, msg

@@ -646,9 +646,10 @@ def design(study: Study | str | Path | None = None, *, data: str | Path | None =
     study : Study, preset name or study file, optional
         Default: the built-in MagOne study.
     data : path, optional
-        A DOE data set (``magtact doe``) for a study the bundled data set does not describe.
+        A DOE data set (``magtact doe``) for a study the bundled data set does not describe
+        (it answers the study's own magnet: no other size is chosen).
     models : path, optional
-        A folder of model files (``magtact fit``) to use instead of fitting.
+        A folder of model files (``magtact fit``) to use instead of fitting (likewise).
     constraints : ForceConstraints, optional
         Default: the study's ``[constraints]``.
     refit : bool
@@ -669,5 +670,7 @@ def design(study: Study | str | Path | None = None, *, data: str | Path | None =
     """
     if not isinstance(study, Study):
         study = load_study(study)
+    if data is not None or models is not None:
+        study = _own_size(study)  # the data or models given answer the study's own magnet
     m, source, ds = models_for(study, data=data, models=models, refit=refit, log=log)
     return solve(m, study, constraints, models_source=source, dataset=ds)
