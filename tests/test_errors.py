@@ -45,12 +45,12 @@ def test_internal_error_in_the_optimiser_shows_its_traceback(tmp_path):
         import os
         os.environ["MAGTACT_CACHE_DIR"] = "off"  # solve, not read a kept answer
         import numpy as np
-        import magtact.optimise._run as run
+        import magtact.optimise._design as design
 
         def broken(*args, **kwargs):
             raise np.linalg.LinAlgError("Singular matrix")
 
-        run.sweep = broken
+        design._extrema = broken  # every sweep of the heights' extrema
         from magtact.cli import main
         main()
     """)

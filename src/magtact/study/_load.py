@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import difflib
 import itertools
 import math
@@ -43,11 +45,20 @@ def load_study(source: str | Path | None = None) -> Study:
     if source is None:
         source = "magone"
     if isinstance(source, str) and source in PRESETS:
-        text = resources.files("magtact.study").joinpath(PRESETS[source]).read_text("utf-8")
-        label = f"preset '{source}'"
-    else:
-        path = Path(source)
-        text, label = _read_text(path), str(path)
+        return _preset(source)
+    path = Path(source)
+    return _study_of_text(_read_text(path), str(path))
+
+
+@functools.lru_cache(maxsize=None)
+def _preset(name: str) -> Study:
+    """A preset study: read once per process (a frozen value of the package's own file)."""
+    text = resources.files("magtact.study").joinpath(PRESETS[name]).read_text("utf-8")
+    return _study_of_text(text, f"preset '{name}'")
+
+
+def _study_of_text(text: str, label: str) -> Study:
+    """The study of a study file's ``text`` (``label`` names it in errors)."""
     try:
         data = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, ValueError) as exc:
