@@ -601,6 +601,39 @@ def blend() -> None:
                       "checks": checks})
 
 
+def robust() -> None:
+    """Whether the size the built-in study chooses on its nominal parts is also the best for
+    the units built: each size that carries the specification solved whole (its worst corner,
+    NSGA-II's cross-check: what the chosen size gets) and its robust verdict recorded."""
+    import magtact
+    from magtact._front import _sensor_result, models_for
+    from magtact.optimise import force_constraints, optimise
+
+    os.environ["MAGTACT_CACHE_DIR"] = "off"
+    study = magtact.load("magone")
+    chosen = magtact.design(study).sensor_design
+    out = {}
+    for name, d in zip(chosen.sizes, chosen.per_size, strict=True):
+        if d is None:
+            continue
+        sub = study.sized(name)
+        models = models_for(sub)[0]
+        c = force_constraints(models, sub)
+        start = time.perf_counter()
+        r = _sensor_result(models, sub, optimise(models, sub, c), c, "given", None)
+        rob, s = r.chosen.robust, r.sensor_design.choice
+        out[name] = {"nominal_sigma_mN": 1e3 * d.sigma, "sigma_Fr_mN": 1e3 * s.sigma_r,
+                     "sigma_Fz_mN": 1e3 * s.sigma_z, "yield": rob.yield_fraction,
+                     "requirements": {q.key: {"met_worst_case": q.met,
+                                              "yield": q.yield_fraction}
+                                      for q in rob.requirements},
+                     "wall_time_s": time.perf_counter() - start}
+        print(name, round(1e3 * d.sigma, 4), round(rob.yield_fraction, 4), flush=True)
+    best = max(out, key=lambda n: (out[n]["yield"], -out[n]["nominal_sigma_mN"]))
+    _update("robust", {"command": "python bench/bench_sizes.py robust",
+                       "chosen_size": chosen.size, "best_yield_size": best, "sizes": out})
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = ap.add_subparsers(dest="step", required=True)
@@ -610,6 +643,7 @@ def main(argv=None) -> None:
     sub.add_parser("status")
     sub.add_parser("interpolate")
     sub.add_parser("blend")
+    sub.add_parser("robust")
     sh = sub.add_parser("ship")
     sh.add_argument("sizes", help="finished sizes to ship, e.g. 3x2,5x2")
     s = sub.add_parser("surrogate")
@@ -626,6 +660,8 @@ def main(argv=None) -> None:
         interpolate()
     elif args.step == "blend":
         blend()
+    elif args.step == "robust":
+        robust()
     elif args.step == "ship":
         ship(args.sizes.split(","))
     else:

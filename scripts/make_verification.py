@@ -913,7 +913,26 @@ def sizes_section(r: Results) -> list[str]:
                          fit])
     out += table(["model", "held-out data", "f_z max error / range", "f_r max error / range",
                   "fit f_z + f_r [s]"], rows)
-    return out + [""] + _interpolation_rows(d) + _blend_rows(d)
+    return out + [""] + _interpolation_rows(d) + _blend_rows(d) + _robust_size_rows(d)
+
+
+def _robust_size_rows(d: dict) -> list[str]:
+    rb = d.get("robust")
+    if not rb:
+        return []
+    out = [f"**The size chosen on the nominal parts against the units built** "
+           f"(`{rb['command']}`): every size that carries the built-in specification solved "
+           "whole, its worst corner and robust verdict included. The size chosen on the "
+           f"nominal parts is {rb['chosen_size']} mm; the size whose units meet every "
+           f"requirement most often is {rb['best_yield_size']} mm.", ""]
+    rows = [[name, f"{v['nominal_sigma_mN']:.3g}", f"{v['sigma_Fr_mN']:.3g} / "
+             f"{v['sigma_Fz_mN']:.3g}", pct(v["yield"], 1),
+             ", ".join(f"{k} {'yes' if q['met_worst_case'] else 'no'} "
+                       f"({pct(q['yield'], 1)})" for k, q in v["requirements"].items())]
+            for name, v in rb["sizes"].items()]
+    out += table(["size [mm]", "nominal σ_F [mN]", "σ_F,r / σ_F,z designed [mN]",
+                  "units meeting every requirement", "worst case met (units)"], rows)
+    return out + [""]
 
 
 def _interpolation_rows(d: dict) -> list[str]:
