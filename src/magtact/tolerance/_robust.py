@@ -85,13 +85,14 @@ class RobustRequirement:
 
     @property
     def answer(self) -> str:
-        """Whether every unit meets it (its worst case does), and the fraction that does:
-        "no: 97.7 % of units meet it (95 % CI 97–98.4 %; worst case saturates at 3.03 N;
-        limited by G)"."""
+        """Whether the worst case meets it, and the fraction of units that does: "no at the
+        worst case; 97.7 % of units meet it (95 % CI 97–98.4 %; the worst case saturates at
+        3.03 N; limited by G)"."""
         lo, hi = self.interval
         limit = f"; limited by {WORDS[self.limited_by]}" if self.limited_by else ""
-        return (f"{'yes' if self.met else 'no'}: {_pct(self.yield_fraction)} of units meet "
-                f"it (95 % CI {_pct(lo)}–{_pct(hi)}; worst case {self.worst_words}{limit})")
+        return (f"{'yes' if self.met else 'no'} at the worst case; "
+                f"{_pct(self.yield_fraction)} of units meet it (95 % CI {_pct(lo)}–{_pct(hi)}; "
+                f"the worst case {self.worst_words}{limit})")
 
     @property
     def text(self) -> str:
