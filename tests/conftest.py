@@ -28,14 +28,6 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from magtact.doe import run_doe
-
-
-@pytest.hookimpl(tryfirst=True)
-def pytest_cmdline_main(config):
-    """One worker per core where pytest-xdist is installed and no ``-n`` is given; without it
-    (or with ``-p no:xdist``) the suite runs in this one process."""
-    if getattr(config.option, "numprocesses", False) is None:
-        config.option.numprocesses = "auto"
 from magtact.geometry import hall_from_magnet_centre, loading_path
 from magtact.metamodel import H as Hs
 from magtact.metamodel import ModelSet
