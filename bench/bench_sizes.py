@@ -489,12 +489,6 @@ def surrogate(models: list[str], cached: bool = False,
             _update("surrogate", result)
 
 
-def _lagrange(x: np.ndarray, x0: float) -> np.ndarray:
-    """The weights of the polynomial through the points ``x`` at ``x0`` (Lagrange)."""
-    return np.array([np.prod([(x0 - x[m]) / (x[k] - x[m]) for m in range(x.size) if m != k])
-                     for k in range(x.size)])
-
-
 def interpolate() -> None:
     """Each size of the DOE predicted from the others at the same (t, θ, H) points, without
     any model: (a) along the magnet's radius, the quadratic through the three other radii at
@@ -502,6 +496,8 @@ def interpolate() -> None:
     radius (the middle height only: three levels leave nothing to check a quadratic with).
     The error of a size: the largest |error| over its finite points / its range."""
     import xarray as xr
+
+    from magtact.doe._dataset import radius_weights  # the Lagrange weights magtact blends with
 
     with xr.open_dataset(_doe_file()) as ds:
         ds = ds.load()
@@ -523,13 +519,13 @@ def interpolate() -> None:
         for j, h in enumerate(Hs):
             entry = {}
             others = [m for m in range(Rs.size) if m != i]
-            w = _lagrange(Rs[others], R)
+            w = radius_weights(Rs[others], R)
             for name, v in f.items():
                 true = v[..., i, j]
                 entry[f"{name} along the radius (quadratic)"] = error(
                     np.tensordot(v[..., others, j], w, axes=([-1], [0])), true)
                 if 0 < j < Hs.size - 1:
-                    wl = _lagrange(Hs[[j - 1, j + 1]], h)
+                    wl = radius_weights(Hs[[j - 1, j + 1]], h)
                     entry[f"{name} along the height (line)"] = error(
                         v[..., i, j - 1] * wl[0] + v[..., i, j + 1] * wl[1], true)
             out[_label(R, h)] = entry
