@@ -14,9 +14,10 @@ import numpy as np
 
 from .._errors import MagtactError
 from .._files import significant, write_csv
+from .._records import entry, keys, to_json
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
-from ..study import Study, from_si
+from ..study import Study
 from ._box import BatchOptimum, BoxOptimum, _active, batch_optimum, multistart_optimum
 
 #: Stage-2 responses, maximised over [0, t_m] × [0, θ_m].
@@ -213,6 +214,11 @@ def per_design(models: Responses | ModelSet, H: float, G: float, study: Study,
                         None if M_z is None else float(M_z), scale)
 
 
+#: The fields of :class:`HeightTable` that hold the stable box and the extrema per unit G (t_m …
+#: gamma_z_max, between H and the maxima's locations).
+_EXTREMA = slice(1, 7)
+
+
 @dataclass(frozen=True)
 class HeightTable:
     """Per-unit-G extrema at many heights, from the batched solver (arrays of shape (n,)).
@@ -253,8 +259,7 @@ class HeightTable:
         def line(a):
             return a[i - 1] + w * (a[i] - a[i - 1])
 
-        return HeightTable(H, *(line(getattr(self, k)) for k in (
-            "t_m", "theta_m", "f_r_min", "f_z_max", "gamma_r_max", "gamma_z_max")),
+        return HeightTable(H, *(line(getattr(self, f.name)) for f in fields(self)[_EXTREMA]),
             self.loc_f_z[near], self.loc_gamma_r[near], self.loc_gamma_z[near],
             self.converged[i - 1] & self.converged[i])
 
@@ -490,43 +495,60 @@ class DesignMaps:
     G: np.ndarray
     heights: tuple[HeightResult, ...]
 
-    def _grid(self, attr) -> np.ndarray:
-        per_h = np.array([getattr(h, attr).value for h in self.heights])
-        return per_h[:, None] * self.G[None, :]
+    def _grid(self, per_height) -> np.ndarray:
+        """A quantity per unit G, one value per height, scaled by G: shape (n_H, n_G)."""
+        return np.array(per_height)[:, None] * self.G[None, :]
 
     @property
     def F_r_min(self) -> np.ndarray:
         """F_r,min [N], shape (n_H, n_G)."""
-        return self._grid("f_r_min")
+        return self._grid([h.f_r_min.value for h in self.heights])
 
     @property
     def F_z_max(self) -> np.ndarray:
         """F_z,max [N], shape (n_H, n_G)."""
-        return self._grid("f_z_max")
+        return self._grid([h.f_z_max.value for h in self.heights])
 
     @property
     def Gamma_r_max(self) -> np.ndarray:
         """Γ_r,max [N/T], shape (n_H, n_G)."""
-        return self._grid("gamma_r_max")
+        return self._grid([h.gamma_r_max.value for h in self.heights])
 
     @property
     def Gamma_z_max(self) -> np.ndarray:
         """Γ_z,max [N/T], shape (n_H, n_G)."""
-        return self._grid("gamma_z_max")
+        return self._grid([h.gamma_z_max.value for h in self.heights])
 
     def design(self, i: int, j: int) -> DesignResult:
         """The design (H[i], G[j])."""
         return DesignResult(float(self.H[i]), float(self.G[j]), self.heights[i])
 
     def to_csv(self, path: str | Path) -> Path:
-        """Write one row per design in user units (mm, kPa, N, N/T, rad); return the path."""
-        cols = ["H_mm", "G_kPa", "F_r_min_N", "F_z_max_N", "Gamma_r_max_N_per_T",
-                "Gamma_z_max_N_per_T", "t_m", "theta_m_rad", "degenerate"]
-        rows = ([from_si(d.H, "mm"), from_si(d.G, "kPa"), d.F_r_min, d.F_z_max, d.Gamma_r_max,
-                 d.Gamma_z_max, d.t_m, d.theta_m, d.degenerate or ""]
+        """Write one row per design (:class:`MapsRow`) in user units (mm, kPa, N, N/T, rad);
+        return the path."""
+        rows = (to_json(MapsRow(d.H, d.G, d.F_r_min, d.F_z_max, d.Gamma_r_max, d.Gamma_z_max,
+                                d.t_m, d.theta_m, d.degenerate or ""), null_nan=False)
                 for d in (self.design(i, j) for i in range(self.H.size)
                           for j in range(self.G.size)))
-        return write_csv(path, cols, rows, cell=significant(12))
+        return write_csv(path, keys(MapsRow), (list(r.values()) for r in rows),
+                         cell=significant(12))
+
+
+@dataclass(frozen=True)
+class MapsRow:
+    """A row of ``maps.csv``: a design of the map grid (:class:`DesignMaps`), its force
+    extrema, worst sensitivities, stable box and why it is degenerate (empty where it is
+    not)."""
+
+    H: float = entry(unit="mm")
+    G: float = entry(unit="kPa")
+    F_r_min: float = entry(unit="N")
+    F_z_max: float = entry(unit="N")
+    Gamma_r_max: float = entry(unit="N_per_T")
+    Gamma_z_max: float = entry(unit="N_per_T")
+    t_m: float = entry()
+    theta_m: float = entry(unit="rad")
+    degenerate: str = entry(kind=str)
 
 
 def design_maps(models: Responses | ModelSet, study: Study) -> DesignMaps:

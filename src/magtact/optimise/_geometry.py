@@ -14,13 +14,13 @@ bound to it (:meth:`magtact.metamodel.ModelSet.at`), so both answers are built f
 from __future__ import annotations
 
 import itertools
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .._files import write_text
+from .._files import write_json
+from .._records import entry, from_json_lenient, to_json
 from ..metamodel import ModelSet
 from ..study import Study, from_si
 from ._design import DesignResult, per_design
@@ -35,6 +35,7 @@ from ._pareto import (
     nondominated,
     sweep,
 )
+from ._run import Limits
 
 #: Newton iterations at most per per-height problem, in both answers over the geometry. A flat
 #: valley of f_r keeps some problems iterating on round-off long after their values are
@@ -282,46 +283,109 @@ def describe(values: dict[str, float]) -> str:
                      for k, v in values.items())
 
 
-def _set_json(s: DesignSet) -> list[dict]:
-    return [{f"{k}_{UNITS.get(k, 'mm')}": float(from_si(v[i], UNITS.get(k, "mm")))
-             for k, v in s.values.items()}
-            | {"Gamma_r_max_N_per_T": float(s.Gamma_r_max[i]),
-               "Gamma_z_max_N_per_T": float(s.Gamma_z_max[i])} for i in range(len(s))]
+@dataclass(frozen=True)
+class SetRecord:
+    """A design of a set (:class:`DesignSet`) in ``geometry.json``'s ``pareto`` and
+    ``exact_front``: every design variable (SI inside; mm, kPa, A/m in the file) and the
+    objectives. A geometric variable that is not a design variable of the study is None and
+    left out of the file."""
+
+    H: float = entry(unit="mm")
+    G: float = entry(unit="kPa")
+    M_z: float = entry(unit="A_per_m")
+    R_m: float | None = entry(unit="mm", optional=True, omit="none", default=None)
+    H_m: float | None = entry(unit="mm", optional=True, omit="none", default=None)
+    R: float | None = entry(unit="mm", optional=True, omit="none", default=None)
+    Gamma_r_max: float = entry(unit="N_per_T", kw_only=True)
+    Gamma_z_max: float = entry(unit="N_per_T", kw_only=True)
+
+
+@dataclass(frozen=True)
+class GeometryChoiceRecord:
+    """A chosen design (:class:`GeometricChoice`) in ``geometry.json``: the design in words, its
+    objectives [N/T], force extrema and margins to the force constraints [N]. Its keys are
+    ``chosen.json``'s (:class:`magtact.optimise.ChosenFile` reads it,
+    :func:`geometry_choice_json`). A written choice has every value; a value that a partial
+    file lacks reads (leniently) as None and is left out of the document again."""
+
+    design: str | None = entry(kind=str, optional=True, omit="none")
+    Gamma_r_max: float | None = entry(unit="N_per_T", optional=True, omit="none")
+    Gamma_z_max: float | None = entry(unit="N_per_T", optional=True, omit="none")
+    F_r_min: float | None = entry(unit="N", optional=True, omit="none")
+    F_z_max: float | None = entry(unit="N", optional=True, omit="none")
+    g_r: float | None = entry(unit="N", optional=True, omit="none")
+    g_z: float | None = entry(unit="N", optional=True, omit="none")
+
+
+@dataclass(frozen=True)
+class GeometryFile:
+    """``geometry.json``: the optimisation over the geometric design variables
+    (:class:`GeometryOptimisation`) in user units (mm, kPa, A/m, N, N/T)."""
+
+    variables: tuple[str, ...] = entry(kind=str, levels=("list",))
+    constraints: Limits = entry(kind=Limits)
+    choice: GeometryChoiceRecord = entry(kind=GeometryChoiceRecord)
+    exact_choice: GeometryChoiceRecord = entry(kind=GeometryChoiceRecord)
+    gap_to_exact_front: float = entry()
+    nsga2_evaluations: int = entry(kind=int)
+    exact_grid: dict[str, tuple[float, ...]] = entry(unit="mm", levels=("map", "list"))
+    exact_resolution: dict[str, float] = entry(unit="mm", levels=("map",))
+    pareto: tuple[SetRecord, ...] = entry(kind=SetRecord, levels=("list",))
+    exact_front: tuple[SetRecord, ...] = entry(kind=SetRecord, levels=("list",))
+
+
+@dataclass(frozen=True)
+class GeometryChosen:
+    """``geometry.json``'s choice as ``chosen.json`` holds a design (the document
+    :meth:`magtact.optimise.ChosenFile.from_json` reads): the choice's values with the force
+    constraints (None where the file has none)."""
+
+    choice: GeometryChoiceRecord = entry(kind=GeometryChoiceRecord, inline=True)
+    constraints: Limits | None = entry(kind=Limits, optional=True)
+
+
+def _set_records(s: DesignSet) -> tuple[SetRecord, ...]:
+    return tuple(SetRecord(**s.design(i), Gamma_r_max=float(s.Gamma_r_max[i]),
+                           Gamma_z_max=float(s.Gamma_z_max[i])) for i in range(len(s)))
+
+
+def _choice_record(c: GeometricChoice) -> GeometryChoiceRecord:
+    d = c.design
+    return GeometryChoiceRecord(describe(c.values), d.Gamma_r_max, d.Gamma_z_max, d.F_r_min,
+                                d.F_z_max, c.g_r, c.g_z)
+
+
+def geometry_record(r: GeometryOptimisation) -> GeometryFile:
+    """``geometry.json``'s record of the result."""
+    c = r.constraints
+    return GeometryFile(tuple(r.design_variables), Limits(c.F_r_c, c.F_z_c, c.source),
+                        _choice_record(r.choice), _choice_record(r.exact_choice), r.gap,
+                        r.evaluations, r.grid, r.resolution, _set_records(r.pareto),
+                        _set_records(r.exact))
 
 
 def geometry_json(r: GeometryOptimisation) -> dict:
-    """The result in user units (mm, kPa, A/m, N, N/T) as JSON-ready data."""
-    def choice(c: GeometricChoice) -> dict:
-        d = c.design
-        return {"design": describe(c.values), "Gamma_r_max_N_per_T": d.Gamma_r_max,
-                "Gamma_z_max_N_per_T": d.Gamma_z_max, "F_r_min_N": d.F_r_min,
-                "F_z_max_N": d.F_z_max, "g_r_N": c.g_r, "g_z_N": c.g_z}
-
-    return {"variables": list(r.design_variables),
-            "constraints": {"F_r_c_N": r.constraints.F_r_c, "F_z_c_N": r.constraints.F_z_c,
-                            "source": r.constraints.source},
-            "choice": choice(r.choice), "exact_choice": choice(r.exact_choice),
-            "gap_to_exact_front": r.gap, "nsga2_evaluations": r.evaluations,
-            "exact_grid_mm": {k: [float(from_si(v, "mm")) for v in g]
-                              for k, g in r.grid.items()},
-            "exact_resolution_mm": {k: float(from_si(v, "mm")) for k, v in r.resolution.items()},
-            "pareto": _set_json(r.pareto), "exact_front": _set_json(r.exact)}
+    """The result in user units (mm, kPa, A/m, N, N/T) as JSON-ready data
+    (:class:`GeometryFile`)."""
+    return to_json(geometry_record(r))
 
 
 def geometry_choice_json(data) -> dict | None:
     """The chosen design of ``geometry.json``'s document (:func:`geometry_json`) as the flat
-    values of ``chosen.json``, with the constraints; None where it has none."""
-    if not isinstance(data, dict) or not isinstance(data.get("choice"), dict):
+    values of ``chosen.json``, with the constraints (:class:`GeometryChosen`); None where it
+    has none. The file is read leniently: a value it lacks or gives in another shape is left
+    out."""
+    record = from_json_lenient(GeometryFile, data)
+    if record is None or record.choice is None:
         return None
-    return data["choice"] | {"constraints": data.get("constraints")}
+    return to_json(GeometryChosen(record.choice, record.constraints))
 
 
 def write_geometry_outputs(result: GeometryOptimisation, folder, figures=None) -> list[Path]:
     """Write ``folder/geometry.json`` (and, with ``figures``, its figure: a callable
     ``figures(result, folder)`` returning its files); return the files written."""
     folder = Path(folder)
-    files = [write_text(folder / "geometry.json",
-                        json.dumps(geometry_json(result), indent=1) + "\n")]
+    files = [write_json(folder / "geometry.json", geometry_json(result), indent=1)]
     if figures is not None:
         files += figures(result, folder)
     return files
