@@ -364,37 +364,21 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
     problem's answer lists the best sensor of every size. None where no size has a sensor
     (the study's own magnet then says why)."""
     from dataclasses import replace
+    from functools import partial
 
-    from .metamodel import fit_quality
-    from .optimise import InfeasibleError, force_table, optimise, optimise_sensor
+    from ._parallel import fork_map
+    from .optimise import optimise
 
-    names, best, notes, solved = study.design.magnet_sizes, [], [], {}
-    for name in names:
-        st = study.sized(name)
-        try:
-            m = models if _same_size(study, name) else models_for(st)[0]
-        except MagtactError:
-            best.append(None)
-            notes.append("no bundled data hold this size")
-            continue
-        try:  # the stable box and force extrema on fewer heights than the chosen size's
-            sensor = optimise_sensor(m, _required(st, constraints),
-                                     force_table(m, st, SIZE_HEIGHTS), constraints, nsga2=False)
-        except InfeasibleError:
-            best.append(None)
-            notes.append("no sensor of this size meets the requirements")
-            continue
-        best.append(sensor.choice)
-        quality = fit_quality(m)
-        notes.append("" if not quality.is_poor else "its fit is poor (" + "; ".join(
-            f"{k}: held-out R² {quality.held_out[k][0]:.3g}, error "
-            f"{quality.held_out[k][1]:.1%} of the range"
-            for k in quality.poor) + ")")
-        solved[name] = (m, st)
+    names = study.design.magnet_sizes
+    screened = fork_map(partial(_screen_size, models, study, constraints), names)
+    best = [choice for choice, _ in screened]
+    notes = [note for _, note in screened]
+    solved = [n for n, c in zip(names, best, strict=True) if c is not None]
     if not solved:
         return None
     name = min(solved, key=lambda n: best[names.index(n)].sigma)
-    m, st = solved[name]
+    st = study.sized(name)
+    m = models if _same_size(study, name) else models_for(st)[0]
     original = _values_answer(models, _required(study, constraints),
                               {"H": study.design.H_original, "G": study.design.G_original},
                               "original")
@@ -410,6 +394,29 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
 SIZE_HEIGHTS = 21
 
 
+def _screen_size(models: ModelSet, study: Study, constraints, name: str):
+    """One magnet size of :func:`_sized_result`'s screen: the best sensor of its problem on its
+    nominal parts (None where it has none) and a note (why it has none, or a caution where its
+    fit is poor; empty otherwise)."""
+    from .metamodel import fit_quality
+    from .optimise import InfeasibleError, force_table, optimise_sensor
+
+    st = study.sized(name)
+    try:
+        m = models if _same_size(study, name) else models_for(st)[0]
+    except MagtactError:
+        return None, "no bundled data hold this size"
+    try:  # the stable box and force extrema on fewer heights than the chosen size's
+        sensor = optimise_sensor(m, _required(st, constraints),
+                                 force_table(m, st, SIZE_HEIGHTS), constraints, nsga2=False)
+    except InfeasibleError:
+        return None, "no sensor of this size meets the requirements"
+    quality = fit_quality(m)
+    return sensor.choice, "" if not quality.is_poor else "its fit is poor (" + "; ".join(
+        f"{k}: held-out R² {quality.held_out[k][0]:.3g}, error "
+        f"{quality.held_out[k][1]:.1%} of the range" for k in quality.poor) + ")"
+
+
 def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_source: str,
                    dataset, nominal=None, original=None) -> Result:
     """The sensor problem's :class:`Result`: the whole sensor (:func:`magtact.optimise.
@@ -417,7 +424,6 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
     Forces given as constraints (``magtact optimise --Fzc``) become the required forces.
     ``nominal``: the reduction's answer on the nominal parts where already solved;
     ``original``: the original design's answer where it is not of ``study``'s magnet."""
-    from dataclasses import replace
 
     from .optimise import optimise_sensor
 

@@ -490,13 +490,22 @@ class _Noise:
         (n, K); kept (the running maxima over all points are not: several MB a noise)."""
         key = (F_z, F_r, G_high)
         if key not in self._W:
-            i = self.within.open_pieces(F_z, F_r, G_high)[0]
-            q = self._running()
-            n = q.shape[2]
-            at = i * (2 * n) + np.arange(n)[:, None]  # piece i of height h: q[i, :, h]
-            q = q.reshape(-1)
-            self._W[key] = np.hypot(np.sqrt(q[at]), np.sqrt(q[at + n]))
+            self.prepare(F_z, F_r, (G_high,))
         return self._W[key]
+
+    def prepare(self, F_z: float, F_r: float, G_highs) -> None:
+        """:meth:`W` of every upper bound of G in ``G_highs`` from one running maximum (the
+        silicones of a solve ask for one each)."""
+        todo = [G for G in dict.fromkeys(G_highs) if (F_z, F_r, G) not in self._W]
+        if not todo:
+            return
+        q = self._running()
+        n = q.shape[2]
+        q = q.reshape(-1)
+        for G_high in todo:
+            i = self.within.open_pieces(F_z, F_r, G_high)[0]
+            at = i * (2 * n) + np.arange(n)[:, None]  # piece i of height h: q[i, :, h]
+            self._W[F_z, F_r, G_high] = np.hypot(np.sqrt(q[at]), np.sqrt(q[at + n]))
 
     def least(self, M_z: float, G_low: np.ndarray, G_high: float, F_z: float,
               F_r: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -599,13 +608,15 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
     rows_s = np.repeat(levels, n)  # rows: standoff level, then height
     grid = sensor_grid(models, study, np.tile(H, levels.size), np.tile(t_m, levels.size),
                        np.tile(theta_m, levels.size), space.standoffs[rows_s])
-    options = [(k, o) for k, o in enumerate(space.options) if only is None or k == only[1]]
+    keep = _undominated(space.options) if only is None else {only[1]}
+    options = [(k, o) for k, o in enumerate(space.options) if k in keep]
     grades = [(g, M) for g, M in enumerate(space.M_z) if only is None or g == only[0]]
     within = _within_of(grid)
     reading = grid.read_order(space.F_z * space.read_factor)
     cands, falls = [], []
     for k, o in options:
         noise = within.noise(o.noise_x, o.noise_z)
+        noise.prepare(space.F_z, space.F_r, [hi for _, _, hi in silicones])
         least = reading.least_limit(o.range_x, o.range_z)
         for g, M_z in grades:
             G_range = reading.G_range(least, M_z * space.field_factor)
@@ -653,6 +664,20 @@ def _reduce_heights(models, study, space, H, levels, best=None, fallback=None, o
         if fallback is None or -f > fallback.sigma:
             fallback = _Best(-f, h, hi, s, g, k, j)
     return best, fallback, tuple(each)
+
+
+def _undominated(options: tuple) -> frozenset[int]:
+    """The chip options no earlier option dominates: one with as wide a range on both axes and
+    as little noise on both is at least as good for every design (its reading limit is no lower,
+    so its least G no higher, and σ grows with the noise), and wins a tie by coming first, so
+    the reduction's answer is the same without the dominated ones."""
+    keep = set()
+    for k, o in enumerate(options):
+        if not any(p.range_x >= o.range_x and p.range_z >= o.range_z
+                   and p.noise_x <= o.noise_x and p.noise_z <= o.noise_z
+                   for p in options[:k]):
+            keep.add(k)
+    return frozenset(keep)
 
 
 @dataclass(frozen=True)
