@@ -461,15 +461,18 @@ def study_rows(study) -> tuple[str, list[tuple[str, str]]]:
 
 class Card(dict):
     """The design card (:func:`magtact.card`): a dict (``header``, ``rows`` and, where
-    the card has them, ``verdict``, ``parts`` and the best sensor of each silicone,
-    ``silicones``, and of each magnet size, ``magnet_sizes``) that prints as a few lines and shows as a table in a notebook."""
+    the card has them, ``verdict``, ``parts`` and the best sensor of each silicone and of each
+    magnet size, :class:`magtact.report._card.CardChoices`) that prints as a few lines and
+    shows as a table in a notebook."""
 
     def _rows(self) -> tuple[str, list[tuple[str, str]]]:
+        from .report._card import CardChoices
+
         header = [str(h) for h in self.get("header", [])]
         verdict = [v for v in self.get("verdict") or [] if isinstance(v, dict)]
         rows = requirement_rows(verdict)
-        for p in [*(self.get("parts") or []), *(self.get("silicones") or []),
-                  *(self.get("magnet_sizes") or [])]:
+        choices = CardChoices.of(self)
+        for p in [*(self.get("parts") or []), *choices.silicones, *choices.magnet_sizes]:
             if isinstance(p, (list, tuple)) and len(p) == 2:
                 rows.append((str(p[0]), round_text(str(p[1]))))
         shown = {str(v.get("statement", "")) for v in verdict}  # the verdict's rows, once

@@ -88,7 +88,9 @@ def card(result: Result, budgets: tuple[Budget, Budget] | None = None) -> Card:
     >>> print(magtact.card(result))                                 # doctest: +SKIP
     """
     from ._display import Card
+    from ._records import to_json
     from .report import card_rows, parts_list, silicone_table, size_table
+    from .report._card import CardChoices
 
     if budgets is None:
         budgets = error_budgets(result)
@@ -98,12 +100,8 @@ def card(result: Result, budgets: tuple[Budget, Budget] | None = None) -> Card:
     if result.chosen.verdict is not None:  # the verdict and the parts lead, as in card.json
         doc = {"verdict": result.chosen.verdict.to_json(),
                "parts": parts_list(result.chosen)} | doc
-    silicones = silicone_table(result.sensor_design)
-    if silicones:
-        doc["silicones"] = silicones
-    sizes = size_table(result.sensor_design)
-    if sizes:
-        doc["magnet_sizes"] = sizes
+    doc |= to_json(CardChoices(silicone_table(result.sensor_design),
+                               size_table(result.sensor_design)))
     return Card(doc)
 
 

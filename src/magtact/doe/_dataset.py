@@ -39,12 +39,18 @@ VARIABLES = {
 }
 COORDS = {"t": ("1", "non-dimensional load"), "theta": ("rad", "shear angle"),
           "H": ("m", "base height of the body"), "G": ("Pa", "shear modulus of the elastomer")}
+
+
+def _csv_column(var: str, unit: str) -> str:
+    """The CSV column of a variable or coordinate in a user unit: its name followed by
+    ``_<unit>`` (``H_mm``), the name alone without a unit (``t``)."""
+    return f"{var}_{unit}" if unit else var
+
+
 #: CSV columns: name, (variable or coordinate, user unit).
-CSV_COLUMNS = {
-    "t": ("t", ""), "theta_rad": ("theta", "rad"), "H_mm": ("H", "mm"), "G_kPa": ("G", "kPa"),
-    "u_r_mm": ("u_r", "mm"), "u_z_mm": ("u_z", "mm"), "B_r_T": ("B_r", "T"),
-    "B_z_T": ("B_z", "T"), "F_r_N": ("F_r", "N"), "F_z_N": ("F_z", "N"),
-}
+CSV_COLUMNS = {_csv_column(var, unit): (var, unit) for var, unit in (
+    ("t", ""), ("theta", "rad"), ("H", "mm"), ("G", "kPa"), ("u_r", "mm"), ("u_z", "mm"),
+    ("B_r", "T"), ("B_z", "T"), ("F_r", "N"), ("F_z", "N"))}
 #: Long names of the geometric design variables' dimensions (after ``DIMS``, in metres).
 GEOMETRY_NAMES = {"R_m": "magnet radius", "H_m": "magnet height", "R": "body radius"}
 BUNDLED_NAME = "magone_doe.nc"
@@ -226,9 +232,9 @@ def write_csv(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     def column(var: str, unit: str) -> np.ndarray:
         return from_si(ds[var].broadcast_like(ds["F_r"]).transpose(*order).values.ravel(), unit)
 
-    extra = {f"{k}_mm": (k, "mm") for k in geometry_dims(ds)}  # after G_kPa
+    extra = {_csv_column(k, "mm"): (k, "mm") for k in geometry_dims(ds)}  # after G's column
     names = list(CSV_COLUMNS)
-    at = names.index("G_kPa") + 1
+    at = [var for var, _ in CSV_COLUMNS.values()].index("G") + 1
     columns = {n: (extra | CSV_COLUMNS)[n] for n in names[:at] + list(extra) + names[at:]}
     full = {name: column(var, unit) for name, (var, unit) in columns.items()}
     return _write_csv(path, list(columns),

@@ -43,6 +43,7 @@ import sympy as sp
 
 from .._errors import MagtactError
 from .._floor import above_floor
+from .._records import entry, to_json
 from ..geometry import hall_from_magnet_centre, loading_path
 from ..study import Study, holdout_limit, mm, mt
 from ._field_force import B_r, B_z, ComposedForce, FieldForceModel
@@ -65,13 +66,14 @@ TRAIN_TARGET = {"B_r": 0.004, "B_z": 0.004, "f_r": 0.02, "f_z": 0.02}
 
 @dataclass(frozen=True)
 class Accuracy:
-    """Accuracy of one model on a set of points (values in the response's SI units)."""
+    """Accuracy of one model on a set of points (values in the response's SI units); a record
+    of the model files (``info.accuracy``, :class:`ModelInfo`)."""
 
-    r2: float
-    max_abs_err: float
-    max_abs_err_over_range: float
-    max_rel_err: float
-    n_points: int
+    r2: float = entry()
+    max_abs_err: float = entry()
+    max_abs_err_over_range: float = entry()
+    max_rel_err: float = entry()
+    n_points: int = entry(kind=int)
 
 
 @dataclass(frozen=True)
@@ -88,6 +90,42 @@ class FitReport:
     train: Accuracy
     test: Accuracy | None
     rejected: tuple[str, ...] = field(default_factory=tuple)
+
+
+@dataclass(frozen=True)
+class ModelAccuracy:
+    """``info.accuracy`` of a fitted model's file: on the training points, on the held-out
+    paths (None where none was held out), and those paths' (θ [rad], H [m])."""
+
+    train: Accuracy = entry(kind=Accuracy)
+    test: Accuracy | None = entry(kind=Accuracy, optional=True)
+    holdout_paths: tuple[tuple[float, float], ...] = entry(
+        key="holdout_paths_theta_H", levels=("list", "list"))
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    """The ``info`` of a fitted model's file (``<name>.json``,
+    :func:`magtact.metamodel.save_model`): how the model was fitted, on which data and how
+    well. A model read from a file keeps its ``info`` as the file gives it (a dict)."""
+
+    transform: str = entry(kind=str, doc="the transform of the response (TRANSFORMS)")
+    features: tuple[str, ...] = entry(kind=str, levels=("list",))
+    accuracy: ModelAccuracy = entry(kind=ModelAccuracy)
+    settings: dict = entry(kind=object, doc="the [metamodel] settings of the fit")
+    seed: int = entry(kind=int, doc="the seed of the fit kept")
+    tries: int = entry(kind=int)
+    rejected: tuple[str, ...] = entry(kind=str, levels=("list",),
+                                      doc="the fits the guard rails rejected, and why")
+    fit_time_s: float = entry(doc="wall time of the fit [s]")
+    data_hash: str = entry(kind=str, doc="data_hash of the DOE data set")
+    G_spread: float = entry(doc="spread of F / G between the G levels (module notes)")
+    omitted_points: int | None = entry(kind=int, omit="none", default=None,
+                                       doc="points of the DOE left out (failed jobs)")
+    failed_jobs: str | None = entry(kind=str, omit="none", default=None,
+                                    doc="the DOE's failed jobs, where points were left out")
+    definition: str | None = entry(kind=str, omit="none", default=None,
+                                   doc="the sensitivity definition a force model serves")
 
 
 @dataclass(frozen=True)
@@ -486,20 +524,12 @@ def fit_models(ds, study: Study, *, settings=None, names=None, log=None,
             field = field_models or _field_for(models, study, cfg)
         m, rep = fit_response(name, table, test, study, settings=cfg, log=log,
                               field_models=field)
-        info = {
-            "transform": rep.transform, "features": list(rep.features),
-            "accuracy": {"train": asdict(rep.train),
-                         "test": asdict(rep.test) if rep.test else None,
-                         "holdout_paths_theta_H": [list(h) for h in hold]},
-            "settings": asdict(cfg), "seed": rep.seed, "tries": rep.tries,
-            "rejected": list(rep.rejected), "fit_time_s": rep.fit_time_s,
-            "data_hash": digest, "G_spread": spread.get(name, 0.0),
-        }
-        if omitted:
-            info["omitted_points"] = omitted
-            info["failed_jobs"] = str(ds.attrs.get("failed_jobs", ""))
-        if name in ("f_r", "f_z"):
-            info["definition"] = definition
+        info = to_json(ModelInfo(
+            rep.transform, rep.features, ModelAccuracy(rep.train, rep.test, hold),
+            asdict(cfg), rep.seed, rep.tries, rep.rejected, rep.fit_time_s, digest,
+            spread.get(name, 0.0), omitted_points=omitted or None,
+            failed_jobs=str(ds.attrs.get("failed_jobs", "")) if omitted else None,
+            definition=definition if name in ("f_r", "f_z") else None))
         if isinstance(m, FieldForceModel):
             models[name] = FieldForceModel(name=m.name, expr=m.expr, units=m.units, info=info)
         else:

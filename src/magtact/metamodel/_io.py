@@ -22,7 +22,7 @@ import numpy as np
 import sympy as sp
 
 from .._errors import MagtactError, MissingFileError
-from .._files import UnreadableFile, file_problem, read_text_capped
+from .._files import UnreadableFile, file_problem, read_text_capped, write_json
 from ._field_force import FIELD_SYMBOLS, ComposedForce, FieldForceModel
 from ._model import RESPONSES, Metamodel, ModelSet
 from ._parse import format_expression, parse_expression
@@ -155,8 +155,7 @@ def save_model(model: Metamodel | FieldForceModel, path: str | Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     content = (field_force_to_dict(model) if isinstance(model, FieldForceModel)
                else model_to_dict(model))
-    path.write_text(json.dumps(content, indent=2) + "\n")
-    return path
+    return write_json(path, content, indent=2)
 
 
 def load_model(path: str | Path) -> Metamodel:
@@ -216,9 +215,8 @@ def save_models(models: ModelSet, folder: str | Path) -> list[Path]:
         elif isinstance(m, Metamodel):
             save_model(m, path)
         else:
-            path.write_text(json.dumps({"format": EXACT_FORMAT, "name": k, "units": "T",
-                                        "study_toml": m.study.to_toml(), "info": m.info},
-                                       indent=2) + "\n")
+            write_json(path, {"format": EXACT_FORMAT, "name": k, "units": "T",
+                              "study_toml": m.study.to_toml(), "info": m.info}, indent=2)
         paths.append(path)
     return paths
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from functools import cache
 from importlib import resources
 
@@ -35,9 +35,6 @@ from .._errors import MagtactError
 CHIP_FILES: dict[str, str] = {"MLX90393": "mlx90393.toml", "TLV493D": "tlv493d.toml"}
 #: The study's name of a chip of the user's own: no data, the study gives its noise and range.
 CUSTOM_CHIP = "custom"
-#: The MLX90393's setting fields, their datasheet names and allowed values.
-MLX_FIELDS: dict[str, tuple[str, int]] = {"gain_sel": ("GAIN_SEL", 8), "res": ("RES", 4),
-                                          "osr": ("OSR", 4), "dig_filt": ("DIG_FILT", 8)}
 
 
 class SettingError(MagtactError):
@@ -56,19 +53,36 @@ def _data(chip: str) -> dict:
                          .read_text("utf-8"))
 
 
+def _setting_field(word: str, values: int, pair: bool = False):
+    """A setting field of the MLX90393: its name in the datasheet, how many values it takes (0
+    to ``values`` - 1) and whether it is one of the pair (OSR, DIG_FILT) whose combinations
+    the datasheet permits or not (``conversion.not_permitted`` of the chip's data file)."""
+    return field(default=None, metadata={"datasheet": word, "values": values, "pair": pair})
+
+
 @dataclass(frozen=True)
 class ChipSetting:
     """One setting of a programmable chip (None: the chip has no such field)."""
 
-    gain_sel: int | None = None
-    res: int | None = None
-    osr: int | None = None
-    dig_filt: int | None = None
+    gain_sel: int | None = _setting_field("GAIN_SEL", 8)
+    res: int | None = _setting_field("RES", 4)
+    osr: int | None = _setting_field("OSR", 4, pair=True)
+    dig_filt: int | None = _setting_field("DIG_FILT", 8, pair=True)
 
     def words(self) -> str:
         """The setting as the datasheet writes it, e.g. ``GAIN_SEL 7, RES 0, OSR 0, DIG_FILT 2``."""
         parts = [f"{MLX_FIELDS[k][0]} {v}" for k, v in self.__dict__.items() if v is not None]
         return ", ".join(parts) or "the chip's only setting"
+
+
+#: The MLX90393's setting fields (those of :class:`ChipSetting`, in datasheet order), their
+#: datasheet names and how many values each takes.
+MLX_FIELDS: dict[str, tuple[str, int]] = {
+    f.name: (f.metadata["datasheet"], f.metadata["values"]) for f in fields(ChipSetting)}
+#: The setting fields (OSR, DIG_FILT) whose pairs the datasheet permits or not, in the order of
+#: the pairs of ``conversion.not_permitted``; the error for a pair not permitted names the
+#: second.
+PERMITTED_PAIR: tuple[str, str] = tuple(f.name for f in fields(ChipSetting) if f.metadata["pair"])
 
 
 @dataclass(frozen=True)
@@ -198,10 +212,10 @@ class ChipTable:
         if not self.permitted(setting.osr, setting.dig_filt):
             bad = ", ".join(f"OSR {o} / DIG_FILT {d}"
                             for o, d in self.data["conversion"]["not_permitted"])
-            raise SettingError("dig_filt", f"OSR {setting.osr} with DIG_FILT {setting.dig_filt} "
-                                           f"is not permitted with HALLCONF = 0xC ("
-                                           f"{self.data['conversion']['not_permitted_source']}; "
-                                           f"not permitted: {bad})")
+            source = self.data["conversion"]["not_permitted_source"]
+            raise SettingError(PERMITTED_PAIR[1],
+                               f"OSR {setting.osr} with DIG_FILT {setting.dig_filt} is not "
+                               f"permitted with HALLCONF = 0xC ({source}; not permitted: {bad})")
 
     def figures(self, setting: ChipSetting, noise: tuple[float, float] | None = None
                 ) -> SettingFigures:

@@ -3,9 +3,11 @@ and plain words (no internal keys; the JSON keeps every number)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 from .._files import write_json
+from .._records import entry, from_json_lenient, keys, to_json
 from ..study import from_si, kpa, mm
 
 
@@ -259,6 +261,29 @@ def size_table(opt) -> list[list[str]]:
     return rows
 
 
+@dataclass(frozen=True)
+class CardChoices:
+    """The tables of ``card.json`` (and of :func:`magtact.card`) that compare the parts the
+    sensor problem chose among: the best sensor of each silicone (:func:`silicone_table`) and
+    of each magnet size (:func:`size_table`), rows of [label, the sensor in words]. A table
+    is left out where the problem chose from one part. The rows are kept as the document gives
+    them: a reader shows those that are pairs."""
+
+    silicones: tuple = entry(kind=object, levels=("list",), omit="empty", default=(),
+                             doc="the best sensor of each silicone")
+    magnet_sizes: tuple = entry(kind=object, levels=("list",), omit="empty", default=(),
+                                doc="the best sensor of each magnet size")
+
+    @classmethod
+    def of(cls, card) -> CardChoices:
+        """The tables of a card document (a table that is not a list: none)."""
+        return from_json_lenient(cls, card) or cls()
+
+
+#: The keys of :class:`CardChoices`' tables in the card (the report's ids of them too).
+SILICONES_KEY, SIZES_KEY = keys(CardChoices)
+
+
 def _kpa_range(lo: float, hi: float) -> str:
     return (f"{kpa(lo):.3g} kPa" if lo == hi else f"{kpa(lo):.3g}–{kpa(hi):.3g} kPa")
 
@@ -302,10 +327,7 @@ def write_card(answers, folder, constraints=None, rtol: float = 1e-2, study=None
     doc = {"header": header, "rows": rows, "answers": [answer_json(a) for a in answers]}
     if answers[0].verdict is not None:  # the chosen design's verdict and parts lead the card
         doc = {"verdict": answers[0].verdict.to_json(), "parts": parts_list(answers[0])} | doc
-    if silicones:
-        doc["silicones"] = silicones
-    if sizes:
-        doc["magnet_sizes"] = sizes
+    doc |= to_json(CardChoices(silicones or (), sizes or ()))
     if study is not None:
         doc |= {"study": study.name, "definition": study.sensitivity.definition}
     return write_json(Path(folder) / "card.json", doc, indent=1, ensure_ascii=False)

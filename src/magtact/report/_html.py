@@ -24,7 +24,7 @@ from pathlib import Path
 from .._errors import MissingFileError
 from .._runfolder import MANIFEST, RunManifest, StageRecord
 from ..study import from_si
-from ._card import UNITS_ROW, read_card
+from ._card import SILICONES_KEY, SIZES_KEY, UNITS_ROW, CardChoices, read_card
 from ._explorer import explorer_section
 from ._fragments import collecting, damaged_section, load_captions, load_record, read_text
 from ._fragments import escape as _e
@@ -324,10 +324,11 @@ def _choices(card: dict | None) -> str:
     each silicone, as the card lists them (nothing where it chose from one of each)."""
     if not isinstance(card, dict):
         return ""
-    tables = []
-    for key, title in (("magnet_sizes", "Best sensor of each magnet size"),
-                       ("silicones", "Best sensor of each silicone")):
-        rows = [r for r in card.get(key) or [] if isinstance(r, (list, tuple)) and len(r) == 2]
+    choices, tables = CardChoices.of(card), []
+    for key, table, title in (
+            (SIZES_KEY, choices.magnet_sizes, "Best sensor of each magnet size"),
+            (SILICONES_KEY, choices.silicones, "Best sensor of each silicone")):
+        rows = [r for r in table if isinstance(r, (list, tuple)) and len(r) == 2]
         if rows:
             body = "".join(f'<tr><th class="l">{_inline(str(k))}</th><td class="l">'
                            f"{_inline(str(v))}</td></tr>" for k, v in rows)

@@ -41,7 +41,7 @@ CAPTIONS = {
 def publication_figures(folder: str | Path) -> list[Path]:
     """Draw the section's figures from ``folder/publication.json``; write ``captions.json``."""
     folder = Path(folder)
-    from .._files import read_result
+    from .._files import read_result, write_text
 
     doc = PublicationFile.from_json(read_result(folder / "publication.json", "json"))
     records = list(doc.records) if doc is not None else []
@@ -54,7 +54,7 @@ def publication_figures(folder: str | Path) -> list[Path]:
             files += fig_resolution_range(own.sweep, doc.G_range, folder / "resolution_range")
         if own.conditioning is not None:
             files += fig_conditioning(own.conditioning, folder / "conditioning")
-    (folder / "captions.json").write_text(json.dumps(CAPTIONS, indent=1, ensure_ascii=False))
+    write_text(folder / "captions.json", json.dumps(CAPTIONS, indent=1, ensure_ascii=False))
     return files
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from ..parts import MLX_FIELDS, ChipSetting, SettingError, SettingFigures, chip_part, chip_table
+from ..parts._chips import PERMITTED_PAIR
 from ._errors import StudyError
 from ._model import Study
 
@@ -132,9 +133,10 @@ def check_hall(study: Study) -> None:
         if v >= n:
             raise StudyError(f"hall.{k}", f"{word} of the {table.name} is 0 to {n - 1} (-1: "
                                           f"magtact picks it), got {v}")
-    if "osr" in fixed and "dig_filt" in fixed:
+    if all(k in fixed for k in PERMITTED_PAIR):  # the pair fixed: is it permitted?
+        pair = {k: fixed[k] for k in PERMITTED_PAIR}
         try:
-            table.check(ChipSetting(0, 0, fixed["osr"], fixed["dig_filt"]))
+            table.check(ChipSetting(**dict.fromkeys(MLX_FIELDS, 0) | pair))
         except SettingError as exc:
             raise StudyError(f"hall.{exc.key}", exc.reason) from None
     rate = study.requirements.rate
