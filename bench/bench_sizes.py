@@ -50,6 +50,10 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
 STUDY = HERE / "magtact_sizes.toml"
+#: FE paths of a 4 x 1.5 mm magnet (``magtact doe bench/magtact_4x1p5.toml --out
+#: bench/results/size_check/doe --cache bench/results/size_check/cache``), a height between the
+#: shipped sizes': the check of the blend along the height.
+HEIGHT_CHECK = RESULTS / "size_check" / "doe" / "doe.nc"
 DOE_DIR = RESULTS / "sizes_doe"
 CACHE = RESULTS / "broad_cache"
 OUT = RESULTS / "sizes.json"
@@ -497,7 +501,7 @@ def interpolate() -> None:
     The error of a size: the largest |error| over its finite points / its range."""
     import xarray as xr
 
-    from magtact.doe._dataset import radius_weights  # the Lagrange weights magtact blends with
+    from magtact.doe import lagrange_weights  # the Lagrange weights magtact blends with
 
     with xr.open_dataset(_doe_file()) as ds:
         ds = ds.load()
@@ -519,13 +523,13 @@ def interpolate() -> None:
         for j, h in enumerate(Hs):
             entry = {}
             others = [m for m in range(Rs.size) if m != i]
-            w = radius_weights(Rs[others], R)
+            w = lagrange_weights(Rs[others], R)
             for name, v in f.items():
                 true = v[..., i, j]
                 entry[f"{name} along the radius (quadratic)"] = error(
                     np.tensordot(v[..., others, j], w, axes=([-1], [0])), true)
                 if 0 < j < Hs.size - 1:
-                    wl = radius_weights(Hs[[j - 1, j + 1]], h)
+                    wl = lagrange_weights(Hs[[j - 1, j + 1]], h)
                     entry[f"{name} along the height (line)"] = error(
                         v[..., i, j - 1] * wl[0] + v[..., i, j + 1] * wl[1], true)
             out[_label(R, h)] = entry
@@ -551,11 +555,12 @@ def _stable(tab: dict) -> np.ndarray:
 
 def blend() -> None:
     """What magtact ships across sizes, measured on sizes it never saw: the shipped per-size
-    fits of three sizes of a magnet's height blended along the radius
+    fits of the sizes around a magnet blended along its radius, or its height and radius
     (:func:`magtact.doe.bundled_blend`, :func:`magtact.metamodel.blended_metamodels`), the
     held-out size left out of the sizes it may blend, against (a) that size's FE paths in
-    this DOE and (b) for the 5 x 2 mm magnet, the bundled MagOne data set (another DOE: H 3-7
-    mm at 5 levels, 5 theta levels). Largest |error| / the size's force range, per response,
+    this DOE, (b) for the 5 x 2 mm magnet, the bundled MagOne data set (another DOE: H 3-7
+    mm at 5 levels, 5 theta levels) and (c) the FE paths of a 4 x 1.5 mm magnet
+    (:data:`HEIGHT_CHECK`). Largest |error| / the size's force range, per response,
     over every point, over the points of t <= 0.5 and over the stable points (each path up to
     its shear force's extreme, :func:`_stable`)."""
     import xarray as xr
@@ -566,18 +571,27 @@ def blend() -> None:
 
     with xr.open_dataset(_doe_file()) as ds:
         table = sizes_table(ds.load())
+    with xr.open_dataset(HEIGHT_CHECK) as ds:
+        between = _points(ds.load(), ("t", "theta", "H"))
     checks = {}
-    for target, H_range in (("5x2", (2.0, 10.0)), ("5x1", (2.0, 10.0)), ("4x1", (2.0, 10.0))):
-        size = _size(target)
-        study = magtact.load("magone", design={"H_mm": list(H_range)}).sized(target)
-        ds, parts = bundled_blend(study, tuple(s for s in BROAD_SIZES if s != target))
+    for target, H_range in (("5x2", (2.0, 10.0)), ("5x1", (2.0, 10.0)), ("4x1", (2.0, 10.0)),
+                            ("4x1.5", (2.0, 10.0))):
+        if target == "4x1.5":  # between the heights: every shipped size may blend
+            study = magtact.load("magone", magnet={"R_m_mm": 2.0, "H_m_mm": 1.5},
+                                 design={"H_mm": list(H_range), "magnet_sizes": []})
+            ds, parts = bundled_blend(study)
+            tabs = {"4 x 1.5 mm, its own FE paths (bench/magtact_4x1p5.toml)": between}
+        else:
+            size = _size(target)
+            study = magtact.load("magone", design={"H_mm": list(H_range)}).sized(target)
+            ds, parts = bundled_blend(study, tuple(s for s in BROAD_SIZES if s != target))
+            own = {k: v[np.isclose(table["R_m"], size["R_m"])
+                        & np.isclose(table["H_m"], size["H_m"])] for k, v in table.items()}
+            name = f"{_label(size['R_m'], size['H_m'])}"
+            tabs = {f"{name}, this DOE's FE paths": own}
+            if target == "5x2":
+                tabs[f"{name}, the bundled MagOne data set"] = magone_table()
         models = blended_metamodels(study, parts).models
-        own = {k: v[np.isclose(table["R_m"], size["R_m"]) & np.isclose(table["H_m"], size["H_m"])]
-               for k, v in table.items()}
-        name = f"{_label(size['R_m'], size['H_m'])}"
-        tabs = {f"{name}, this DOE's FE paths": own}
-        if target == "5x2":
-            tabs[f"{name}, the bundled MagOne data set"] = magone_table()
         for label, tab in tabs.items():
             entry = {"blended_from": {n: w for n, w, _, _ in parts}}
             stable = _stable(tab)

@@ -624,9 +624,9 @@ _SHIPPED: dict[Study, tuple] = {}
 
 
 def _blend(study: Study):
-    """:func:`models_for` of a magnet between the bundled sizes of its height: the data sets
-    and shipped fits of three sizes blended along the radius (:func:`magtact.doe.
-    bundled_blend`; its error where none is)."""
+    """:func:`models_for` of a magnet between the bundled sizes: the data sets and shipped
+    fits of the sizes around it blended along its radius, or its height and radius
+    (:func:`magtact.doe.bundled_blend`; its error where none is)."""
     from .doe import bundled_blend
     from .metamodel import blended_metamodels
 

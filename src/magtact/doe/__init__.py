@@ -1,9 +1,9 @@
 """Design of experiments: parallel, cached, resumable runs of the field and mechanics stages."""
 
+from ._blend import bundled_blend, lagrange_weights
 from ._cache import CacheCorruptWarning, CacheError, JobCache
 from ._dataset import (
     BROAD_SIZES,
-    bundled_blend,
     bundled_for,
     bundled_path,
     differences,

@@ -38,7 +38,7 @@ class Selection:
     shipped: Path | None
     fit: FitResult | None
     field_scale: float = 1.0
-    #: (size name, weight) of the shipped fits blended along the magnet's radius (empty: none).
+    #: (size name, weight) of the shipped fits blended across magnet sizes (empty: none).
     blend: tuple[tuple[str, float], ...] = ()
 
     @property
@@ -56,9 +56,13 @@ class Selection:
     def source(self) -> str:
         """In words: the shipped fit or a new fit (and the verdict when the fit is poor)."""
         if self.blend:
+            from ..parts import SIZES
+
             parts = ", ".join(f"{name} mm × {w:.3g}" for name, w in self.blend)
+            along = ("radius" if len({SIZES[name].H_m for name, _ in self.blend}) == 1
+                     else "height and radius")
             return ("the shipped fits of the magnet sizes around it blended along the "
-                    f"magnet's radius ({parts})")
+                    f"magnet's {along} ({parts})")
         text = ("the fit shipped with magtact for this data set and these settings"
                 if self.shipped is not None else "fitted now to the data set")
         if self.shipped is not None and self.field_scale != 1.0:
@@ -81,8 +85,7 @@ def select_metamodels(study: Study, ds, *, refit: bool = False,
 
 
 def blended_metamodels(study: Study, parts) -> Selection | None:
-    """The models of ``study``'s magnet blended along the radius from the shipped fits of the
-    sizes around it (``parts``: :func:`magtact.doe.bundled_blend`'s): f_r and f_z the weighted
+    """The models of ``study``'s magnet blended from the shipped fits of the sizes around it (``parts``: :func:`magtact.doe.bundled_blend`'s): f_r and f_z the weighted
     sums of the parts' force models (both forms, so values and derivatives blend alike), the
     field the exact one of ``study``'s magnet. None where a part has no shipped fit."""
     from ._exact_field import ExactField
