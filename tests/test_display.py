@@ -13,7 +13,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import magtact
-from magtact._display import MAX_LINES, Card, round_text, sig, significant_digits
+from magtact._card import Card
+from magtact._display import MAX_LINES, round_text, sig, significant_digits
 
 #: A decimal number as the displays write one (not a dotted version, not inside a word).
 NUMBER = re.compile(r"(?<![\w.])-?\d+(?:\.\d+)?(?:e-?\d+)?(?![\w.]*\d)")

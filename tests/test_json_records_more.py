@@ -13,7 +13,7 @@ from magtact._records import from_json, keys, to_json
 
 # ---- card.json's tables of the parts compared ---------------------------------------------------
 def test_the_card_tables_are_left_out_where_empty_and_keep_their_order():
-    from magtact.report._card import SILICONES_KEY, SIZES_KEY, CardChoices
+    from magtact._card import SILICONES_KEY, SIZES_KEY, CardChoices
 
     assert keys(CardChoices) == (SILICONES_KEY, SIZES_KEY) == ("silicones", "magnet_sizes")
     assert to_json(CardChoices()) == {}
@@ -25,7 +25,7 @@ def test_the_card_tables_are_left_out_where_empty_and_keep_their_order():
 
 
 def test_the_card_tables_are_read_from_any_card_document():
-    from magtact.report._card import CardChoices
+    from magtact._card import CardChoices
 
     card = {"header": ["", "chosen"], "rows": [], "silicones": [["a", "b"], "not a row"],
             "magnet_sizes": {"forged": "object"}}
@@ -36,7 +36,7 @@ def test_the_card_tables_are_read_from_any_card_document():
 
 
 def test_the_printed_card_and_the_report_show_the_tables():
-    from magtact._display import Card
+    from magtact._card import Card
     from magtact.report._html import _choices
 
     card = {"header": ["", "chosen"], "rows": [], "silicones": [["with Ecoflex", "σ_F 1"]],

@@ -5,7 +5,6 @@ every size beside it, and a study that sets its magnet keeps it."""
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest

@@ -457,35 +457,3 @@ def study_rows(study) -> tuple[str, list[tuple[str, str]]]:
     if study.description:
         rows.insert(0, ("description", study.description))
     return f"study {study.name}", rows
-
-
-class Card(dict):
-    """The design card (:func:`magtact.card`): a dict (``header``, ``rows`` and, where
-    the card has them, ``verdict``, ``parts`` and the best sensor of each silicone and of each
-    magnet size, :class:`magtact.report._card.CardChoices`) that prints as a few lines and
-    shows as a table in a notebook."""
-
-    def _rows(self) -> tuple[str, list[tuple[str, str]]]:
-        from .report._card import CardChoices
-
-        header = [str(h) for h in self.get("header", [])]
-        verdict = [v for v in self.get("verdict") or [] if isinstance(v, dict)]
-        rows = requirement_rows(verdict)
-        choices = CardChoices.of(self)
-        for p in [*(self.get("parts") or []), *choices.silicones, *choices.magnet_sizes]:
-            if isinstance(p, (list, tuple)) and len(p) == 2:
-                rows.append((str(p[0]), round_text(str(p[1]))))
-        shown = {str(v.get("statement", "")) for v in verdict}  # the verdict's rows, once
-        for r in self.get("rows", []):
-            if isinstance(r, (list, tuple)) and r and str(r[0]) not in shown:
-                rows.append((str(r[0]), " | ".join(round_text(str(c)) for c in r[1:])))
-        title = "design card: " + " | ".join(h for h in header if h)
-        if verdict:
-            title += f"; {header[1] if len(header) > 1 else 'design'}: {verdict_title(verdict)}"
-        return title, rows
-
-    def __str__(self) -> str:
-        return text_block(*self._rows())
-
-    def _repr_html_(self) -> str:
-        return html_block(*self._rows())

@@ -18,7 +18,7 @@ from ._front import calibrate, error_budget
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from ._display import Card
+    from ._card import Card
     from ._result import Result
     from .budget import Budget
     from .metamodel import ModelSet
@@ -87,10 +87,9 @@ def card(result: Result, budgets: tuple[Budget, Budget] | None = None) -> Card:
     >>> result = magtact.design()                                   # doctest: +SKIP
     >>> print(magtact.card(result))                                 # doctest: +SKIP
     """
-    from ._display import Card
+    from ._card import Card, CardChoices
     from ._records import to_json
     from .report import card_rows, parts_list, silicone_table, size_table
-    from .report._card import CardChoices
 
     if budgets is None:
         budgets = error_budgets(result)

@@ -85,8 +85,9 @@ def select_metamodels(study: Study, ds, *, refit: bool = False,
 
 
 def blended_metamodels(study: Study, parts) -> Selection | None:
-    """The models of ``study``'s magnet blended from the shipped fits of the sizes around it (``parts``: :func:`magtact.doe.bundled_blend`'s): f_r and f_z the weighted
-    sums of the parts' force models (both forms, so values and derivatives blend alike), the
+    """The models of ``study``'s magnet blended from the shipped fits of the sizes around it
+    (``parts``: :func:`magtact.doe.bundled_blend`'s): f_r and f_z the weighted sums of the
+    parts' force models (both forms, so values and derivatives blend alike), the
     field the exact one of ``study``'s magnet. None where a part has no shipped fit."""
     from ._exact_field import ExactField
     from ._model import Metamodel

@@ -15,6 +15,7 @@ from ._catalogue import (
 )
 from ._chips import (
     MLX_FIELDS,
+    PERMITTED_PAIR,
     ChipPart,
     ChipSetting,
     ChipTable,

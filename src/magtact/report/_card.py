@@ -3,11 +3,11 @@ and plain words (no internal keys; the JSON keeps every number)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
+from .._card import CardChoices
 from .._files import write_json
-from .._records import entry, from_json_lenient, keys, to_json
+from .._records import to_json
 from ..study import from_si, kpa, mm
 
 
@@ -261,27 +261,6 @@ def size_table(opt) -> list[list[str]]:
     return rows
 
 
-@dataclass(frozen=True)
-class CardChoices:
-    """The tables of ``card.json`` (and of :func:`magtact.card`) that compare the parts the
-    sensor problem chose among: the best sensor of each silicone (:func:`silicone_table`) and
-    of each magnet size (:func:`size_table`), rows of [label, the sensor in words]. A table
-    is left out where the problem chose from one part. The rows are kept as the document gives
-    them: a reader shows those that are pairs."""
-
-    silicones: tuple = entry(kind=object, levels=("list",), omit="empty", default=(),
-                             doc="the best sensor of each silicone")
-    magnet_sizes: tuple = entry(kind=object, levels=("list",), omit="empty", default=(),
-                                doc="the best sensor of each magnet size")
-
-    @classmethod
-    def of(cls, card) -> CardChoices:
-        """The tables of a card document (a table that is not a list: none)."""
-        return from_json_lenient(cls, card) or cls()
-
-
-#: The keys of :class:`CardChoices`' tables in the card (the report's ids of them too).
-SILICONES_KEY, SIZES_KEY = keys(CardChoices)
 
 
 def _kpa_range(lo: float, hi: float) -> str:

@@ -21,10 +21,11 @@ import re
 from datetime import UTC, datetime
 from pathlib import Path
 
+from .._card import SILICONES_KEY, SIZES_KEY, CardChoices
 from .._errors import MissingFileError
 from .._runfolder import MANIFEST, RunManifest, StageRecord
 from ..study import from_si
-from ._card import SILICONES_KEY, SIZES_KEY, UNITS_ROW, CardChoices, read_card
+from ._card import UNITS_ROW, read_card
 from ._explorer import explorer_section
 from ._fragments import collecting, damaged_section, load_captions, load_record, read_text
 from ._fragments import escape as _e

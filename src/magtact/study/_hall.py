@@ -13,8 +13,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from ..parts import MLX_FIELDS, ChipSetting, SettingError, SettingFigures, chip_part, chip_table
-from ..parts._chips import PERMITTED_PAIR
+from ..parts import (
+    MLX_FIELDS,
+    PERMITTED_PAIR,
+    ChipSetting,
+    SettingError,
+    SettingFigures,
+    chip_part,
+    chip_table,
+)
 from ._errors import StudyError
 from ._model import Study
 

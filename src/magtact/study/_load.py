@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import functools
-
 import difflib
+import functools
 import itertools
 import math
 import tomllib
@@ -50,7 +49,7 @@ def load_study(source: str | Path | None = None) -> Study:
     return _study_of_text(_read_text(path), str(path))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _preset(name: str) -> Study:
     """A preset study: read once per process (a frozen value of the package's own file)."""
     text = resources.files("magtact.study").joinpath(PRESETS[name]).read_text("utf-8")
