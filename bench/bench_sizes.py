@@ -598,6 +598,10 @@ def blend() -> None:
             for resp in ("f_z", "f_r"):
                 pred = np.asarray(models[resp].value(tab["t"], tab["theta"], tab["H"]), float)
                 entry[resp] = _errors(pred, tab, resp)
+                i = int(np.argmax(np.abs(pred - tab[resp]) * stable))
+                entry[resp]["stable_worst_at"] = {"t": float(tab["t"][i]),
+                                                  "theta_rad": float(tab["theta"][i]),
+                                                  "H_mm": 1e3 * float(tab["H"][i])}
                 for label_, keep in (("t <= 0.5", tab["t"] <= 0.5), ("stable", stable)):
                     entry[f"{resp}, {label_}"] = _errors(pred[keep], {k: v[keep] for k, v in
                                                                       tab.items()}, resp)

@@ -960,18 +960,27 @@ def _blend_rows(d: dict) -> list[str]:
     if not bl:
         return []
     out = [f"**The shipped blend across sizes, on sizes it never saw** (`{bl['command']}`): "
-           "the shipped per-size fits of three sizes of the magnet's height blended along the "
-           "radius (what `magtact` answers for a magnet between the bundled sizes), the "
-           "held-out size left out of the sizes it may blend; largest |error| / the size's "
-           "force range, over every point and over t ≤ 0.5 (the targets: 2 % for f_z, 5 % for "
-           "f_r).", ""]
+           "the shipped per-size fits of the sizes around a magnet blended along its radius "
+           "(three sizes of its height), or along its height and radius (the 4 × 1.5 mm "
+           "magnet: the quadratic through the heights 1, 2 and 3 mm), what `magtact` answers "
+           "for a magnet between the bundled sizes; a held-out size is left out of the sizes it "
+           "may blend. Largest |error| / the size's force range, over every point, over the "
+           "stable region (each path up to its shear force's extreme: what the sensor problem "
+           "reads) and over t ≤ 0.5 (the targets: 2 % for f_z, 5 % for f_r).", ""]
     rows = []
     for label, e in bl["checks"].items():
         parts = ", ".join(f"{n} × {w:.3g}" for n, w in e["blended_from"].items())
-        rows.append([label, parts] + [pct(e[k]["max_error_of_range"], 2) for k in
-                                      ("f_z", "f_r", "f_z, t <= 0.5", "f_r, t <= 0.5")])
-    out += table(["held-out data", "blend of", "f_z", "f_r", "f_z, t ≤ 0.5", "f_r, t ≤ 0.5"],
-                 rows)
+        rows.append([label, parts] + [pct(e[k]["max_error_of_range"], 2) if k in e else "–"
+                                      for k in ("f_z", "f_r", "f_z, stable", "f_r, stable",
+                                                "f_z, t <= 0.5", "f_r, t <= 0.5")])
+    out += table(["held-out data", "blend of", "f_z", "f_r", "f_z, stable", "f_r, stable",
+                  "f_z, t ≤ 0.5", "f_r, t ≤ 0.5"], rows)
+    worst = [f"{label}: t = {w['t']:.3g}, θ = {w['theta_rad']:.3g} rad, H = {w['H_mm']:.3g} mm"
+             for label, e in bl["checks"].items()
+             if (w := e["f_r"].get("stable_worst_at")) is not None]
+    if worst:
+        out += ["", "Where the largest f_r error over the stable region lies: " + "; ".join(worst)
+                + "."]
     return out + [""]
 
 
