@@ -1,5 +1,5 @@
 """geometry.json and maps.csv are written and read through their records
-(``magtact.optimise._geometry.GeometryFile``, ``magtact.optimise._design.MapsRow``)."""
+(``magtact.optimise._geometry.GeometryFile``, ``magtact.optimise._run.DesignRecord``)."""
 
 import csv
 import json
@@ -20,13 +20,14 @@ from magtact.optimise import (
     geometry_choice_json,
     write_geometry_outputs,
 )
-from magtact.optimise._design import HeightResult, MapsRow
+from magtact.optimise._design import HeightResult
 from magtact.optimise._geometry import (
     GeometryChoiceRecord,
     GeometryFile,
     SetRecord,
     geometry_json,
 )
+from magtact.optimise._run import DesignRecord, write_maps
 
 
 def _set(names, shift):
@@ -51,7 +52,7 @@ def _optimisation(names=("R_m", "R")):
 
 
 def test_the_records_declare_known_units():
-    for cls in (GeometryFile, GeometryChoiceRecord, SetRecord, MapsRow):
+    for cls in (GeometryFile, GeometryChoiceRecord, SetRecord):
         check_declarations(cls)
 
 
@@ -102,11 +103,11 @@ def test_maps_csv_is_written_through_its_row_record(tmp_path):
     heights = (HeightResult(3e-3, box(-2e-6), box(1e-4), box(3e-4), box(9e-4)),
                HeightResult(4e-3, box(-3e-6, 0.0), box(2e-4), box(4e-4), box(8e-4)))
     maps = DesignMaps(np.array([3e-3, 4e-3]), np.array([1e4, 2e4]), heights)
-    with open(maps.to_csv(tmp_path / "maps.csv"), newline="", encoding="utf-8") as f:
+    with open(write_maps(maps, tmp_path / "maps.csv"), newline="", encoding="utf-8") as f:
         rows = list(csv.reader(f))
-    assert rows[0] == list(keys(MapsRow)) == [
-        "H_mm", "G_kPa", "F_r_min_N", "F_z_max_N", "Gamma_r_max_N_per_T",
-        "Gamma_z_max_N_per_T", "t_m", "theta_m_rad", "degenerate"]
-    assert rows[1] == ["3", "10", "-0.02", "1", "3", "9", "0.5", "0.2", ""]
-    assert rows[4][:3] == ["4", "20", "-0.06"] and rows[4][-1] == "t_m = 0"
+    assert rows[0] == [k for k in keys(DesignRecord) if k != "M_z_A_per_m"] == [
+        "H_mm", "G_kPa", "Gamma_r_max_N_per_T", "Gamma_z_max_N_per_T", "F_r_min_N",
+        "F_z_max_N", "t_m", "theta_m_rad", "degenerate"]
+    assert rows[1] == ["3", "10", "3", "9", "-0.02", "1", "0.5", "0.2", ""]
+    assert rows[4][:6] == ["4", "20", "8", "16", "-0.06", "4"] and rows[4][-1] == "t_m = 0"
     np.testing.assert_allclose(maps.Gamma_z_max, [[9.0, 18.0], [8.0, 16.0]])

@@ -8,13 +8,10 @@ once per height H (:class:`HeightResult`) and scaled by G for a design (:class:`
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
-from pathlib import Path
 
 import numpy as np
 
 from .._errors import MagtactError
-from .._files import significant, write_csv
-from .._records import entry, keys, to_json
 from ..metamodel import ModelSet
 from ..sensitivity import Responses
 from ..study import Study
@@ -523,32 +520,6 @@ class DesignMaps:
         """The design (H[i], G[j])."""
         return DesignResult(float(self.H[i]), float(self.G[j]), self.heights[i])
 
-    def to_csv(self, path: str | Path) -> Path:
-        """Write one row per design (:class:`MapsRow`) in user units (mm, kPa, N, N/T, rad);
-        return the path."""
-        rows = (to_json(MapsRow(d.H, d.G, d.F_r_min, d.F_z_max, d.Gamma_r_max, d.Gamma_z_max,
-                                d.t_m, d.theta_m, d.degenerate or ""), null_nan=False)
-                for d in (self.design(i, j) for i in range(self.H.size)
-                          for j in range(self.G.size)))
-        return write_csv(path, keys(MapsRow), (list(r.values()) for r in rows),
-                         cell=significant(12))
-
-
-@dataclass(frozen=True)
-class MapsRow:
-    """A row of ``maps.csv``: a design of the map grid (:class:`DesignMaps`), its force
-    extrema, worst sensitivities, stable box and why it is degenerate (empty where it is
-    not)."""
-
-    H: float = entry(unit="mm")
-    G: float = entry(unit="kPa")
-    F_r_min: float = entry(unit="N")
-    F_z_max: float = entry(unit="N")
-    Gamma_r_max: float = entry(unit="N_per_T")
-    Gamma_z_max: float = entry(unit="N_per_T")
-    t_m: float = entry()
-    theta_m: float = entry(unit="rad")
-    degenerate: str = entry(kind=str)
 
 
 def design_maps(models: Responses | ModelSet, study: Study) -> DesignMaps:

@@ -266,7 +266,7 @@ class Optimisation:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         files = [self._write_json(out / "design.json"), self._write_pareto(out / "pareto.csv"),
-                 self._write_reduction(out / "reduction.csv"), self.maps.to_csv(out / "maps.csv")]
+                 self._write_reduction(out / "reduction.csv"), self._write_maps(out / "maps.csv")]
         if figures is not None:
             files += figures(self, out)
         return files
@@ -297,6 +297,9 @@ class Optimisation:
             for row in zip(p.H, p.G, M_z, p.Gamma_r_max, p.Gamma_z_max, p.F_r_min, p.F_z_max,
                            g_r, g_z, strict=True)))
 
+    def _write_maps(self, path: Path) -> Path:
+        return write_maps(self.maps, path)
+
     def _write_reduction(self, path: Path) -> Path:
         r = self.reduction
         t = r.table
@@ -306,6 +309,13 @@ class Optimisation:
             for row in zip(r.H, r.G_star, M_z, r.Gamma_r, r.Gamma_z, r.G_star * t.f_r_min,
                            r.G_star * t.f_z_max, t.t_m, t.theta_m, r.front.astype(int),
                            strict=True)))
+
+
+def write_maps(maps, path: Path) -> Path:
+    """``maps.csv``: one row per design of the map grid (:class:`DesignMaps`), as the files
+    hold a design (:class:`DesignRecord`), in user units (mm, kPa, N, N/T, rad)."""
+    return _table(path, DesignRecord, (_design_record(maps.design(i, j))
+                                       for i in range(maps.H.size) for j in range(maps.G.size)))
 
 
 def design_json(d: DesignResult) -> dict:
