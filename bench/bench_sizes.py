@@ -15,6 +15,14 @@ Steps (each writes its part of ``bench/results/sizes.json``)::
     python bench/bench_sizes.py surrogate    # models across sizes, held-out sizes measured
     python bench/bench_sizes.py surrogate --cached --models rbf,kriging   # before the DOE ends
 
+The 2 mm-high sizes over H 2-10 mm at 7 levels instead of 4 (``bench/magtact_sizes_fine_h.toml``,
+the same cache: only the 3 new levels are solved), fitted but not shipped, and their blend for
+the 5 x 2 mm magnet measured on the MagOne data::
+
+    nohup python bench/bench_sizes.py fine-h-doe 4x2,6x2,3x2 > fine_h_doe.log 2>&1 &
+    python bench/bench_sizes.py fine-h 4x2,6x2,3x2   # data sets and fits (bench/results/sizes_fine_h)
+    python bench/bench_sizes.py fine-h-blend
+
 ``doe --first`` solves the named sizes' paths first (one sub-DOE each, through the same cache),
 then runs ``magtact doe`` on the whole study, which finds them cached.
 
@@ -384,6 +392,100 @@ def ship(texts: list[str]) -> None:
                                           for k, v in record[text]["accuracy"].items()})
 
 
+#: The 2 mm-high magnets over H 2-10 mm at 7 levels (:data:`FINE_H_STUDY`): their data and fits,
+#: not shipped (``fine-h`` and ``fine-h-blend``).
+FINE_H_STUDY = HERE / "magtact_sizes_fine_h.toml"
+FINE_H_DIR = RESULTS / "sizes_fine_h"
+
+
+def fine_h_doe(texts: list[str], workers: int) -> None:
+    """The named 2 mm-high sizes' paths over H 2-10 mm at 7 levels (:data:`FINE_H_STUDY`),
+    through the committed job cache: the 4 levels of :data:`STUDY` are found there, the 3 new
+    ones solved (resumable: a path finished is never solved again)."""
+    from magtact import study as mstudy
+    from magtact.doe import run_doe
+    from magtact.doe._run import DOEFailed
+
+    study = mstudy.load_study(FINE_H_STUDY)
+    for text in texts:
+        start = time.perf_counter()
+        try:
+            ds = run_doe(study.at(**_size(text)), cache=CACHE, workers=workers)
+            print(text, "complete:", ds.attrs["run_paths_computed"], "paths solved",
+                  f"{time.perf_counter() - start:.0f} s", flush=True)
+        except DOEFailed as exc:
+            print(text, f"{len(exc.failures)} path(s) failed", flush=True)
+
+
+def fine_h(texts: list[str]) -> None:
+    """Each named 2 mm-high size's data set over H 2-10 mm at 7 levels, read from the cache
+    (a path not cached: refused), and its ``magtact fit`` with the shipped sizes' settings, in
+    :data:`FINE_H_DIR` (nothing is copied into the package)."""
+    from dataclasses import replace
+
+    from magtact import study as mstudy
+    from magtact.doe import run_doe, save_dataset
+    from magtact.doe._cache import JobCache
+    from magtact.doe._jobs import plan
+    from magtact.magnetics import hall_field
+    from magtact.mechanics import simulate_path
+
+    study = mstudy.load_study(FINE_H_STUDY)
+    settings = replace(mstudy.magone().metamodel, b_model="exact", holdout_paths=2,
+                       generations=200, population=1000, retries=4)
+    record = json.loads(OUT.read_text()).get("fine_h", {}) if OUT.is_file() else {}
+    for text in texts:
+        sub = replace(study.at(**_size(text)), metamodel=settings,
+                      name=f"MagOne body, {text} mm magnet, H 2-10 mm at 7 levels")
+        _, jobs = plan(sub, simulate_path, hall_field)
+        missing = [j.label for j in jobs if JobCache(CACHE).get("path", j.key) is None]
+        if missing:
+            raise SystemExit(f"{text}: {len(missing)} path(s) not cached yet ({missing[0]} ...)")
+        ds = run_doe(sub, cache=CACHE, workers=0)
+        folder = FINE_H_DIR / text
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "study.toml").write_text(sub.to_toml(), encoding="utf-8")
+        save_dataset(ds, folder / "doe.nc")
+        cmd = [sys.executable, "-m", "magtact", "fit", str(folder / "study.toml"), "--data",
+               str(folder / "doe.nc"), "--out", str(folder / "fit")]
+        start = time.perf_counter()
+        subprocess.run(cmd, check=True, cwd=ROOT)
+        record[text] = {
+            "fit_wall_time_s": time.perf_counter() - start, "load_average": os.getloadavg(),
+            "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
+                         ["accuracy"] for k in ("f_r", "f_z")}}
+        _update("fine_h", record)
+        print(text, f"fit {record[text]['fit_wall_time_s']:.0f} s", flush=True)
+
+
+def fine_h_blend() -> None:
+    """The 5 x 2 mm magnet's blend along the radius (4 x 2 mm x 1, 6 x 2 mm x 1/3, 3 x 2 mm x
+    -1/3, :func:`magtact.doe.lagrange_weights`) of the fits over 7 heights (:func:`fine_h`)
+    against the bundled MagOne data set, as ``blend`` measures the shipped fits."""
+    from magtact import study as mstudy
+    from magtact.doe import lagrange_weights
+    from magtact.metamodel import load_models
+
+    names = ("4x2", "6x2", "3x2")
+    w = lagrange_weights([_size(n)["R_m"] for n in names], 2.5e-3)
+    study = mstudy.magone()
+    models = [load_models(FINE_H_DIR / n / "fit", definition=study.sensitivity.definition)
+              for n in names]
+    tab = magone_table()
+    stable = _stable(tab)
+    entry = {"blended_from": dict(zip(names, map(float, w), strict=True))}
+    for resp in ("f_z", "f_r"):
+        pred = sum(wk * np.asarray(m[resp].value(tab["t"], tab["theta"], tab["H"]), float)
+                   for wk, m in zip(w, models, strict=True))
+        entry[resp] = _errors(pred, tab, resp)
+        entry[f"{resp}, stable"] = _errors(pred[stable], {k: v[stable] for k, v in tab.items()},
+                                           resp)
+    _update("fine_h_blend", {"command": "python bench/bench_sizes.py fine-h-blend",
+                             "the bundled MagOne data set": entry})
+    print({k: round(v["max_error_of_range"], 4) for k, v in entry.items()
+           if k != "blended_from"})
+
+
 def _errors(pred: np.ndarray, table: dict, name: str) -> dict:
     y = table[name]
     span = float(y.max() - y.min())
@@ -658,6 +760,12 @@ def main(argv=None) -> None:
     sub.add_parser("interpolate")
     sub.add_parser("blend")
     sub.add_parser("robust")
+    fd = sub.add_parser("fine-h-doe")
+    fd.add_argument("sizes", nargs="?", default="4x2,6x2,3x2")
+    fd.add_argument("--workers", type=int, default=1)
+    fh = sub.add_parser("fine-h")
+    fh.add_argument("sizes", help="2 mm-high sizes whose 7 heights are cached, e.g. 4x2,6x2")
+    sub.add_parser("fine-h-blend")
     sh = sub.add_parser("ship")
     sh.add_argument("sizes", help="finished sizes to ship, e.g. 3x2,5x2")
     s = sub.add_parser("surrogate")
@@ -676,6 +784,12 @@ def main(argv=None) -> None:
         blend()
     elif args.step == "robust":
         robust()
+    elif args.step == "fine-h-doe":
+        fine_h_doe([x for x in args.sizes.split(",") if x], args.workers)
+    elif args.step == "fine-h":
+        fine_h([x for x in args.sizes.split(",") if x])
+    elif args.step == "fine-h-blend":
+        fine_h_blend()
     elif args.step == "ship":
         ship(args.sizes.split(","))
     else:
