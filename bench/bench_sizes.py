@@ -20,8 +20,9 @@ the same cache: only the 3 new levels are solved), fitted but not shipped, and t
 the 5 x 2 mm magnet measured on the MagOne data::
 
     nohup python bench/bench_sizes.py fine-h-doe 4x2,6x2,3x2 > fine_h_doe.log 2>&1 &
-    python bench/bench_sizes.py fine-h 4x2,6x2,3x2   # data sets and fits (bench/results/sizes_fine_h)
+    python bench/bench_sizes.py fine-h 4x2,6x2,3x2   # data and fits, bench/results/sizes_fine_h
     python bench/bench_sizes.py fine-h-blend
+    python bench/bench_sizes.py fine-h-ship 4x2,6x2,3x2   # into the package, replacing 4 heights
 
 ``doe --first`` solves the named sizes' paths first (one sub-DOE each, through the same cache),
 then runs ``magtact doe`` on the whole study, which finds them cached.
@@ -458,6 +459,21 @@ def fine_h(texts: list[str]) -> None:
         print(text, f"fit {record[text]['fit_wall_time_s']:.0f} s", flush=True)
 
 
+def fine_h_ship(texts: list[str]) -> None:
+    """Copy the named sizes' data sets and fits over 7 heights (:func:`fine_h`) into the
+    package as ``broad_<D>x<H>``, replacing those over 4 heights; their records in ``ship``."""
+    from bench_broad import ship_size
+
+    record = json.loads(OUT.read_text()).get("ship", {}) if OUT.is_file() else {}
+    fits = json.loads(OUT.read_text()).get("fine_h", {}) if OUT.is_file() else {}
+    for text in texts:
+        folder = FINE_H_DIR / text
+        record[text] = {"from": "python bench/bench_sizes.py fine-h (H 2-10 mm at 7 levels)",
+                        **fits.get(text, {}), **ship_size(folder, text)}
+        print(text, record[text]["data"], record[text]["fit"], flush=True)
+    _update("ship", record)
+
+
 def fine_h_blend() -> None:
     """The 5 x 2 mm magnet's blend along the radius (4 x 2 mm x 1, 6 x 2 mm x 1/3, 3 x 2 mm x
     -1/3, :func:`magtact.doe.lagrange_weights`) of the fits over 7 heights (:func:`fine_h`)
@@ -766,6 +782,8 @@ def main(argv=None) -> None:
     fh = sub.add_parser("fine-h")
     fh.add_argument("sizes", help="2 mm-high sizes whose 7 heights are cached, e.g. 4x2,6x2")
     sub.add_parser("fine-h-blend")
+    fs = sub.add_parser("fine-h-ship")
+    fs.add_argument("sizes", help="sizes fitted over 7 heights, e.g. 4x2,6x2,3x2")
     sh = sub.add_parser("ship")
     sh.add_argument("sizes", help="finished sizes to ship, e.g. 3x2,5x2")
     s = sub.add_parser("surrogate")
@@ -790,6 +808,8 @@ def main(argv=None) -> None:
         fine_h([x for x in args.sizes.split(",") if x])
     elif args.step == "fine-h-blend":
         fine_h_blend()
+    elif args.step == "fine-h-ship":
+        fine_h_ship([x for x in args.sizes.split(",") if x])
     elif args.step == "ship":
         ship(args.sizes.split(","))
     else:
