@@ -23,6 +23,7 @@ the 5 x 2 mm magnet measured on the MagOne data::
     python bench/bench_sizes.py fine-h 4x2,6x2,3x2   # data and fits, bench/results/sizes_fine_h
     python bench/bench_sizes.py fine-h-blend
     python bench/bench_sizes.py fine-h-ship 4x2,6x2,3x2   # into the package, replacing 4 heights
+    nohup python bench/bench_sizes.py fine-h-doe 4x2,6x2,3x2 --angles 5 > fine_ht.log 2>&1 &
 
 ``doe --first`` solves the named sizes' paths first (one sub-DOE each, through the same cache),
 then runs ``magtact doe`` on the whole study, which finds them cached.
@@ -397,17 +398,20 @@ def ship(texts: list[str]) -> None:
 #: not shipped (``fine-h`` and ``fine-h-blend``).
 FINE_H_STUDY = HERE / "magtact_sizes_fine_h.toml"
 FINE_H_DIR = RESULTS / "sizes_fine_h"
+#: The same sizes at 5 θ levels too (``fine-h-doe --angles 5``).
+FINE_HT_STUDY = HERE / "magtact_sizes_fine_ht.toml"
 
 
-def fine_h_doe(texts: list[str], workers: int) -> None:
-    """The named 2 mm-high sizes' paths over H 2-10 mm at 7 levels (:data:`FINE_H_STUDY`),
-    through the committed job cache: the 4 levels of :data:`STUDY` are found there, the 3 new
-    ones solved (resumable: a path finished is never solved again)."""
+def fine_h_doe(texts: list[str], workers: int, study_file: Path = FINE_H_STUDY) -> None:
+    """The named 2 mm-high sizes' paths over H 2-10 mm at 7 levels (:data:`FINE_H_STUDY`, or
+    ``study_file``: also at 5 θ levels, :data:`FINE_HT_STUDY`), through the committed job
+    cache: the levels already solved are found there, the new ones solved (resumable: a path
+    finished is never solved again)."""
     from magtact import study as mstudy
     from magtact.doe import run_doe
     from magtact.doe._run import DOEFailed
 
-    study = mstudy.load_study(FINE_H_STUDY)
+    study = mstudy.load_study(study_file)
     for text in texts:
         start = time.perf_counter()
         try:
@@ -779,6 +783,9 @@ def main(argv=None) -> None:
     fd = sub.add_parser("fine-h-doe")
     fd.add_argument("sizes", nargs="?", default="4x2,6x2,3x2")
     fd.add_argument("--workers", type=int, default=1)
+    fd.add_argument("--angles", type=int, choices=(3, 5), default=3,
+                    help="theta levels: 3 (bench/magtact_sizes_fine_h.toml) or 5 "
+                         "(bench/magtact_sizes_fine_ht.toml)")
     fh = sub.add_parser("fine-h")
     fh.add_argument("sizes", help="2 mm-high sizes whose 7 heights are cached, e.g. 4x2,6x2")
     sub.add_parser("fine-h-blend")
@@ -803,7 +810,8 @@ def main(argv=None) -> None:
     elif args.step == "robust":
         robust()
     elif args.step == "fine-h-doe":
-        fine_h_doe([x for x in args.sizes.split(",") if x], args.workers)
+        fine_h_doe([x for x in args.sizes.split(",") if x], args.workers,
+                   FINE_H_STUDY if args.angles == 3 else FINE_HT_STUDY)
     elif args.step == "fine-h":
         fine_h([x for x in args.sizes.split(",") if x])
     elif args.step == "fine-h-blend":
