@@ -66,9 +66,14 @@ def fork_map(fn: Callable, items: Sequence, workers: int | None = None) -> list:
 
     _JOB = (fn, items)
     try:
-        with ProcessPoolExecutor(max_workers=workers,
-                                 mp_context=multiprocessing.get_context("fork")) as pool:
-            done = list(pool.map(_run, range(len(items))))
+        with warnings.catch_warnings():
+            # Python 3.12+ warns of fork in a process with threads (a BLAS pool's, say): the
+            # workers run only ``fn`` on their own data, as the figures' worker does
+            warnings.filterwarnings("ignore", r"This process .* is multi-threaded",
+                                    DeprecationWarning)
+            with ProcessPoolExecutor(max_workers=workers,
+                                     mp_context=multiprocessing.get_context("fork")) as pool:
+                done = list(pool.map(_run, range(len(items))))
     except (BrokenProcessPool, OSError):  # no worker could run: here, one after the other
         return [fn(x) for x in items]
     finally:
