@@ -422,10 +422,19 @@ def fine_h_doe(texts: list[str], workers: int, study_file: Path = FINE_H_STUDY) 
             print(text, f"{len(exc.failures)} path(s) failed", flush=True)
 
 
-def fine_h(texts: list[str]) -> None:
-    """Each named 2 mm-high size's data set over H 2-10 mm at 7 levels, read from the cache
-    (a path not cached: refused), and its ``magtact fit`` with the shipped sizes' settings, in
-    :data:`FINE_H_DIR` (nothing is copied into the package)."""
+def _fine(angles: int) -> tuple[Path, Path, str]:
+    """The study file, the results folder and the record's name of the 2 mm-high sizes over 7
+    heights at 3 or 5 θ levels."""
+    if angles == 3:
+        return FINE_H_STUDY, FINE_H_DIR, "fine_h"
+    return FINE_HT_STUDY, RESULTS / "sizes_fine_ht", "fine_ht"
+
+
+def fine_h(texts: list[str], angles: int = 3) -> None:
+    """Each named 2 mm-high size's data set over H 2-10 mm at 7 levels (and 3 or 5 θ levels),
+    read from the cache (a path not cached: refused), and its ``magtact fit`` with the shipped
+    sizes' settings, in :data:`FINE_H_DIR` (``sizes_fine_ht`` at 5 θ levels; nothing is copied
+    into the package)."""
     from dataclasses import replace
 
     from magtact import study as mstudy
@@ -435,10 +444,11 @@ def fine_h(texts: list[str]) -> None:
     from magtact.magnetics import hall_field
     from magtact.mechanics import simulate_path
 
-    study = mstudy.load_study(FINE_H_STUDY)
+    study_file, results, name = _fine(angles)
+    study = mstudy.load_study(study_file)
     settings = replace(mstudy.magone().metamodel, b_model="exact", holdout_paths=2,
                        generations=200, population=1000, retries=4)
-    record = json.loads(OUT.read_text()).get("fine_h", {}) if OUT.is_file() else {}
+    record = json.loads(OUT.read_text()).get(name, {}) if OUT.is_file() else {}
     for text in texts:
         sub = replace(study.at(**_size(text)), metamodel=settings,
                       name=f"MagOne body, {text} mm magnet, H 2-10 mm at 7 levels")
@@ -447,7 +457,7 @@ def fine_h(texts: list[str]) -> None:
         if missing:
             raise SystemExit(f"{text}: {len(missing)} path(s) not cached yet ({missing[0]} ...)")
         ds = run_doe(sub, cache=CACHE, workers=0)
-        folder = FINE_H_DIR / text
+        folder = results / text
         folder.mkdir(parents=True, exist_ok=True)
         (folder / "study.toml").write_text(sub.to_toml(), encoding="utf-8")
         save_dataset(ds, folder / "doe.nc")
@@ -459,26 +469,28 @@ def fine_h(texts: list[str]) -> None:
             "fit_wall_time_s": time.perf_counter() - start, "load_average": os.getloadavg(),
             "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
                          ["accuracy"] for k in ("f_r", "f_z")}}
-        _update("fine_h", record)
+        _update(name, record)
         print(text, f"fit {record[text]['fit_wall_time_s']:.0f} s", flush=True)
 
 
-def fine_h_ship(texts: list[str]) -> None:
+def fine_h_ship(texts: list[str], angles: int = 3) -> None:
     """Copy the named sizes' data sets and fits over 7 heights (:func:`fine_h`) into the
     package as ``broad_<D>x<H>``, replacing those over 4 heights; their records in ``ship``."""
     from bench_broad import ship_size
 
+    _, results, name = _fine(angles)
     record = json.loads(OUT.read_text()).get("ship", {}) if OUT.is_file() else {}
-    fits = json.loads(OUT.read_text()).get("fine_h", {}) if OUT.is_file() else {}
+    fits = json.loads(OUT.read_text()).get(name, {}) if OUT.is_file() else {}
     for text in texts:
-        folder = FINE_H_DIR / text
-        record[text] = {"from": "python bench/bench_sizes.py fine-h (H 2-10 mm at 7 levels)",
+        folder = results / text
+        record[text] = {"from": f"python bench/bench_sizes.py fine-h --angles {angles} (H 2-10 "
+                                f"mm at 7 levels, {angles} theta levels)",
                         **fits.get(text, {}), **ship_size(folder, text)}
         print(text, record[text]["data"], record[text]["fit"], flush=True)
     _update("ship", record)
 
 
-def fine_h_blend() -> None:
+def fine_h_blend(angles: int = 3) -> None:
     """The 5 x 2 mm magnet's blend along the radius (4 x 2 mm x 1, 6 x 2 mm x 1/3, 3 x 2 mm x
     -1/3, :func:`magtact.doe.lagrange_weights`) of the fits over 7 heights (:func:`fine_h`)
     against the bundled MagOne data set, as ``blend`` measures the shipped fits."""
@@ -489,7 +501,8 @@ def fine_h_blend() -> None:
     names = ("4x2", "6x2", "3x2")
     w = lagrange_weights([_size(n)["R_m"] for n in names], 2.5e-3)
     study = mstudy.magone()
-    models = [load_models(FINE_H_DIR / n / "fit", definition=study.sensitivity.definition)
+    _, results, name = _fine(angles)
+    models = [load_models(results / n / "fit", definition=study.sensitivity.definition)
               for n in names]
     tab = magone_table()
     stable = _stable(tab)
@@ -500,8 +513,8 @@ def fine_h_blend() -> None:
         entry[resp] = _errors(pred, tab, resp)
         entry[f"{resp}, stable"] = _errors(pred[stable], {k: v[stable] for k, v in tab.items()},
                                            resp)
-    _update("fine_h_blend", {"command": "python bench/bench_sizes.py fine-h-blend",
-                             "the bundled MagOne data set": entry})
+    _update(f"{name}_blend", {"command": f"python bench/bench_sizes.py fine-h-blend --angles "
+                                         f"{angles}", "the bundled MagOne data set": entry})
     print({k: round(v["max_error_of_range"], 4) for k, v in entry.items()
            if k != "blended_from"})
 
@@ -788,9 +801,11 @@ def main(argv=None) -> None:
                          "(bench/magtact_sizes_fine_ht.toml)")
     fh = sub.add_parser("fine-h")
     fh.add_argument("sizes", help="2 mm-high sizes whose 7 heights are cached, e.g. 4x2,6x2")
-    sub.add_parser("fine-h-blend")
+    fb = sub.add_parser("fine-h-blend")
     fs = sub.add_parser("fine-h-ship")
     fs.add_argument("sizes", help="sizes fitted over 7 heights, e.g. 4x2,6x2,3x2")
+    for q in (fh, fb, fs):
+        q.add_argument("--angles", type=int, choices=(3, 5), default=3)
     sh = sub.add_parser("ship")
     sh.add_argument("sizes", help="finished sizes to ship, e.g. 3x2,5x2")
     s = sub.add_parser("surrogate")
@@ -813,11 +828,11 @@ def main(argv=None) -> None:
         fine_h_doe([x for x in args.sizes.split(",") if x], args.workers,
                    FINE_H_STUDY if args.angles == 3 else FINE_HT_STUDY)
     elif args.step == "fine-h":
-        fine_h([x for x in args.sizes.split(",") if x])
+        fine_h([x for x in args.sizes.split(",") if x], args.angles)
     elif args.step == "fine-h-blend":
-        fine_h_blend()
+        fine_h_blend(args.angles)
     elif args.step == "fine-h-ship":
-        fine_h_ship([x for x in args.sizes.split(",") if x])
+        fine_h_ship([x for x in args.sizes.split(",") if x], args.angles)
     elif args.step == "ship":
         ship(args.sizes.split(","))
     else:
