@@ -424,7 +424,6 @@ def _sensor_result(models: ModelSet, study: Study, opt, constraints, models_sour
     Forces given as constraints (``magtact optimise --Fzc``) become the required forces.
     ``nominal``: the reduction's answer on the nominal parts where already solved;
     ``original``: the original design's answer where it is not of ``study``'s magnet."""
-
     from .optimise import optimise_sensor
 
     study = _required(study, constraints)
