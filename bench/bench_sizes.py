@@ -345,6 +345,33 @@ def blend_sizes(ds, name: str, R_m: float, H_m: float, exclude=HELD_OUT) -> np.n
 SIZE_DIR = RESULTS / "sizes"
 
 
+def _cut_and_fit(sub, text: str, folder: Path) -> dict:
+    """A size's data set read from the cache (a path not cached: refused, nothing is solved)
+    into ``folder`` with its study, and its ``magtact fit`` in ``folder/fit``; the fit's wall
+    time, the load and the models' accuracy."""
+    from magtact.doe import run_doe, save_dataset
+    from magtact.doe._cache import JobCache
+    from magtact.doe._jobs import plan
+    from magtact.magnetics import hall_field
+    from magtact.mechanics import simulate_path
+
+    _, jobs = plan(sub, simulate_path, hall_field)
+    missing = [j.label for j in jobs if JobCache(CACHE).get("path", j.key) is None]
+    if missing:
+        raise SystemExit(f"{text}: {len(missing)} path(s) not cached yet ({missing[0]} ...)")
+    ds = run_doe(sub, cache=CACHE, workers=0)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "study.toml").write_text(sub.to_toml(), encoding="utf-8")
+    save_dataset(ds, folder / "doe.nc")
+    cmd = [sys.executable, "-m", "magtact", "fit", str(folder / "study.toml"), "--data",
+           str(folder / "doe.nc"), "--out", str(folder / "fit")]
+    start = time.perf_counter()
+    subprocess.run(cmd, check=True, cwd=ROOT)
+    return {"fit_wall_time_s": time.perf_counter() - start, "load_average": os.getloadavg(),
+            "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
+                         ["accuracy"] for k in ("f_r", "f_z")}}
+
+
 def ship(texts: list[str]) -> None:
     """Each finished size's (t, θ, H) data set, read from the cache (a size with a path not
     cached is refused: nothing is solved here), its ``magtact fit`` with the broad sizes'
@@ -355,11 +382,6 @@ def ship(texts: list[str]) -> None:
     from bench_broad import ship_size
 
     from magtact import study as mstudy
-    from magtact.doe import run_doe, save_dataset
-    from magtact.doe._cache import JobCache
-    from magtact.doe._jobs import plan
-    from magtact.magnetics import hall_field
-    from magtact.mechanics import simulate_path
 
     study = mstudy.load_study(STUDY)
     settings = replace(mstudy.magone().metamodel, b_model="exact", holdout_paths=2,
@@ -369,26 +391,10 @@ def ship(texts: list[str]) -> None:
         size = _size(text)
         sub = replace(study.at(**size), metamodel=settings,
                       name=f"MagOne body, {text} mm magnet, H 2-10 mm")
-        _, jobs = plan(sub, simulate_path, hall_field)
-        missing = [j.label for j in jobs if JobCache(CACHE).get("path", j.key) is None]
-        if missing:
-            raise SystemExit(f"{text}: {len(missing)} path(s) not cached yet ({missing[0]} ...)")
-        ds = run_doe(sub, cache=CACHE, workers=0)
         folder = SIZE_DIR / text
-        folder.mkdir(parents=True, exist_ok=True)
-        (folder / "study.toml").write_text(sub.to_toml(), encoding="utf-8")
-        save_dataset(ds, folder / "doe.nc")
-        cmd = [sys.executable, "-m", "magtact", "fit", str(folder / "study.toml"), "--data",
-               str(folder / "doe.nc"), "--out", str(folder / "fit")]
-        start = time.perf_counter()
-        subprocess.run(cmd, check=True, cwd=ROOT)
-        wall = time.perf_counter() - start
-        shipped = ship_size(folder, text)
-        record[text] = {
-            "fit_wall_time_s": wall, "load_average": os.getloadavg(),
-            **shipped,
-            "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
-                         ["accuracy"] for k in ("f_r", "f_z")}}
+        fitted = _cut_and_fit(sub, text, folder)
+        wall = fitted["fit_wall_time_s"]
+        record[text] = {**fitted, **ship_size(folder, text)}
         _update("ship", record)
         print(text, f"fit {wall:.0f} s", {k: v["test"]["max_abs_err_over_range"]
                                           for k, v in record[text]["accuracy"].items()})
@@ -438,11 +444,6 @@ def fine_h(texts: list[str], angles: int = 3) -> None:
     from dataclasses import replace
 
     from magtact import study as mstudy
-    from magtact.doe import run_doe, save_dataset
-    from magtact.doe._cache import JobCache
-    from magtact.doe._jobs import plan
-    from magtact.magnetics import hall_field
-    from magtact.mechanics import simulate_path
 
     study_file, results, name = _fine(angles)
     study = mstudy.load_study(study_file)
@@ -452,23 +453,7 @@ def fine_h(texts: list[str], angles: int = 3) -> None:
     for text in texts:
         sub = replace(study.at(**_size(text)), metamodel=settings,
                       name=f"MagOne body, {text} mm magnet, H 2-10 mm at 7 levels")
-        _, jobs = plan(sub, simulate_path, hall_field)
-        missing = [j.label for j in jobs if JobCache(CACHE).get("path", j.key) is None]
-        if missing:
-            raise SystemExit(f"{text}: {len(missing)} path(s) not cached yet ({missing[0]} ...)")
-        ds = run_doe(sub, cache=CACHE, workers=0)
-        folder = results / text
-        folder.mkdir(parents=True, exist_ok=True)
-        (folder / "study.toml").write_text(sub.to_toml(), encoding="utf-8")
-        save_dataset(ds, folder / "doe.nc")
-        cmd = [sys.executable, "-m", "magtact", "fit", str(folder / "study.toml"), "--data",
-               str(folder / "doe.nc"), "--out", str(folder / "fit")]
-        start = time.perf_counter()
-        subprocess.run(cmd, check=True, cwd=ROOT)
-        record[text] = {
-            "fit_wall_time_s": time.perf_counter() - start, "load_average": os.getloadavg(),
-            "accuracy": {k: json.loads((folder / "fit" / f"{k}.json").read_text())["info"]
-                         ["accuracy"] for k in ("f_r", "f_z")}}
+        record[text] = _cut_and_fit(sub, text, results / text)
         _update(name, record)
         print(text, f"fit {record[text]['fit_wall_time_s']:.0f} s", flush=True)
 
