@@ -24,6 +24,7 @@ from magtact.doe import (
     write_csv,
 )
 from magtact.doe._cache import Entry
+from magtact.doe._dataset import BUNDLED_NAMES, _read_h5, bundled_path
 from magtact.geometry import loading_path
 from magtact.study import from_si
 
@@ -74,6 +75,37 @@ def test_netcdf_round_trip_and_csv_export(tmp_path):
     assert last[5] == from_si(float(sel.u_z), "mm") and last[9] == float(sel.F_z)
     second = [float(x) for x in rows[2]]  # t=0, theta=0, H=H_0, G=G_1
     assert second[3] == from_si(s.G_levels[1], "kPa") and second[0] == 0.0
+
+
+@pytest.mark.parametrize("name", BUNDLED_NAMES)
+def test_direct_reading_equals_xarrays_for_every_bundled_file(name):
+    """The bundled files are read through HDF5 directly (the magnet-size screen reads one per
+    size): the same data set as xarray's reading, attributes and types included."""
+    path = bundled_path(name)
+    direct = _read_h5(path)
+    assert direct is not None
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        reference = ds.load()
+    xr.testing.assert_identical(direct, reference)
+    for k in reference.variables:
+        assert direct[k].dtype == reference[k].dtype and direct[k].attrs == reference[k].attrs
+    assert {k: type(v) for k, v in direct.attrs.items()} == \
+        {k: type(v) for k, v in reference.attrs.items()}
+
+
+def test_files_of_another_layout_are_read_by_xarray(tmp_path):
+    """A NaN written and read back, and files the direct reading does not describe (CF
+    scaling, a float fill value that is not NaN) are read as xarray reads them."""
+    ds = run(tiny())
+    ds["F_z"][0, 0, 0, 0] = np.nan
+    path = save_dataset(ds, tmp_path / "d.nc")
+    assert _read_h5(path) is not None
+    xr.testing.assert_identical(load_dataset(path), ds)
+    for encoding in ({"F_z": {"scale_factor": 0.5}}, {"F_z": {"_FillValue": -1.0}}):
+        ds.to_netcdf(tmp_path / "e.nc", engine="h5netcdf", encoding=encoding)
+        assert _read_h5(tmp_path / "e.nc") is None
+        with xr.open_dataset(tmp_path / "e.nc", engine="h5netcdf") as ref:
+            xr.testing.assert_identical(load_dataset(tmp_path / "e.nc"), ref.load())
 
 
 def test_load_dataset_errors(tmp_path):
