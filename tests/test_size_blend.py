@@ -75,6 +75,52 @@ def test_the_blend_predicts_fe_paths_of_the_size_it_never_saw():
         assert np.abs(pred - F[inside]).max() / span < limit, name
 
 
+def _grid_forces(ds):
+    """(t, θ, H) grids and f = F / G (mean over the G levels) of a data set's every point."""
+    G = ds["G"].values
+    grids = np.meshgrid(ds["t"].values, ds["theta"].values, ds["H"].values, indexing="ij")
+    f = {k: (ds[f"F_{k[-1]}"].transpose("t", "theta", "H", "G").values / G).mean(axis=-1)
+         for k in ("f_r", "f_z")}
+    return grids, f
+
+
+def _worst(models, grids, f, name):
+    T, TH, HH = grids
+    ok = np.isfinite(f[name])
+    pred = np.asarray(models[name].value(T[ok], TH[ok], HH[ok]), dtype=float)
+    return np.abs(pred - f[name][ok]).max() / np.ptp(f[name][ok])
+
+
+def test_the_blend_predicts_the_magone_data_set_at_every_point():
+    """The bundled MagOne data set (another DOE of the 5 x 2 mm magnet: H 3-7 mm, 5 θ levels),
+    which no blended part holds: F_z within 2 % and F_r within 5 % of the force range at every
+    point, beyond the shear force's extreme too."""
+    from magtact.doe import load_bundled
+
+    study = magtact.load("magone", design={"H_mm": [3.0, 7.0], "magnet_sizes": []},
+                         magnet={"size": "5x2"})
+    ds, parts = bundled_blend(study)
+    models = magtact.metamodel.blended_metamodels(study, parts).models
+    grids, f = _grid_forces(load_bundled())
+    assert _worst(models, grids, f, "f_z") < 0.02
+    assert _worst(models, grids, f, "f_r") < 0.05
+
+
+def test_a_size_held_out_of_the_shipped_ones_is_predicted_by_the_others():
+    """The 4 x 1 mm magnet blended from the other 1 mm-high sizes (3, 5 and 6 mm), its own
+    shipped data set left out: F_z within 2 %, F_r within 5 % of the force range at every
+    point of that data set."""
+    from magtact.doe import BROAD_SIZES, load_bundled
+
+    study = magtact.load("magone", design={"H_mm": [2.0, 10.0]}).sized("4x1")
+    ds, parts = bundled_blend(study, tuple(s for s in BROAD_SIZES if s != "4x1"))
+    assert sorted(name for name, *_ in parts) == ["3x1", "5x1", "6x1"]
+    models = magtact.metamodel.blended_metamodels(study, parts).models
+    grids, f = _grid_forces(load_bundled("broad_4x1_doe.nc"))
+    assert _worst(models, grids, f, "f_z") < 0.02
+    assert _worst(models, grids, f, "f_r") < 0.05
+
+
 #: FE paths of a 4 x 1.5 mm magnet (``bench/magtact_4x1p5.toml``: the magnet-size DOE's body,
 #: levels and mesh at H 2, 4.67 and 7.33 mm), whose height none of the bundled sizes has.
 HEIGHT_CHECK = ROOT / "bench" / "results" / "size_check" / "doe" / "doe.nc"
