@@ -78,15 +78,13 @@ def _plain(x):
 def key(models, study, constraints) -> str | None:
     """The key of ``solve(models, study, constraints)``; None where the models are not all
     closed-form expressions (then nothing is kept)."""
-    import sympy as sp
-
     from .metamodel import Metamodel
 
     parts = []
     for name, m in models.items():
         if type(m) is not Metamodel:
             return None
-        parts.append([name, m.units, sp.srepr(m.expr), sp.srepr(m.expr_pq)])
+        parts.append([name, m.units, *m.text])
     try:
         text = json.dumps([_code(), parts, dataclasses.asdict(study),
                            None if constraints is None else dataclasses.asdict(constraints)],

@@ -370,6 +370,9 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
     from .optimise import optimise
 
     names = study.design.magnet_sizes
+    # the exact field's library, loaded once here rather than by each worker
+    import magpylib.core  # noqa: F401
+
     screened = fork_map(partial(_screen_size, models, study, constraints), names)
     best = [choice for choice, _ in screened]
     notes = [note for _, note in screened]

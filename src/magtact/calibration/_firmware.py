@@ -29,6 +29,7 @@ from numpy.polynomial import chebyshev as cheb
 
 from .. import _files as files
 from .._errors import MagtactError
+from .._parallel import fork_map
 from .._records import entry, from_json, from_json_lenient, to_json
 from ..study import from_si, mm, to_si
 from ._map import OK, MapDesign, SensorMap
@@ -559,11 +560,25 @@ def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
     test = _test_set(smap, n_test, seed + 2)
     axisymmetric = not any(smap.unit.chip_offset) and not any(smap.unit.field_offset[:2])
     samples = _FeatureSamples(smap, seed)
-    cands = [fit_features(smap, n, tr, seed, samples) for tr in TRANSFORMS for n in degrees]
+    jobs = [("features", tr, n) for tr in TRANSFORMS for n in degrees]
     if axisymmetric:  # the planar forms need a map that is the same at every azimuth
-        cands += [fit_poly(smap, n, tr, train, polygon) for tr in TRANSFORMS for n in degrees]
-        cands += fit_tables(smap, tuple(table_sizes), polygon)
-    cands = [_measured(a, test) for a in cands]
+        jobs += [("poly", tr, n) for tr in TRANSFORMS for n in degrees] + [("tables", "", 0)]
+
+    def measured(job) -> list[Approximation]:
+        kind, tr, n = job
+        if kind == "features":
+            made = [fit_features(smap, n, tr, seed, samples)]
+        elif kind == "poly":
+            made = [fit_poly(smap, n, tr, train, polygon)]
+        else:
+            made = fit_tables(smap, tuple(table_sizes), polygon)
+        return [_measured(a, test) for a in made]
+
+    # the candidates are independent: on the machine's cores, the tables (the longest job)
+    # first; in the order of ``jobs`` whatever the order of their work
+    order = sorted(range(len(jobs)), key=lambda k: jobs[k][0] != "tables")
+    done = dict(zip(order, fork_map(measured, [jobs[k] for k in order]), strict=True))
+    cands = [a for k in range(len(jobs)) for a in done[k]]
 
     def score(a):
         return max(a.err_r / sr, a.err_z / sz)

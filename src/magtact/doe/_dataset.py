@@ -226,10 +226,12 @@ def _read_h5(path: Path) -> xr.Dataset | None:
             attrs = {k: _attribute(a) for k, a in v.attrs.items() if k not in _H5_BOOKKEEPING}
             variables[name] = (tuple(scales[int(i)] for i in ids), v[()], attrs)
         attrs = {k: _attribute(a) for k, a in f.attrs.items() if k not in _H5_BOOKKEEPING}
-    dims = set(scales.values())
+    dims = [name for name in variables if name in scales.values()]  # in the file's order
     coords = {d: xr.Variable((d,), pd.Index(variables[d][1], name=d), variables[d][2])
               for d in dims}
-    data = {k: xr.Variable(*v) for k, v in variables.items() if k not in dims}
+    # plain arrays, as xarray's own reading leaves them (its checks of other array types
+    # would import dask)
+    data = {k: xr.Variable(*v, fastpath=True) for k, v in variables.items() if k not in dims}
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 

@@ -63,8 +63,9 @@ def model_to_dict(model: Metamodel) -> dict:
 
 
 def model_from_dict(data: dict, source: str = "<dict>", check: bool = True) -> Metamodel:
-    """A model from the content of a model file (see the module notes); ``check``: that its
-    two forms agree (False only for files of the package, which its tests check).
+    """A model from the content of a model file (see the module notes); ``check``: read
+    through the grammar, its two forms checked to agree (False only for files of the package,
+    which its tests read so: :meth:`Metamodel.from_text`).
 
     Raises
     ------
@@ -77,17 +78,19 @@ def model_from_dict(data: dict, source: str = "<dict>", check: bool = True) -> M
     for key in ("name", "units", "expression", "expression_pq"):
         if not isinstance(data.get(key), str):
             raise MagtactError(f"{source}: key {key!r} is missing or not a string")
+    info = data.get("info", {})
+    if not isinstance(info, dict):
+        raise MagtactError(f"{source}: 'info' must be an object")
+    if not check:  # a file of the package: its SymPy forms are built when asked for
+        return Metamodel.from_text(data["name"], data["expression"], data["expression_pq"],
+                                   data["units"], info)
     try:
         geo = tuple(g.name for g in GEOMETRY)  # a model over geometric design variables
         expr = parse_expression(data["expression"], ("t", "theta", "H", *geo))
         expr_pq = parse_expression(data["expression_pq"], ("p", "q", "H", *geo))
     except ValueError as exc:
         raise MagtactError(f"{source}: {exc}") from None
-    if check:
-        _check_agree(expr, expr_pq, source)
-    info = data.get("info", {})
-    if not isinstance(info, dict):
-        raise MagtactError(f"{source}: 'info' must be an object")
+    _check_agree(expr, expr_pq, source)
     return Metamodel(name=data["name"], expr=expr, units=data["units"], expr_pq=expr_pq, info=info)
 
 
@@ -273,9 +276,10 @@ def load_models(folder: str | Path, B_model=None, definition: str | None = None,
     definition : {"jacobian", "published"}, optional
         The sensitivity definition the study asks for; the force files must be of it.
     check : bool
-        Check that each model's two forms (in (t, θ) and in the features (p, q)) agree; False
-        only for the fits shipped with magtact, which their tests check (the check costs more
-        than the loading).
+        Read each expression through the grammar of :func:`parse_expression` and check that
+        each model's two forms (in (t, θ) and in the features (p, q)) agree; False only for the
+        fits shipped with magtact, which their tests read and check so: their SymPy forms are
+        then built when first asked for (:meth:`Metamodel.from_text`).
 
     Raises
     ------

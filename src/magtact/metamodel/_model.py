@@ -68,10 +68,14 @@ def _derivative_tensors(expr, symbols, order: int) -> list:
 
 
 def _lambdify(exprs: list, symbols):
-    """Compile expressions to one vectorised function (LLVM if available) with CSE."""
+    """Compile expressions to one vectorised function (LLVM if available) with CSE.
+
+    LLVM's optimisation passes are left out (``opt_level=0``): they take three quarters of a
+    compilation and speed up the evaluation of these expressions not at all (the array
+    handling around it dominates), and a design compiles some seventy functions."""
     args = [se.sympify(s) for s in symbols]
     try:
-        return se.Lambdify(args, exprs, cse=True, backend="llvm")
+        return se.Lambdify(args, exprs, cse=True, backend="llvm", opt_level=0)
     except (RuntimeError, ValueError, TypeError):  # SymEngine built without LLVM
         return se.Lambdify(args, exprs, cse=True, backend="lambda")
 
@@ -170,6 +174,51 @@ class Metamodel:
         expr, expr_pq = (parse_expression(format_expression(e)) for e in (expr, expr_pq))
         return cls(name=name, expr=expr, units=units, expr_pq=expr_pq, info=dict(info or {}))
 
+    @classmethod
+    def from_text(cls, name: str, text: str, text_pq: str, units: str,
+                  info: dict | None = None) -> Metamodel:
+        """A model from the text of its two forms as a model file of the package holds them
+        (files its tests read whole): the SymPy forms are built when first asked for, the
+        compiled functions straight from the text. A design compiles the force models of a
+        dozen magnet sizes, and building their SymPy forms costs a hundred times more than
+        reading them into SymEngine."""
+        model = object.__new__(cls)
+        for key, value in (("name", name), ("units", units), ("info", dict(info or {})),
+                           ("_text", {"tth": text, "pq": text_pq})):
+            object.__setattr__(model, key, value)
+        return model
+
+    def __getattr__(self, attr: str):
+        # called only for attributes not set: the SymPy forms of a model made from text
+        text = self.__dict__.get("_text")
+        if attr not in ("expr", "expr_pq") or text is None:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {attr!r}")
+        from ._parse import parse_expression
+
+        geo = tuple(g.name for g in GEOMETRY)
+        object.__setattr__(self, "expr", parse_expression(text["tth"], ("t", "theta", "H", *geo)))
+        object.__setattr__(self, "expr_pq", parse_expression(text["pq"], ("p", "q", "H", *geo)))
+        return self.__dict__[attr]
+
+    @property
+    def text(self) -> tuple[str, str]:
+        """The two forms, (t, θ, H) and (p, q, H), as a model file writes them
+        (:func:`magtact.metamodel.format_expression`)."""
+        text = self.__dict__.get("_text")
+        if text is not None:
+            return text["tth"], text["pq"]
+        from ._parse import format_expression
+
+        return format_expression(self.expr), format_expression(self.expr_pq)
+
+    def _symengine(self, form: str):
+        """The form "tth" or "pq" as a SymEngine expression (from the text where the model
+        was made from text)."""
+        text = self.__dict__.get("_text")
+        if text is not None:
+            return se.sympify(text[form])
+        return se.sympify(self.expr if form == "tth" else self.expr_pq)
+
     @cached_property
     def _compiled(self) -> dict:
         return {}
@@ -177,7 +226,7 @@ class Metamodel:
     @cached_property
     def geometry(self) -> tuple[str, ...]:
         """Names of the geometric design variables besides H the model depends on."""
-        names = {s.name for s in self.expr.free_symbols}
+        names = {str(s) for s in self._symengine("tth").free_symbols}
         return tuple(g.name for g in GEOMETRY if g.name in names)
 
     def _fn(self, form: str, order: int):
@@ -186,10 +235,8 @@ class Metamodel:
         key = (form, order)
         if key not in self._compiled:
             geo = tuple(SYMBOLS[g] for g in self.geometry)
-            if form == "tth":
-                exprs = _derivative_tensors(self.expr, TTH, order)
-            else:
-                exprs = _derivative_tensors(self.expr_pq, (p, q), order)
+            exprs = _derivative_tensors(self._symengine(form), TTH if form == "tth" else (p, q),
+                                        order)
             self._compiled[key] = _lambdify(exprs, (TTH if form == "tth" else PQH) + geo)
         return self._compiled[key]
 
@@ -242,8 +289,18 @@ class _Bound:
     def __init__(self, model: Metamodel, geometry: dict[str, float]):
         self.model, self.geometry_values = model, geometry
         self.name, self.units, self.info = model.name, model.units, model.info
-        sub = {SYMBOLS[g]: sp.Float(v) for g, v in geometry.items()}
-        self.expr, self.expr_pq = model.expr.xreplace(sub), model.expr_pq.xreplace(sub)
+
+    @cached_property
+    def expr(self) -> sp.Expr:
+        return self.model.expr.xreplace(self._sub)
+
+    @cached_property
+    def expr_pq(self) -> sp.Expr:
+        return self.model.expr_pq.xreplace(self._sub)
+
+    @property
+    def _sub(self) -> dict:
+        return {SYMBOLS[g]: sp.Float(v) for g, v in self.geometry_values.items()}
 
     geometry = ()
 
