@@ -71,14 +71,24 @@ OUT = RESULTS / "sizes.json"
 HELD_OUT = ((2.5e-3, 2.0e-3), (2.0e-3, 3.0e-3))
 
 
-def _update(section: str, values: dict) -> None:
-    out = json.loads(OUT.read_text()) if OUT.is_file() else {}
-    out.update({"benchmark": "the magnet-size design space",
-                "study": str(STUDY.relative_to(ROOT)),
-                "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
-                            "python": platform.python_version()}})
-    out[section] = values
-    OUT.write_text(json.dumps(out, indent=1) + "\n")
+def _update(section: str, values: dict, key: str | None = None) -> None:
+    """Set ``section`` of the record to ``values`` (with ``key``: only that entry of the
+    section), the file read and written under a lock: steps of this bench run side by side
+    (a fit of one size while another's DOE runs), and each keeps the others' entries."""
+    import fcntl
+
+    with open(OUT.with_suffix(".lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        out = json.loads(OUT.read_text()) if OUT.is_file() else {}
+        out.update({"benchmark": "the magnet-size design space",
+                    "study": str(STUDY.relative_to(ROOT)),
+                    "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
+                                "python": platform.python_version()}})
+        if key is None:
+            out[section] = values
+        else:
+            out.setdefault(section, {})[key] = values
+        OUT.write_text(json.dumps(out, indent=1) + "\n")
 
 
 def _label(R_m: float, H_m: float) -> str:
@@ -449,13 +459,12 @@ def fine_h(texts: list[str], angles: int = 3) -> None:
     study = mstudy.load_study(study_file)
     settings = replace(mstudy.magone().metamodel, b_model="exact", holdout_paths=2,
                        generations=200, population=1000, retries=4)
-    record = json.loads(OUT.read_text()).get(name, {}) if OUT.is_file() else {}
     for text in texts:
         sub = replace(study.at(**_size(text)), metamodel=settings,
                       name=f"MagOne body, {text} mm magnet, H 2-10 mm at 7 levels")
-        record[text] = _cut_and_fit(sub, text, results / text)
-        _update(name, record)
-        print(text, f"fit {record[text]['fit_wall_time_s']:.0f} s", flush=True)
+        entry = _cut_and_fit(sub, text, results / text)
+        _update(name, entry, key=text)
+        print(text, f"fit {entry['fit_wall_time_s']:.0f} s", flush=True)
 
 
 def fine_h_ship(texts: list[str], angles: int = 3) -> None:

@@ -879,7 +879,7 @@ def sizes_section(r: Results) -> list[str]:
     if ship:
         rows = [[k, f"{pct(v['accuracy']['f_z']['test']['max_abs_err_over_range'], 2)}",
                  f"{pct(v['accuracy']['f_r']['test']['max_abs_err_over_range'], 2)}",
-                 f"{v['fit_wall_time_s']:.0f}",
+                 "—" if v.get("fit_wall_time_s") is None else f"{v['fit_wall_time_s']:.0f}",
                  f"`{v['data']}`" if v.get("shipped", True) else f"not shipped: {v['why_not']}"]
                 for k, v in ship.items()]
         out += ["**Shipped sizes** (`python bench/bench_sizes.py ship SIZE`: the size's data set "
