@@ -66,18 +66,32 @@ def test_shipped_held_out_accuracy_within_targets(ds, shipped, name):
 
 @pytest.mark.parametrize("path", sorted(prefitted_dir().parent.glob("*/*.json")),
                          ids=lambda p: f"{p.parent.name}/{p.name}")
-def test_every_shipped_model_file_agrees_with_its_feature_form(path):
-    """The shipped fits load without checking their two forms (it costs more than the loading
-    itself): here each model file's (t, θ) and (p, q) expressions are checked against each
-    other, as every other model file is when loaded."""
+def test_every_shipped_model_file_reads_and_compiles_as_any_other(path):
+    """The shipped fits load without the grammar's reading and the check of their two forms
+    (``check=False``: compiled from their text, :meth:`Metamodel.from_text`). Here each file
+    is read as every other model file is (the grammar; its (t, θ) and (p, q) expressions
+    checked against each other), and the model compiled from its text gives the same values
+    and derivatives, to rounding; its SymPy forms, built when asked for, are those read."""
     import json
+
+    import numpy as np
 
     from magtact.metamodel._io import FORMAT, model_from_dict
 
     data = json.loads(path.read_text(encoding="utf-8"))
-    if data.get("format") != FORMAT:  # an exact-field or a field-force file: one expression
-        pytest.skip(f"{data.get('format')}: no second form")
-    model_from_dict(data, str(path))  # check=True: raises where the two forms disagree
+    if data.get("format") != FORMAT:
+        pytest.skip(f"{data.get('format')}: not a closed-form model")
+    fast, read = model_from_dict(data, str(path), check=False), model_from_dict(data, str(path))
+    assert "expr" not in vars(fast)  # nothing built yet
+    assert fast.text == read.text == (data["expression"], data["expression_pq"])
+    assert fast.geometry == read.geometry
+    rng = np.random.default_rng(0)
+    t, th, H = rng.uniform(0, 1, 200), rng.uniform(0, 0.45, 200), rng.uniform(2e-3, 1e-2, 200)
+    for a, b in ((fast.value(t, th, H), read.value(t, th, H)),
+                 *zip(fast.jet(t, th, H, 2), read.jet(t, th, H, 2), strict=True)):
+        scale = np.nanmax(np.abs(b), initial=1e-300)
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * scale, equal_nan=True)
+    assert fast.expr == read.expr and fast.expr_pq == read.expr_pq
 
 
 def test_the_agreement_check_finds_two_forms_that_disagree(tmp_path):
