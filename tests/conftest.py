@@ -37,6 +37,15 @@ from magtact.study import study_from_dict
 
 threadpool_limits(1)  # libraries loaded before the environment above was read
 
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_cmdline_main(config):
+    """One worker per core where pytest-xdist is installed and ``-n`` was not given; without
+    it, the suite runs in this process."""
+    if (config.pluginmanager.hasplugin("xdist") and not hasattr(config, "workerinput")
+            and config.getoption("numprocesses", None) is None):
+        config.option.numprocesses = "auto"
+
 # ---- the magnet of the built-in study, and its field computed independently of magtact ---------
 MU0 = 1.257e-6  # docs/method.md §1
 R_M, H_M, M_Z, H_G, DZ_SAT = 2.5e-3, 2e-3, 1.2e6, 4.97e-3, 2.97e-3
