@@ -17,6 +17,18 @@ def test_fork_map_equals_the_loop_and_takes_what_does_not_pickle():
     assert _parallel.fork_map(fn, [], workers=2) == []
 
 
+def test_fork_map_hands_out_the_first_items_first_and_returns_the_items_order():
+    import time
+
+    items = [3, 0, 2, 1]
+    assert _parallel.fork_map(lambda x: x * x, items, workers=2, first=lambda x: -x) == \
+        [9, 0, 4, 1]
+    # each job lasts 0.5 s: the two workers start 3 and 2, then 1 and 0
+    started = _parallel.fork_map(lambda x: (time.monotonic(), time.sleep(0.5))[0], items,
+                                 workers=2, first=lambda x: -x)
+    assert max(started[0], started[2]) < min(started[1], started[3])
+
+
 def test_fork_map_runs_in_other_processes_where_it_can():
     pids = set(_parallel.fork_map(lambda _: os.getpid(), range(4), workers=2))
     if _parallel._can_fork(2):

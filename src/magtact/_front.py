@@ -373,13 +373,11 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
     # the exact field's library, loaded once here rather than by each worker
     import magpylib.core  # noqa: F401
 
-    # the largest magnets first: they are the ones that carry a sensor, the longer solves, so
-    # that the quick refusals of small magnets fill the workers' last moments
+    # the largest magnets first: they are the ones that carry a sensor, the longer solves
     from .parts import SIZES
 
-    order = sorted(range(len(names)), key=lambda k: -_volume(SIZES.get(names[k]), names[k]))
-    done = fork_map(partial(_screen_size, models, study, constraints), [names[k] for k in order])
-    screened = [done[order.index(k)] for k in range(len(names))]
+    screened = fork_map(partial(_screen_size, models, study, constraints), names,
+                        first=lambda n: -SIZES[n].R_m ** 2 * SIZES[n].H_m if n in SIZES else 0)
     best = [choice for choice, _ in screened]
     notes = [note for _, note in screened]
     solved = [n for n, c in zip(names, best, strict=True) if c is not None]
@@ -396,11 +394,6 @@ def _sized_result(models: ModelSet, study: Study, constraints) -> Result | None:
     per = replace(result.sensor_design, sizes=tuple(names), per_size=tuple(best),
                   size_notes=tuple(notes), size=name)
     return replace(result, sensor_design=per)
-
-
-def _volume(size, name: str) -> float:
-    """A catalogue size's magnet volume [m³] (0 for a name the catalogue does not hold)."""
-    return 0.0 if size is None else size.R_m ** 2 * size.H_m
 
 
 #: Heights of the force table (:func:`magtact.optimise.force_table`) on which every magnet size

@@ -51,9 +51,14 @@ def _run(i: int) -> tuple[str, Any, list]:
     return "ok", out, [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
 
 
-def fork_map(fn: Callable, items: Sequence, workers: int | None = None) -> list:
+def fork_map(fn: Callable, items: Sequence, workers: int | None = None, *,
+             first: Callable[[Any], float] | None = None) -> list:
     """``[fn(x) for x in items]``, on up to ``workers`` (default: the cores) forked worker
-    processes where that is possible (see the module notes); the same list either way."""
+    processes where that is possible (see the module notes); the same list either way.
+
+    ``first``: the items of the smallest ``first(x)`` are handed to the workers first (the
+    longest jobs, so that short ones fill the workers' last moments); the list returned is in
+    the order of ``items`` all the same."""
     global _JOB
 
     items = list(items)
@@ -73,7 +78,10 @@ def fork_map(fn: Callable, items: Sequence, workers: int | None = None) -> list:
                                     DeprecationWarning)
             with ProcessPoolExecutor(max_workers=workers,
                                      mp_context=multiprocessing.get_context("fork")) as pool:
-                done = list(pool.map(_run, range(len(items))))
+                order = (range(len(items)) if first is None
+                         else sorted(range(len(items)), key=lambda k: first(items[k])))
+                done = dict(zip(order, pool.map(_run, order), strict=True))
+                done = [done[k] for k in range(len(items))]
     except (BrokenProcessPool, OSError):  # no worker could run: here, one after the other
         return [fn(x) for x in items]
     finally:

@@ -575,10 +575,9 @@ def firmware_approximation(smap: SensorMap, sigma_F: tuple[float, float],
         return [_measured(a, test) for a in made]
 
     # the candidates are independent: on the machine's cores, the tables (the longest job)
-    # first; in the order of ``jobs`` whatever the order of their work
-    order = sorted(range(len(jobs)), key=lambda k: jobs[k][0] != "tables")
-    done = dict(zip(order, fork_map(measured, [jobs[k] for k in order]), strict=True))
-    cands = [a for k in range(len(jobs)) for a in done[k]]
+    # first
+    cands = [a for made in fork_map(measured, jobs, first=lambda job: job[0] != "tables")
+             for a in made]
 
     def score(a):
         return max(a.err_r / sr, a.err_z / sz)

@@ -522,7 +522,7 @@ def _read_outline(path: Path) -> xr.Dataset:
 
     with h5py.File(path, "r") as f:
         coords = {k: f[k][()] for k in (*DIMS, *GEOMETRY_NAMES) if k in f}
-        attrs = {k: v.decode() if isinstance(v, bytes) else v for k, v in f.attrs.items()}
+        attrs = {k: _attribute(v) for k, v in f.attrs.items() if k not in _H5_BOOKKEEPING}
     # each dimension's levels as a pandas index: xarray takes it as it is, where an array would
     # have it look for (and import) dask to tell what kind of array it was given
     coords = {k: pd.Index(v, name=k) if np.ndim(v) == 1 else v for k, v in coords.items()}

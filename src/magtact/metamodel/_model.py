@@ -226,7 +226,9 @@ class Metamodel:
     @cached_property
     def geometry(self) -> tuple[str, ...]:
         """Names of the geometric design variables besides H the model depends on."""
-        names = {str(s) for s in self._symengine("tth").free_symbols}
+        text = self.__dict__.get("_text")
+        symbols = se.sympify(text["tth"]).free_symbols if text else self.expr.free_symbols
+        names = {str(s) for s in symbols}
         return tuple(g.name for g in GEOMETRY if g.name in names)
 
     def _fn(self, form: str, order: int):
